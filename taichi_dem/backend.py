@@ -1,0 +1,61 @@
+"""The one place ``ti.init`` is called.
+
+Taichi has one runtime per process and ``ti.init`` invalidates every field of the old one
+(touching a stale field segfaults). Simulations therefore share the runtime: the first one
+initialises it with its arch and precision, later ones with the same arch and precision reuse
+it. Asking for a different arch or precision re-initialises the runtime; every simulation still
+alive on the old runtime is then marked stale and refuses further use with a clear error
+instead of crashing. Float literals in kernels take the runtime's default float type, which is
+why precision is a runtime setting and not only a field dtype.
+"""
+from __future__ import annotations
+
+import weakref
+
+import taichi as ti
+
+_ARCHES = {
+    "cpu": lambda: ti.cpu,
+    "gpu": lambda: ti.gpu,
+    "cuda": lambda: ti.cuda,
+    "vulkan": lambda: ti.vulkan,
+    "metal": lambda: ti.metal,
+}
+_current: dict = {"arch": None, "precision": None, "generation": 0}
+_live: "weakref.WeakSet" = weakref.WeakSet()
+
+
+class BackendError(RuntimeError):
+    pass
+
+
+def real_type(precision: str):
+    """Taichi float type for ``"f32"`` or ``"f64"``."""
+    return ti.f64 if precision == "f64" else ti.f32
+
+
+def acquire(owner, arch: str = "cpu", precision: str = "f32", threads: int | None = None) -> int:
+    """Make sure the runtime runs ``arch`` with ``precision``; register ``owner`` as living on
+    it. Returns the runtime generation the owner must match to stay valid."""
+    if arch not in _ARCHES:
+        raise BackendError(f"unknown arch '{arch}'; choose one of {', '.join(_ARCHES)}")
+    if _current["arch"] != arch or _current["precision"] != precision:
+        for other in list(_live):
+            other._mark_stale(f"the Taichi runtime was re-initialised for arch={arch}, "
+                              f"precision={precision} by another simulation")
+        kwargs = dict(arch=_ARCHES[arch](), default_fp=real_type(precision), default_ip=ti.i32,
+                      log_level=ti.WARN, offline_cache=True)
+        if threads:
+            kwargs["cpu_max_num_threads"] = threads
+        ti.init(**kwargs)
+        _current.update(arch=arch, precision=precision, generation=_current["generation"] + 1)
+    _live.add(owner)
+    return _current["generation"]
+
+
+def generation() -> int:
+    return _current["generation"]
+
+
+def describe() -> str:
+    return f"{_current['arch']} ({_current['precision']})"

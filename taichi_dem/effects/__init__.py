@@ -1,0 +1,48 @@
+"""Effects: each physical effect is one module; the stepper composes the ones a scene enables.
+
+``enabled_effects(scene)`` is the tuple the stepper unrolls at compile time (``ti.static``):
+an effect not in it is neither allocated, compiled nor run. ``taichi-dem check`` prints it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..scene import Scene
+
+
+@dataclass(frozen=True)
+class Effect:
+    name: str
+    stage: str          # "pair" | "particle" | "integrate"
+    description: str
+
+
+def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
+    """The effects this scene calls for, in step order."""
+    effects = [Effect("velocity_verlet", "integrate",
+                      "velocity Verlet for translation and rotation")]
+    if any(abs(g) > 0 for g in scene.simulation.gravity):
+        effects.append(Effect("gravity", "particle", "uniform gravity"))
+    effects.append(Effect("hertz_mindlin", "pair",
+                          "Hertz-Mindlin no-slip, tangential history, Coulomb limit"))
+    models = {i.rolling_model for i in scene.interactions.values() if i.rolling_friction > 0}
+    if "constant_torque" in models:
+        effects.append(Effect("rolling_constant_torque", "pair",
+                              "rolling friction, constant directional torque"))
+    if "epsd" in models:
+        effects.append(Effect("rolling_epsd", "pair", "rolling friction, EPSD spring"))
+    if scene.walls:
+        effects.append(Effect("plane_walls", "particle",
+                              f"{len(scene.walls)} analytic plane wall(s)"))
+    if scene.domain.periodic:
+        effects.append(Effect("periodic", "integrate",
+                              "periodic faces: " + ", ".join(scene.domain.periodic)))
+    if any(f.fixed for f in scene.fills):
+        effects.append(Effect("fixed_particles", "integrate", "fixed (frozen) particles"))
+    return tuple(effects)
+
+
+def effect_names(scene: Scene) -> set[str]:
+    return {e.name for e in enabled_effects(scene)}

@@ -1,0 +1,55 @@
+"""Hertz-Mindlin (no slip) contact with tangential history and the Coulomb limit.
+
+PHYSICS.md "Hertz-Mindlin"; EDEM's default model (seed 001, eqs. 5-11):
+
+    F_n   = 4/3 E* sqrt(R*) d_n^(3/2)            S_n = 2 E* sqrt(R* d_n)
+    F_n^d = -zeta sqrt(S_n m*) v_n                S_t = 8 G* sqrt(R* d_n)
+    F_t   = -S_t d_t - zeta sqrt(S_t m*) v_t,     |F_t| <= mu_s F_n,total
+
+The total normal force is clamped at zero (no adhesion); zeta is the damping ratio that makes
+the clamped contact rebound with the user's restitution (restitution.py), so the restitution
+set is the restitution achieved and the Coulomb cap on the clamped total makes the tangential
+impulse mu_s times the normal impulse in gross sliding, as rigid-body theory has it.
+"""
+import taichi as ti
+
+
+@ti.func
+def rotate_into_tangent_plane(history, normal):
+    """Project a stored tangential vector onto the plane normal to ``normal``, keeping its
+    length: the contact frame has rotated since the last step (LIGGGHTS-style)."""
+    length = history.norm()
+    projected = history - history.dot(normal) * normal
+    projected_length = projected.norm()
+    result = projected * 0.0
+    if projected_length > 0.0:
+        result = projected * (length / projected_length)
+    return result
+
+
+@ti.func
+def contact_force(normal, normal_overlap, r_eff, m_eff, v_rel, tangential_history,
+                  youngs_eff, shear_eff, damping, friction, dt):
+    """One Hertz-Mindlin contact. ``normal`` is the unit vector from the partner to this
+    particle, ``v_rel`` the velocity of this particle relative to the partner at the contact
+    point (m/s). Returns (normal force magnitude N (clamped total, >= 0), tangential force on
+    this particle N, updated tangential displacement m, normal stiffness S_n N/m)."""
+    contact_stiffness_root = ti.sqrt(r_eff * normal_overlap)           # sqrt(R* d_n)
+    normal_stiffness = 2.0 * youngs_eff * contact_stiffness_root        # S_n
+    tangential_stiffness = 8.0 * shear_eff * contact_stiffness_root     # S_t
+    normal_speed = v_rel.dot(normal)                                    # < 0 approaching
+    elastic_normal = 4.0 / 3.0 * youngs_eff * contact_stiffness_root * normal_overlap
+    normal_force = elastic_normal - damping * ti.sqrt(normal_stiffness * m_eff) * normal_speed
+    normal_force = ti.max(normal_force, 0.0)
+
+    tangential_velocity = v_rel - normal_speed * normal
+    displacement = rotate_into_tangent_plane(tangential_history, normal) + tangential_velocity * dt
+    tangential_force = (-tangential_stiffness * displacement
+                        - damping * ti.sqrt(tangential_stiffness * m_eff) * tangential_velocity)
+    limit = friction * normal_force
+    magnitude = tangential_force.norm()
+    if magnitude > limit:
+        # sliding: the force sits on the Coulomb cone and the spring is reset to hold it there
+        tangential_force *= limit / magnitude
+        displacement = -tangential_force / tangential_stiffness
+    return normal_force, tangential_force, displacement, normal_stiffness

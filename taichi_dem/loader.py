@@ -1,0 +1,586 @@
+"""Scene TOML -> :class:`~taichi_dem.scene.Scene`, with strict validation.
+
+Every problem is a :class:`~taichi_dem.scene.SceneError` naming the file, the dotted TOML key
+(``materials.ash.poisson_ratio``, ``particles[2].radius``) and what was wrong and what is allowed.
+Unknown keys are errors (with the closest valid key suggested), so a typo never silently falls
+back to a default.
+"""
+from __future__ import annotations
+
+import csv
+import difflib
+import math
+import re
+import tomllib
+from pathlib import Path
+from typing import Any, Optional
+
+import numpy as np
+
+from .scene import (Domain, Interaction, Material, Output, ParticleFill, PlaneWall,
+                    RadiusDistribution, Region, Scene, SceneError, SimulationSettings)
+from .units import parse_quantity, parse_vec3
+
+SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "output")
+PLANNED_SECTIONS = ("bodies", "factories", "outlets", "sensors", "thermal", "mobility")
+
+SIMULATION_KEYS = ("end_time", "dt", "rayleigh_fraction", "gravity", "precision", "seed", "skin")
+DOMAIN_KEYS = ("min", "max", "periodic")
+MATERIAL_KEYS = ("density", "youngs_modulus", "poisson_ratio", "thermal_conductivity",
+                 "heat_capacity", "emissivity", "real_youngs_modulus")
+INTERACTION_KEYS = ("pair", "restitution", "friction", "rolling_friction", "model")
+ROLLING_MODELS = ("constant_torque", "epsd")
+PARTICLE_KEYS = ("material", "radius", "count", "region", "velocity", "angular_velocity",
+                 "temperature", "fixed", "file")
+RADIUS_KEYS = ("mean", "std", "min", "max")
+REGION_KINDS = ("box", "cylinder")
+BOX_KEYS = ("min", "max")
+CYLINDER_KEYS = ("axis_point", "axis_direction", "radius", "length")
+WALL_KEYS = ("name", "plane", "material", "temperature")
+PLANE_KEYS = ("point", "normal")
+OUTPUT_KEYS = ("interval", "rrd", "h5", "checkpoint_interval")
+CSV_COLUMNS = ("x", "y", "z", "radius", "vx", "vy", "vz", "wx", "wy", "wz")
+AXES = ("x", "y", "z")
+
+
+def load_scene(path) -> Scene:
+    """Read and validate a scene file. A missing file or a TOML syntax error is a SceneError."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError(str(p), "", "scene file not found") from None
+    except IsADirectoryError:
+        raise SceneError(str(p), "", "is a directory, expected a scene TOML file") from None
+    except UnicodeDecodeError as e:
+        raise SceneError(str(p), "", f"not a UTF-8 text file ({e.reason})") from None
+    except OSError as e:
+        raise SceneError(str(p), "", f"cannot read the scene file: {e.strerror or e}") from None
+    return parse_scene(text, source=str(p), base_dir=p.parent)
+
+
+def parse_scene(text: str, source: str = "<string>", base_dir=None) -> Scene:
+    """Validate TOML ``text``; relative particle files resolve against ``base_dir`` (default:
+    the current directory)."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        msg = str(e)
+        m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
+        if m:
+            what = msg[:m.start()].strip()
+            reason = f"TOML syntax error at line {m.group(1)}, column {m.group(2)}: {what}"
+        elif "end of document" in msg:
+            what = msg.replace("(at end of document)", "").strip()
+            n = max(1, len(text.splitlines()))
+            reason = f"TOML syntax error at line {n} (end of document): {what}"
+        else:
+            reason = f"TOML syntax error: {msg}"
+        raise SceneError(source, "", reason) from None
+    return _Parser(source, Path(base_dir) if base_dir is not None else Path.cwd()).scene(doc, text)
+
+
+# ---------------------------------------------------------------------------------------------
+
+def _type_name(value: Any) -> str:
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, dict):
+        return "a table"
+    if isinstance(value, list):
+        return "an array"
+    if isinstance(value, str):
+        return f"the string {value!r}"
+    if isinstance(value, (int, float)):
+        return f"the number {value!r}"
+    return type(value).__name__
+
+
+def _suggest(word: str, choices) -> str:
+    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f"did you mean '{close[0]}'? " if close else ""
+
+
+def _join(key: str, sub: str) -> str:
+    return f"{key}.{sub}" if key else sub
+
+
+class _Parser:
+    def __init__(self, source: str, base_dir: Path):
+        self.source = source
+        self.base_dir = base_dir
+
+    # -- generic helpers ----------------------------------------------------------------------
+    def err(self, key: str, reason: str) -> SceneError:
+        return SceneError(self.source, key, reason)
+
+    def table(self, value: Any, key: str, what: str = "a table") -> dict:
+        if not isinstance(value, dict):
+            raise self.err(key, f"expected {what}, got {_type_name(value)}")
+        return value
+
+    def check_keys(self, tbl: dict, key: str, allowed, required=()) -> None:
+        for k in tbl:
+            if k not in allowed:
+                raise self.err(_join(key, k),
+                               f"unknown key '{k}'; {_suggest(k, allowed)}"
+                               f"allowed keys here: {', '.join(allowed)}")
+        for k in required:
+            if k not in tbl:
+                raise self.err(_join(key, k), "required key is missing")
+
+    def q(self, value: Any, dimension: str, key: str) -> float:
+        return parse_quantity(value, dimension, file=self.source, key=key)
+
+    def positive(self, value: Any, dimension: str, key: str) -> float:
+        x = self.q(value, dimension, key)
+        if not x > 0.0:
+            raise self.err(key, f"must be > 0, got {x:g}")
+        return x
+
+    def nonnegative(self, value: Any, dimension: str, key: str) -> float:
+        x = self.q(value, dimension, key)
+        if not x >= 0.0:
+            raise self.err(key, f"must be >= 0, got {x:g}")
+        return x
+
+    def vec3(self, value: Any, dimension: str, key: str) -> tuple[float, float, float]:
+        return parse_vec3(value, dimension, file=self.source, key=key)
+
+    def direction(self, value: Any, key: str) -> tuple[float, float, float]:
+        v = np.array(self.vec3(value, "dimensionless", key), dtype=float)
+        n = float(np.linalg.norm(v))
+        if not n > 0.0:
+            raise self.err(key, "must be a nonzero vector (it is normalised on load)")
+        return tuple(float(c) for c in v / n)
+
+    def boolean(self, value: Any, key: str) -> bool:
+        if not isinstance(value, bool):
+            raise self.err(key, f"expected true or false, got {_type_name(value)}")
+        return value
+
+    def integer(self, value: Any, key: str) -> int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.err(key, f"expected an integer, got {_type_name(value)}")
+        return value
+
+    def string(self, value: Any, key: str) -> str:
+        if not isinstance(value, str):
+            raise self.err(key, f"expected a string, got {_type_name(value)}")
+        return value
+
+    def material_name(self, value: Any, key: str) -> str:
+        name = self.string(value, key)
+        if name not in self.materials:
+            known = ", ".join(sorted(self.materials)) or "none (add a [materials.NAME] table)"
+            raise self.err(key, f"unknown material '{name}'; {_suggest(name, self.materials)}"
+                                f"defined materials: {known}")
+        return name
+
+    def array_of_tables(self, doc: dict, name: str) -> list[dict]:
+        value = doc.get(name, [])
+        if not isinstance(value, list):
+            raise self.err(name, f"expected an array of tables ([[{name}]]), got "
+                                 f"{_type_name(value)}")
+        for i, item in enumerate(value):
+            self.table(item, f"{name}[{i}]", f"a table ([[{name}]])")
+        return value
+
+    # -- the scene -----------------------------------------------------------------------------
+    def scene(self, doc: dict, text: str) -> Scene:
+        for k in doc:
+            if k in PLANNED_SECTIONS:
+                raise self.err(k, "not supported yet by this version of taichi_dem (planned)")
+        for k in doc:
+            if k not in SECTIONS:
+                raise self.err(k, f"unknown section '{k}'; {_suggest(k, SECTIONS + PLANNED_SECTIONS)}"
+                                  f"allowed sections: {', '.join(SECTIONS)}")
+        simulation = self.simulation(doc.get("simulation", {}))
+        if "domain" not in doc:
+            raise self.err("domain", "required section [domain] is missing (min, max, periodic)")
+        self.domain = self.parse_domain(doc["domain"])
+        self.materials = self.parse_materials(doc.get("materials", {}))
+        interactions, where = self.parse_interactions(self.array_of_tables(doc, "interactions"))
+        walls = self.parse_walls(self.array_of_tables(doc, "walls"))
+        fills = tuple(self.parse_fill(f, f"particles[{i}]")
+                      for i, f in enumerate(self.array_of_tables(doc, "particles")))
+        output = self.parse_output(doc.get("output", {}))
+        self.check_coverage(interactions, fills, walls)
+        return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
+                     materials=self.materials, interactions=interactions, fills=fills,
+                     walls=walls, output=output)
+
+    def simulation(self, value: Any) -> SimulationSettings:
+        key = "simulation"
+        t = self.table(value, key)
+        self.check_keys(t, key, SIMULATION_KEYS)
+        kw: dict[str, Any] = {}
+        if "end_time" in t:
+            kw["end_time"] = self.positive(t["end_time"], "time", f"{key}.end_time")
+        if "dt" in t:
+            dt = t["dt"]
+            if isinstance(dt, str) and dt.strip().lower() == "auto":
+                kw["dt"] = None
+            else:
+                try:
+                    kw["dt"] = self.positive(dt, "time", f"{key}.dt")
+                except SceneError as e:
+                    raise self.err(e.key, f"{e.reason}; dt is \"auto\" or a positive time") from None
+        if "rayleigh_fraction" in t:
+            k = f"{key}.rayleigh_fraction"
+            x = self.q(t["rayleigh_fraction"], "dimensionless", k)
+            if not 0.0 < x <= 1.0:
+                raise self.err(k, f"must be in (0, 1], got {x:g} (typically 0.1 to 0.3)")
+            kw["rayleigh_fraction"] = x
+        if "gravity" in t:
+            kw["gravity"] = self.vec3(t["gravity"], "acceleration", f"{key}.gravity")
+        if "precision" in t:
+            p = t["precision"]
+            if p not in ("f32", "f64"):
+                raise self.err(f"{key}.precision", f"must be \"f32\" or \"f64\", got "
+                                                   f"{_type_name(p)}")
+            kw["precision"] = p
+        if "seed" in t:
+            kw["seed"] = self.integer(t["seed"], f"{key}.seed")
+        if "skin" in t:
+            kw["skin"] = self.positive(t["skin"], "length", f"{key}.skin")
+        return SimulationSettings(**kw)
+
+    def parse_domain(self, value: Any) -> Domain:
+        key = "domain"
+        t = self.table(value, key)
+        self.check_keys(t, key, DOMAIN_KEYS, required=("min", "max"))
+        lo = self.vec3(t["min"], "length", f"{key}.min")
+        hi = self.vec3(t["max"], "length", f"{key}.max")
+        for i, ax in enumerate(AXES):
+            if not lo[i] < hi[i]:
+                raise self.err(f"{key}.max", f"max must exceed min on every axis; on {ax}: "
+                                             f"min = {lo[i]:g}, max = {hi[i]:g}")
+        periodic = t.get("periodic", [])
+        if not isinstance(periodic, list):
+            raise self.err(f"{key}.periodic", f"expected an array of axis names (\"x\", \"y\", "
+                                              f"\"z\"), got {_type_name(periodic)}")
+        seen: list[str] = []
+        for i, a in enumerate(periodic):
+            if a not in AXES:
+                raise self.err(f"{key}.periodic[{i}]", f"must be \"x\", \"y\" or \"z\", got "
+                                                       f"{_type_name(a)}")
+            if a in seen:
+                raise self.err(f"{key}.periodic[{i}]", f"axis \"{a}\" is listed twice")
+            seen.append(a)
+        return Domain(min=lo, max=hi, periodic=tuple(seen))
+
+    def parse_materials(self, value: Any) -> dict[str, Material]:
+        t = self.table(value, "materials", "a table of [materials.NAME] tables")
+        out: dict[str, Material] = {}
+        for name, m in t.items():
+            key = f"materials.{name}"
+            m = self.table(m, key, f"a table ([materials.{name}])")
+            self.check_keys(m, key, MATERIAL_KEYS,
+                            required=("density", "youngs_modulus", "poisson_ratio"))
+            density = self.positive(m["density"], "density", f"{key}.density")
+            e = self.positive(m["youngs_modulus"], "pressure", f"{key}.youngs_modulus")
+            nu = self.q(m["poisson_ratio"], "dimensionless", f"{key}.poisson_ratio")
+            if not -1.0 < nu < 0.5:
+                raise self.err(f"{key}.poisson_ratio",
+                               f"must lie strictly between -1 and 0.5, got {nu:g}")
+            kw: dict[str, Any] = {}
+            if "thermal_conductivity" in m:
+                kw["thermal_conductivity"] = self.positive(
+                    m["thermal_conductivity"], "thermal_conductivity", f"{key}.thermal_conductivity")
+            if "heat_capacity" in m:
+                kw["heat_capacity"] = self.positive(m["heat_capacity"], "specific_heat",
+                                                    f"{key}.heat_capacity")
+            if "emissivity" in m:
+                k = f"{key}.emissivity"
+                x = self.q(m["emissivity"], "dimensionless", k)
+                if not 0.0 <= x <= 1.0:
+                    raise self.err(k, f"must be in [0, 1], got {x:g}")
+                kw["emissivity"] = x
+            if "real_youngs_modulus" in m:
+                k = f"{key}.real_youngs_modulus"
+                x = self.positive(m["real_youngs_modulus"], "pressure", k)
+                if x < e:
+                    raise self.err(k, f"the real (unsoftened) modulus {x:g} Pa must be >= "
+                                      f"youngs_modulus = {e:g} Pa")
+                kw["real_youngs_modulus"] = x
+            out[name] = Material(name=name, density=density, youngs_modulus=e,
+                                 poisson_ratio=nu, **kw)
+        return out
+
+    def parse_interactions(self, items: list[dict]):
+        out: dict[frozenset, Interaction] = {}
+        where: dict[frozenset, str] = {}
+        for i, t in enumerate(items):
+            key = f"interactions[{i}]"
+            self.check_keys(t, key, INTERACTION_KEYS, required=("pair", "restitution", "friction"))
+            pair = t["pair"]
+            if not isinstance(pair, list) or len(pair) != 2:
+                raise self.err(f"{key}.pair", f"expected an array of two material names, got "
+                                              f"{_type_name(pair)}")
+            a = self.material_name(pair[0], f"{key}.pair[0]")
+            b = self.material_name(pair[1], f"{key}.pair[1]")
+            fs = frozenset((a, b))
+            if fs in out:
+                raise self.err(f"{key}.pair", f"duplicate: the pair ('{a}', '{b}') is already "
+                                              f"given by {where[fs]}")
+            e = self.q(t["restitution"], "dimensionless", f"{key}.restitution")
+            if not 0.0 < e <= 1.0:
+                raise self.err(f"{key}.restitution", f"must be in (0, 1], got {e:g}")
+            mu = self.nonnegative(t["friction"], "dimensionless", f"{key}.friction")
+            mur = 0.0
+            if "rolling_friction" in t:
+                mur = self.nonnegative(t["rolling_friction"], "dimensionless",
+                                       f"{key}.rolling_friction")
+            model = t.get("model", "constant_torque")
+            if model not in ROLLING_MODELS:
+                raise self.err(f"{key}.model", f"must be \"constant_torque\" or \"epsd\", got "
+                                               f"{_type_name(model)}")
+            out[fs] = Interaction(pair=(a, b), restitution=e, friction=mu, rolling_friction=mur,
+                                  rolling_model=model)
+            where[fs] = key
+        return out, where
+
+    def parse_plane(self, value: Any, key: str):
+        t = self.table(value, key, "a table { point = [x, y, z], normal = [nx, ny, nz] }")
+        self.check_keys(t, key, PLANE_KEYS, required=PLANE_KEYS)
+        return self.vec3(t["point"], "length", f"{key}.point"), self.direction(t["normal"],
+                                                                                f"{key}.normal")
+
+    def parse_walls(self, items: list[dict]) -> tuple[PlaneWall, ...]:
+        out: list[PlaneWall] = []
+        names: dict[str, str] = {}
+        for i, t in enumerate(items):
+            key = f"walls[{i}]"
+            self.check_keys(t, key, WALL_KEYS, required=("name", "plane", "material"))
+            name = self.string(t["name"], f"{key}.name")
+            if not name.strip():
+                raise self.err(f"{key}.name", "must be a non-empty name")
+            if name in names:
+                raise self.err(f"{key}.name", f"duplicate wall name '{name}' (also {names[name]})")
+            names[name] = key
+            point, normal = self.parse_plane(t["plane"], f"{key}.plane")
+            material = self.material_name(t["material"], f"{key}.material")
+            temp = None
+            if "temperature" in t:
+                temp = self.positive(t["temperature"], "temperature", f"{key}.temperature")
+            out.append(PlaneWall(name=name, point=point, normal=normal, material=material,
+                                 temperature=temp))
+        return tuple(out)
+
+    def parse_radius(self, value: Any, key: str) -> RadiusDistribution:
+        if isinstance(value, dict):
+            self.check_keys(value, key, RADIUS_KEYS, required=("mean", "std"))
+            mean = self.positive(value["mean"], "length", f"{key}.mean")
+            std = self.nonnegative(value["std"], "length", f"{key}.std")
+            if std > 0.0:
+                for k in ("min", "max"):
+                    if k not in value:
+                        raise self.err(f"{key}.{k}", "required when std > 0 (the normal "
+                                                     "distribution is truncated to [min, max])")
+            lo = self.positive(value["min"], "length", f"{key}.min") if "min" in value else None
+            hi = self.positive(value["max"], "length", f"{key}.max") if "max" in value else None
+            if lo is not None and not lo <= mean:
+                raise self.err(f"{key}.min", f"need 0 < min <= mean <= max; min = {lo:g} > "
+                                             f"mean = {mean:g}")
+            if hi is not None and not mean <= hi:
+                raise self.err(f"{key}.max", f"need 0 < min <= mean <= max; max = {hi:g} < "
+                                             f"mean = {mean:g}")
+            return RadiusDistribution(mean=mean, std=std, min=lo, max=hi)
+        try:
+            return RadiusDistribution(mean=self.positive(value, "length", key))
+        except SceneError as e:
+            raise self.err(key, f"{e.reason}; radius is a positive length or a table "
+                                f"{{ mean, std, min, max }}") from None
+
+    def parse_region(self, value: Any, key: str) -> Region:
+        t = self.table(value, key, "a table { box = {...} } or { cylinder = {...} }")
+        self.check_keys(t, key, REGION_KINDS)
+        if len(t) != 1:
+            raise self.err(key, "give exactly one of box = { min, max } or cylinder = "
+                                "{ axis_point, axis_direction, radius, length }")
+        kind = next(iter(t))
+        k = f"{key}.{kind}"
+        sub = self.table(t[kind], k)
+        if kind == "box":
+            self.check_keys(sub, k, BOX_KEYS, required=BOX_KEYS)
+            lo = self.vec3(sub["min"], "length", f"{k}.min")
+            hi = self.vec3(sub["max"], "length", f"{k}.max")
+            for i, ax in enumerate(AXES):
+                if not lo[i] < hi[i]:
+                    raise self.err(f"{k}.max", f"max must exceed min on every axis; on {ax}: "
+                                               f"min = {lo[i]:g}, max = {hi[i]:g}")
+            region = Region(kind="box", box_min=lo, box_max=hi)
+            amin, amax = np.array(lo), np.array(hi)
+        else:
+            self.check_keys(sub, k, CYLINDER_KEYS, required=CYLINDER_KEYS)
+            p = self.vec3(sub["axis_point"], "length", f"{k}.axis_point")
+            d = self.direction(sub["axis_direction"], f"{k}.axis_direction")
+            r = self.positive(sub["radius"], "length", f"{k}.radius")
+            length = self.positive(sub["length"], "length", f"{k}.length")
+            region = Region(kind="cylinder", axis_point=p, axis_direction=d, radius=r,
+                            length=length)
+            amin, amax = region_bounds(region)
+        dlo, dhi = np.array(self.domain.min), np.array(self.domain.max)
+        tol = 1e-9 * float(np.max(dhi - dlo))
+        if np.any(amin < dlo - tol) or np.any(amax > dhi + tol):
+            raise self.err(k, f"the region (bounds {_fmt(amin)} to {_fmt(amax)}) must lie inside "
+                              f"the domain ({_fmt(dlo)} to {_fmt(dhi)})")
+        return region
+
+    def parse_fill(self, t: dict, key: str) -> ParticleFill:
+        self.check_keys(t, key, PARTICLE_KEYS, required=("material",))
+        material = self.material_name(t["material"], f"{key}.material")
+        kw: dict[str, Any] = {}
+        if "velocity" in t:
+            kw["velocity"] = self.vec3(t["velocity"], "speed", f"{key}.velocity")
+        if "angular_velocity" in t:
+            kw["angular_velocity"] = self.vec3(t["angular_velocity"], "angular_speed",
+                                               f"{key}.angular_velocity")
+        if "temperature" in t:
+            kw["temperature"] = self.positive(t["temperature"], "temperature",
+                                              f"{key}.temperature")
+        if "fixed" in t:
+            kw["fixed"] = self.boolean(t["fixed"], f"{key}.fixed")
+        if "file" in t:
+            for k in ("count", "region", "radius"):
+                if k in t:
+                    raise self.err(f"{key}.{k}", f"not allowed together with file (the file "
+                                                 f"gives positions and radii); use either file "
+                                                 f"or count + region + radius")
+            fname = self.string(t["file"], f"{key}.file")
+            arrays = self.read_csv(fname, f"{key}.file")
+            return ParticleFill(key=key, material=material, file=fname, **arrays, **kw)
+        for k in ("count", "region", "radius"):
+            if k not in t:
+                raise self.err(f"{key}.{k}", "required key is missing (a fill needs count, "
+                                             "region and radius, or file)")
+        radius = self.parse_radius(t["radius"], f"{key}.radius")
+        count = self.integer(t["count"], f"{key}.count")
+        if count < 0:
+            raise self.err(f"{key}.count", f"must be >= 0, got {count}")
+        region = self.parse_region(t["region"], f"{key}.region")
+        return ParticleFill(key=key, material=material, radius=radius, count=count,
+                            region=region, **kw)
+
+    def read_csv(self, fname: str, key: str) -> dict[str, Optional[np.ndarray]]:
+        path = Path(fname)
+        if not path.is_absolute():
+            path = self.base_dir / path
+        try:
+            with open(path, newline="", encoding="utf-8") as fh:
+                rows = list(csv.reader(fh))
+        except FileNotFoundError:
+            raise self.err(key, f"particle file '{fname}' not found (looked for {path})") from None
+        except (OSError, UnicodeDecodeError) as e:
+            raise self.err(key, f"cannot read particle file '{fname}' ({path}): {e}") from None
+        csv_file = str(path)
+
+        def bad(reason: str) -> SceneError:
+            return SceneError(csv_file, key, reason)
+
+        # skip leading blank lines / comments
+        lines = [(i + 1, r) for i, r in enumerate(rows)
+                 if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
+        if not lines:
+            raise bad("empty file; expected a header x,y,z,radius[,vx,vy,vz[,wx,wy,wz]]")
+        hline, header = lines[0]
+        names = [h.strip().lower() for h in header]
+        for n in names:
+            if n not in CSV_COLUMNS:
+                raise bad(f"line {hline}: unknown column '{n}' in the header; "
+                          f"{_suggest(n, CSV_COLUMNS)}expected x,y,z,radius[,vx,vy,vz[,wx,wy,wz]]")
+        for n in set(names):
+            if names.count(n) > 1:
+                raise bad(f"line {hline}: column '{n}' appears twice in the header")
+        for group in (("x", "y", "z", "radius"),):
+            for n in group:
+                if n not in names:
+                    raise bad(f"line {hline}: the header lacks column '{n}'; expected "
+                              f"x,y,z,radius[,vx,vy,vz[,wx,wy,wz]]")
+        for group in (("vx", "vy", "vz"), ("wx", "wy", "wz")):
+            present = [n for n in group if n in names]
+            if present and len(present) != 3:
+                raise bad(f"line {hline}: give all of {','.join(group)} or none of them")
+        data = np.empty((len(lines) - 1, len(names)), dtype=float)
+        for r, (lineno, row) in enumerate(lines[1:]):
+            if len(row) != len(names):
+                raise bad(f"line {lineno}: {len(row)} values, the header has {len(names)}")
+            for c, cell in enumerate(row):
+                try:
+                    v = float(cell)
+                except ValueError:
+                    raise bad(f"line {lineno}, column '{names[c]}': cannot read {cell.strip()!r} "
+                              f"as a number") from None
+                if not math.isfinite(v):
+                    raise bad(f"line {lineno}, column '{names[c]}': {cell.strip()} is not finite")
+                data[r, c] = v
+        col = {n: data[:, i] for i, n in enumerate(names)}
+        positions = np.stack([col["x"], col["y"], col["z"]], axis=1)
+        radii = col["radius"].copy()
+        row_lines = [ln for ln, _ in lines[1:]]
+        badr = np.nonzero(~(radii > 0.0))[0]
+        if len(badr):
+            raise bad(f"line {row_lines[badr[0]]}: radius must be > 0, got {radii[badr[0]]:g}")
+        lo, hi = np.array(self.domain.min), np.array(self.domain.max)
+        outside = np.nonzero(np.any((positions < lo) | (positions > hi), axis=1))[0]
+        if len(outside):
+            j = outside[0]
+            raise bad(f"line {row_lines[j]}: the particle centre {_fmt(positions[j])} lies "
+                      f"outside the domain ({_fmt(lo)} to {_fmt(hi)})")
+        vel = np.stack([col["vx"], col["vy"], col["vz"]], axis=1) if "vx" in col else None
+        ang = np.stack([col["wx"], col["wy"], col["wz"]], axis=1) if "wx" in col else None
+        return dict(positions=positions, radii=radii, velocities=vel, angular_velocities=ang)
+
+    def parse_output(self, value: Any) -> Output:
+        key = "output"
+        t = self.table(value, key)
+        self.check_keys(t, key, OUTPUT_KEYS)
+        kw: dict[str, Any] = {}
+        if "interval" in t:
+            kw["interval"] = self.positive(t["interval"], "time", f"{key}.interval")
+        for k in ("rrd", "h5"):
+            if k in t:
+                s = self.string(t[k], f"{key}.{k}")
+                if not s.strip():
+                    raise self.err(f"{key}.{k}", "must be a non-empty file path")
+                kw[k] = s
+        if "checkpoint_interval" in t:
+            kw["checkpoint_interval"] = self.positive(t["checkpoint_interval"], "time",
+                                                      f"{key}.checkpoint_interval")
+        return Output(**kw)
+
+    def check_coverage(self, interactions: dict, fills, walls) -> None:
+        """Every pair of materials that can meet needs an [[interactions]] entry."""
+        particle_mats: list[str] = []
+        for f in fills:
+            if f.material not in particle_mats:
+                particle_mats.append(f.material)
+        needed: list[tuple[str, str, str]] = []
+        for i, a in enumerate(particle_mats):
+            for b in particle_mats[i:]:
+                needed.append((a, b, f"particles of '{a}' and of '{b}'"))
+        for w in walls:
+            for a in particle_mats:
+                needed.append((a, w.material, f"particles of '{a}' and wall '{w.name}'"))
+        for a, b, why in needed:
+            if frozenset((a, b)) not in interactions:
+                raise self.err("interactions",
+                               f"no interaction for the material pair ('{a}', '{b}'), which can "
+                               f"meet ({why}); add [[interactions]] with pair = [\"{a}\", "
+                               f"\"{b}\"], restitution and friction")
+
+
+def region_bounds(region: Region) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounding box of a region."""
+    if region.kind == "box":
+        return np.array(region.box_min, float), np.array(region.box_max, float)
+    p0 = np.array(region.axis_point, float)
+    d = np.array(region.axis_direction, float)
+    p1 = p0 + d * region.length
+    ext = region.radius * np.sqrt(np.clip(1.0 - d * d, 0.0, 1.0))
+    return np.minimum(p0, p1) - ext, np.maximum(p0, p1) + ext
+
+
+def _fmt(v) -> str:
+    return "[" + ", ".join(f"{float(x):g}" for x in v) + "]"

@@ -1,0 +1,427 @@
+"""Initial particle placement: turn a Scene's fills into arrays of non-overlapping spheres.
+
+File fills are taken as given. A ``count``/``region`` fill is placed on a face-centred-cubic
+lattice whose nearest-neighbour spacing is at least ``2 r_max (1 + 5 %)``, clipped to the
+region: every site must hold a sphere of the largest radius wholly inside the region and the
+domain, on the positive side of every wall plane, and clear of every particle placed before
+(file fills first, then earlier count fills, with minimum-image distances across periodic
+faces). ``count`` sites are drawn at random, radii are sampled, and each sphere is jittered
+inside the ball of radius ``spacing / 2`` around its site (so new spheres can never overlap
+each other); a jittered sphere that would break a constraint stays at its site.
+
+Pure numpy (a sorted-key hash grid for neighbour queries); deterministic for a given rng seed.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scene import ParticleFill, RadiusDistribution, Region, Scene, SceneError
+
+GAP = 0.05                 # lattice spacing = 2 r_max (1 + GAP)
+_CLEAR = 1e-9              # relative clearance required between spheres
+
+
+@dataclass(frozen=True, eq=False)
+class PlacedParticles:
+    """Placed initial particles, SI, in fill order.
+
+    ``material`` indexes ``materials`` (the scene's material names, sorted); ``fill`` indexes
+    ``scene.fills``; ``temperature`` is NaN where the fill gives none.
+    """
+    position: np.ndarray           # (n, 3) float64, m
+    radius: np.ndarray             # (n,) float64, m
+    velocity: np.ndarray           # (n, 3) float64, m/s
+    angular_velocity: np.ndarray   # (n, 3) float64, rad/s
+    fixed: np.ndarray              # (n,) bool
+    material: np.ndarray           # (n,) int32, index into `materials`
+    fill: np.ndarray               # (n,) int32, index into scene.fills
+    temperature: np.ndarray        # (n,) float64, K; NaN = none given
+    materials: tuple[str, ...] = ()
+
+    @property
+    def n(self) -> int:
+        return int(self.radius.shape[0])
+
+    def __len__(self) -> int:
+        return self.n
+
+
+def sample_radii(dist: RadiusDistribution, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` radii: constant, or a normal(mean, std) truncated to [min, max] (by rejection from
+    the normal or from a uniform proposal, whichever accepts more; both accept >= 4 %)."""
+    if n == 0:
+        return np.empty(0)
+    if dist.std == 0.0:
+        return np.full(n, dist.mean)
+    lo, hi, mu, sd = float(dist.min), float(dist.max), dist.mean, dist.std
+    if hi <= lo:
+        return np.full(n, lo)
+    out = np.empty(n)
+    filled = 0
+    use_uniform = (hi - lo) < 2.5 * sd
+    while filled < n:
+        m = max(2 * (n - filled), 64)
+        if use_uniform:
+            x = rng.uniform(lo, hi, m)
+            accept = rng.uniform(0.0, 1.0, m) < np.exp(-0.5 * ((x - mu) / sd) ** 2)
+            x = x[accept]
+        else:
+            x = rng.normal(mu, sd, m)
+            x = x[(x >= lo) & (x <= hi)]
+        k = min(len(x), n - filled)
+        out[filled:filled + k] = x[:k]
+        filled += k
+    return out
+
+
+# --- neighbour queries ---------------------------------------------------------------------------
+
+class _Grid:
+    """Points binned into cells of size >= ``cell``; finds candidate pairs within one cell."""
+
+    def __init__(self, points: np.ndarray, cell: float, lo, hi, periodic):
+        self.lo = np.asarray(lo, float)
+        self.length = np.asarray(hi, float) - self.lo
+        self.periodic = np.asarray(periodic, bool)
+        n = np.maximum(np.floor(self.length / cell).astype(np.int64), 1)
+        # non-periodic axes: one extra cell each side for points on / slightly past the faces
+        self.n = np.where(self.periodic, n, n + 2)
+        self.size = np.where(self.periodic, self.length / n, cell)
+        self.dense = float(np.prod(self.n.astype(float))) < 2.0 ** 62
+        self.points = points
+        c = self._cells(points)
+        keys = self._key(c)
+        self.order = np.argsort(keys, kind="stable")
+        self.keys = keys[self.order]
+        # a dense cell table (O(1) look-ups) when the number of cells is moderate
+        ncell = float(np.prod(self.n.astype(float)))
+        self.table = None
+        if self.dense and ncell <= max(16.0 * len(points), float(1 << 22)):
+            counts = np.bincount(self.keys, minlength=int(ncell))
+            self.table = (np.cumsum(counts) - counts, counts)
+
+    def _cells(self, p: np.ndarray) -> np.ndarray:
+        c = np.floor((p - self.lo) / self.size).astype(np.int64)
+        c = np.where(self.periodic, np.mod(c, self.n), np.clip(c + 1, 0, self.n - 1))
+        return c
+
+    def _key(self, c: np.ndarray) -> np.ndarray:
+        if self.dense:
+            return (c[:, 0] * self.n[1] + c[:, 1]) * self.n[2] + c[:, 2]
+        h = (c[:, 0].astype(np.uint64) * np.uint64(73856093)) ^ \
+            (c[:, 1].astype(np.uint64) * np.uint64(19349663)) ^ \
+            (c[:, 2].astype(np.uint64) * np.uint64(83492791))
+        return h.view(np.int64)
+
+    def delta(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """a - b with the minimum-image convention on periodic axes."""
+        d = a - b
+        if self.periodic.any():
+            L = np.where(self.periodic, self.length, 0.0)
+            d = d - L * np.round(d / np.where(self.periodic, self.length, 1.0))
+        return d
+
+    def pairs(self, q: np.ndarray):
+        """Yield (query index, point index) candidate arrays, one batch per neighbour offset."""
+        if len(self.keys) == 0 or len(q) == 0:
+            return
+        cq = self._cells(q)
+        # per axis and offset: the neighbour cell index and (non-periodic axes) its validity
+        comp = []
+        for a in range(3):
+            per_off = {}
+            for o in (-1, 0, 1):
+                eff = o % int(self.n[a]) if self.periodic[a] else o
+                if eff in per_off:
+                    continue
+                c = cq[:, a] + o
+                if self.periodic[a]:
+                    per_off[eff] = (np.mod(c, self.n[a]), None)
+                else:
+                    per_off[eff] = (c, (c >= 0) & (c < self.n[a]) if o else None)
+            comp.append(list(per_off.values()))
+        strides = (self.n[1] * self.n[2], self.n[2], 1)
+        for cx, vx in comp[0]:
+            for cy, vy in comp[1]:
+                for cz, vz in comp[2]:
+                    valid = [v for v in (vx, vy, vz) if v is not None]
+                    if valid:
+                        ok = valid[0] if len(valid) == 1 else np.logical_and.reduce(valid)
+                        qi = np.nonzero(ok)[0]
+                        if len(qi) == 0:
+                            continue
+                        cx_, cy_, cz_ = cx[qi], cy[qi], cz[qi]
+                    else:
+                        qi = None
+                        cx_, cy_, cz_ = cx, cy, cz
+                    if self.dense:
+                        keys = cx_ * strides[0] + cy_ * strides[1] + cz_
+                    else:
+                        keys = self._key(np.stack([cx_, cy_, cz_], axis=1))
+                    if self.table is not None:
+                        cnt = self.table[1][keys]
+                        has = np.nonzero(cnt)[0]
+                        cnt = cnt[has]
+                        start = self.table[0][keys[has]]
+                    else:
+                        start = np.searchsorted(self.keys, keys, "left")
+                        cnt = np.searchsorted(self.keys, keys, "right") - start
+                        has = np.nonzero(cnt)[0]
+                        start, cnt = start[has], cnt[has]
+                    if len(has) == 0:
+                        continue
+                    qsel = has if qi is None else qi[has]
+                    total = int(cnt.sum())
+                    rep_q = np.repeat(qsel, cnt)
+                    first = np.repeat(np.cumsum(cnt) - cnt, cnt)
+                    idx = np.repeat(start, cnt) + (np.arange(total) - first)
+                    yield rep_q, self.order[idx]
+
+
+def _conflicts(grid: _Grid, radii_pts: np.ndarray, q: np.ndarray, rq: np.ndarray,
+               exclude_self: bool = False) -> np.ndarray:
+    """Mask of queries overlapping any grid point (distance < (rq + r_point)(1 + clearance))."""
+    bad = np.zeros(len(q), bool)
+    for qi, pj in grid.pairs(q):
+        if exclude_self:
+            keep = qi != pj
+            qi, pj = qi[keep], pj[keep]
+        d = grid.delta(q[qi], grid.points[pj])
+        reach = (rq[qi] + radii_pts[pj]) * (1.0 + _CLEAR)
+        hit = np.einsum("ij,ij->i", d, d) < reach * reach
+        bad[qi[hit]] = True
+    return bad
+
+
+# --- regions and constraints ---------------------------------------------------------------------
+
+def _frame(region: Region):
+    """(origin, 3x3 rows = local axes) so that world = origin + local @ axes."""
+    if region.kind == "box":
+        return np.zeros(3), np.eye(3)
+    a = np.asarray(region.axis_direction, float)
+    a = a / np.linalg.norm(a)
+    helper = np.eye(3)[int(np.argmin(np.abs(a)))]
+    e1 = np.cross(a, helper)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    return np.asarray(region.axis_point, float), np.stack([a, e1, e2])
+
+
+def _local_bounds(region: Region):
+    if region.kind == "box":
+        return np.asarray(region.box_min, float), np.asarray(region.box_max, float)
+    R = region.radius
+    return np.array([0.0, -R, -R]), np.array([region.length, R, R])
+
+
+def _inside_region(region: Region, local: np.ndarray, r: np.ndarray) -> np.ndarray:
+    lo, hi = _local_bounds(region)
+    rr = r[:, None]
+    if region.kind == "box":
+        return np.all((local - rr >= lo) & (local + rr <= hi), axis=1)
+    u = local[:, 0]
+    rad2 = local[:, 1] ** 2 + local[:, 2] ** 2
+    room = region.radius - r
+    return (u - r >= 0.0) & (u + r <= region.length) & (room >= 0.0) & (rad2 <= room * room)
+
+
+def _region_volume(region: Region) -> float:
+    lo, hi = _local_bounds(region)
+    if region.kind == "box":
+        return float(np.prod(hi - lo))
+    return float(np.pi * region.radius ** 2 * region.length)
+
+
+def _valid(scene: Scene, region: Region, origin, axes, local, world, r, grid, grid_r):
+    """Mask: sphere (world centre, radius r) inside region and domain, clear of walls and of
+    earlier particles."""
+    dlo, dhi = np.asarray(scene.domain.min), np.asarray(scene.domain.max)
+    ok = _inside_region(region, local, r)
+    ok &= np.all((world - r[:, None] >= dlo) & (world + r[:, None] <= dhi), axis=1)
+    for w in scene.walls:
+        ok &= (world - np.asarray(w.point)) @ np.asarray(w.normal) >= r
+    if grid is not None and ok.any():
+        idx = np.nonzero(ok)[0]
+        ok[idx[_conflicts(grid, grid_r, world[idx], r[idx])]] = False
+    return ok
+
+
+def _lattice(region: Region, spacing: float, margin: float):
+    """FCC sites (local coordinates) with nearest-neighbour distance ``spacing``, centred in the
+    region's local box shrunk by ``margin``; returns (points, parity) for both FCC sublattices."""
+    lo, hi = _local_bounds(region)
+    h = spacing / np.sqrt(2.0)
+    axes = []
+    for a in range(3):
+        span = hi[a] - lo[a] - 2.0 * margin
+        if span < 0.0:
+            return np.empty((0, 3)), np.empty(0, np.int64)
+        n = int(np.floor(span / h + 1e-9)) + 1
+        start = lo[a] + margin + 0.5 * (span - (n - 1) * h)
+        axes.append((start + h * np.arange(n), np.arange(n)))
+    gx, gy, gz = np.meshgrid(axes[0][0], axes[1][0], axes[2][0], indexing="ij")
+    ix, iy, iz = np.meshgrid(axes[0][1], axes[1][1], axes[2][1], indexing="ij")
+    pts = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1)
+    parity = ((ix + iy + iz) % 2).ravel()
+    if region.kind == "cylinder":
+        room = region.radius - margin
+        keep = pts[:, 1] ** 2 + pts[:, 2] ** 2 <= room * room
+        pts, parity = pts[keep], parity[keep]
+    return pts, parity
+
+
+def _sites(scene: Scene, region: Region, spacing: float, r_max: float, grid, grid_r):
+    """Valid lattice sites (world coordinates) for spheres of radius <= r_max."""
+    origin, axes = _frame(region)
+    local, parity = _lattice(region, spacing, r_max * (1.0 + 1e-6))
+    if len(local) == 0:
+        return np.empty((0, 3))
+    world = origin + local @ axes
+    ok = _valid(scene, region, origin, axes, local, world, np.full(len(local), r_max), grid,
+                grid_r)
+    best = None
+    for par in (0, 1):
+        sel = world[ok & (parity == par)]
+        sel = _drop_periodic_conflicts(scene, sel, spacing)
+        if best is None or len(sel) > len(best):
+            best = sel
+    return best
+
+
+def _drop_periodic_conflicts(scene: Scene, sites: np.ndarray, spacing: float) -> np.ndarray:
+    """Remove sites whose periodic image comes closer than ``spacing`` to another site."""
+    per = [ax in scene.domain.periodic for ax in "xyz"]
+    if not any(per) or len(sites) < 2:
+        return sites
+    lo, hi = np.asarray(scene.domain.min), np.asarray(scene.domain.max)
+    span = sites.max(axis=0) - sites.min(axis=0)
+    if not any(p and span[a] + spacing > (hi[a] - lo[a]) * (1 - 1e-12)
+               for a, p in enumerate(per)):
+        return sites
+    # only sites within one spacing of a periodic face can meet an image
+    near = np.zeros(len(sites), bool)
+    for a, p in enumerate(per):
+        if p:
+            near |= (sites[:, a] - lo[a] < spacing) | (hi[a] - sites[:, a] < spacing)
+    idx = np.nonzero(near)[0]
+    if len(idx) < 2:
+        return sites
+    sub = sites[idx]
+    grid = _Grid(sub, spacing, lo, hi, per)
+    drop = np.zeros(len(sub), bool)
+    limit = (spacing * (1.0 - 1e-9)) ** 2
+    for qi, pj in grid.pairs(sub):
+        keep = qi < pj
+        qi, pj = qi[keep], pj[keep]
+        d = grid.delta(sub[qi], sub[pj])
+        hit = np.einsum("ij,ij->i", d, d) < limit
+        # drop the member of each conflicting pair nearer the upper faces
+        qi, pj = qi[hit], pj[hit]
+        upper = np.where(sub[qi].sum(axis=1) >= sub[pj].sum(axis=1), qi, pj)
+        drop[upper] = True
+    keep_mask = np.ones(len(sites), bool)
+    keep_mask[idx[drop]] = False
+    return sites[keep_mask]
+
+
+def _place_region_fill(scene: Scene, fill: ParticleFill, rng: np.random.Generator,
+                       prev_pos: np.ndarray, prev_r: np.ndarray):
+    count = fill.count
+    if count == 0:
+        return np.empty((0, 3)), np.empty(0)
+    region = fill.region
+    r_max = fill.radius.largest
+    radii = sample_radii(fill.radius, count, rng)
+    base = 2.0 * r_max * (1.0 + GAP)
+    dlo, dhi = np.asarray(scene.domain.min), np.asarray(scene.domain.max)
+    per = [ax in scene.domain.periodic for ax in "xyz"]
+    grid = None
+    if len(prev_pos):
+        grid = _Grid(prev_pos, r_max + float(prev_r.max()), dlo, dhi, per)
+
+    # A coarser lattice for sparse fills keeps the site count near a few times `count`.
+    target = 4 * count + 1000
+    n_est = _region_volume(region) * np.sqrt(2.0) / base ** 3
+    factor = max(1.0, (n_est / target) ** (1.0 / 3.0))
+    while True:
+        spacing = base * factor
+        sites = _sites(scene, region, spacing, r_max, grid, prev_r)
+        if len(sites) >= count or factor == 1.0:
+            break
+        factor = max(1.0, factor / 2.0)
+    if len(sites) < count:
+        raise SceneError(
+            scene.source, f"{fill.key}.count",
+            f"cannot place {count} spheres: the region holds at most {len(sites)} spheres of "
+            f"radius {r_max:g} m (on a lattice of spacing {base:g} m, clear of walls and earlier "
+            f"particles); enlarge the region or reduce count")
+    chosen = sites[rng.choice(len(sites), size=count, replace=False)]
+
+    # jitter within the ball of radius spacing/2 around each site
+    room = np.maximum(0.5 * spacing - radii, 0.0) * (1.0 - 1e-9)
+    direction = rng.normal(size=(count, 3))
+    direction /= np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300)
+    dist = room * rng.uniform(0.0, 1.0, count) ** (1.0 / 3.0)
+    moved = chosen + direction * dist[:, None]
+    origin, axes = _frame(region)
+    local = (moved - origin) @ axes.T
+    ok = _valid(scene, region, origin, axes, local, moved, radii, grid, prev_r)
+    pos = np.where(ok[:, None], moved, chosen)
+    return pos, radii
+
+
+def place_fills(scene: Scene, rng: np.random.Generator) -> PlacedParticles:
+    """Place every fill of ``scene``: file fills as given, count/region fills without overlap.
+
+    Raises :class:`SceneError` (key ``particles[i].count``) when a region cannot hold its count.
+    """
+    materials = tuple(sorted(scene.materials))
+    mat_index = {m: i for i, m in enumerate(materials)}
+    fills = scene.fills
+    pos: list = [None] * len(fills)
+    rad: list = [None] * len(fills)
+    for i, f in enumerate(fills):
+        if f.positions is not None:
+            pos[i] = np.asarray(f.positions, float).reshape(-1, 3)
+            rad[i] = np.asarray(f.radii, float).reshape(-1)
+    prev_pos = [p for p in pos if p is not None]
+    prev_r = [r for r in rad if r is not None]
+    for i, f in enumerate(fills):
+        if f.positions is not None:
+            continue
+        pp = np.concatenate(prev_pos) if prev_pos else np.empty((0, 3))
+        pr = np.concatenate(prev_r) if prev_r else np.empty(0)
+        pos[i], rad[i] = _place_region_fill(scene, f, rng, pp, pr)
+        prev_pos.append(pos[i])
+        prev_r.append(rad[i])
+
+    def per_fill(value_of, width, dtype):
+        parts = [value_of(i, f, len(rad[i])) for i, f in enumerate(fills)]
+        shape = (0, width) if width else (0,)
+        return np.concatenate(parts).astype(dtype) if parts else np.empty(shape, dtype)
+
+    def vel(i, f, n):
+        if f.velocities is not None:
+            return np.asarray(f.velocities, float).reshape(n, 3)
+        return np.tile(np.asarray(f.velocity, float), (n, 1))
+
+    def ang(i, f, n):
+        if f.angular_velocities is not None:
+            return np.asarray(f.angular_velocities, float).reshape(n, 3)
+        return np.tile(np.asarray(f.angular_velocity, float), (n, 1))
+
+    return PlacedParticles(
+        position=per_fill(lambda i, f, n: pos[i], 3, np.float64),
+        radius=per_fill(lambda i, f, n: rad[i], 0, np.float64),
+        velocity=per_fill(vel, 3, np.float64),
+        angular_velocity=per_fill(ang, 3, np.float64),
+        fixed=per_fill(lambda i, f, n: np.full(n, f.fixed), 0, bool),
+        material=per_fill(lambda i, f, n: np.full(n, mat_index[f.material]), 0, np.int32),
+        fill=per_fill(lambda i, f, n: np.full(n, i), 0, np.int32),
+        temperature=per_fill(lambda i, f, n: np.full(
+            n, np.nan if f.temperature is None else f.temperature), 0, np.float64),
+        materials=materials,
+    )

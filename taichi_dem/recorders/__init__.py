@@ -1,0 +1,1 @@
+"""Recorders observe the simulation and write it out; they never change its state."""

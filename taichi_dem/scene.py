@@ -1,0 +1,173 @@
+"""What a scene *is*: frozen, validated plain data in SI units (no Taichi).
+
+The loader (:mod:`taichi_dem.loader`) turns a TOML file into a :class:`Scene`; the engine
+(:mod:`taichi_dem.simulation`) turns a Scene into device state. Nothing here allocates or
+compiles anything, so a Scene can be built, inspected and validated cheaply (``taichi-dem check``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+Vec3 = tuple[float, float, float]
+
+
+class SceneError(Exception):
+    """Bad input: names the file, the key (dotted TOML path) and the reason.
+
+    The CLI prints ``str(err)`` as one paragraph and exits with status 2.
+    """
+
+    def __init__(self, file: str, key: str, reason: str):
+        self.file, self.key, self.reason = str(file), key, reason
+        super().__init__(f"{self.file}: {key}: {reason}" if key else f"{self.file}: {reason}")
+
+
+@dataclass(frozen=True)
+class SimulationSettings:
+    end_time: float = 1.0                # s
+    dt: Optional[float] = None           # s; None = automatic (rayleigh_fraction x Rayleigh time)
+    rayleigh_fraction: float = 0.2
+    gravity: Vec3 = (0.0, 0.0, -9.81)    # m/s^2
+    precision: str = "f32"               # "f32" | "f64"
+    seed: int = 1
+    skin: Optional[float] = None         # m, Verlet skin; None = 0.1 x mean diameter (LAMMPS-like)
+
+
+@dataclass(frozen=True)
+class Domain:
+    min: Vec3
+    max: Vec3
+    periodic: tuple[str, ...] = ()       # subset of ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class Material:
+    name: str
+    density: float                       # kg/m^3
+    youngs_modulus: float                # Pa (possibly softened)
+    poisson_ratio: float
+    thermal_conductivity: Optional[float] = None   # W/(m K)
+    heat_capacity: Optional[float] = None          # J/(kg K)
+    emissivity: Optional[float] = None
+    real_youngs_modulus: Optional[float] = None    # Pa, unsoftened (conduction correction)
+
+    @property
+    def shear_modulus(self) -> float:
+        """G = E / (2 (1 + v)), Pa."""
+        return self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio))
+
+
+@dataclass(frozen=True)
+class Interaction:
+    pair: tuple[str, str]
+    restitution: float                   # (0, 1]
+    friction: float                      # Coulomb sliding coefficient mu_s >= 0
+    rolling_friction: float = 0.0        # mu_r >= 0; 0 disables
+    rolling_model: str = "constant_torque"   # "constant_torque" | "epsd"
+
+
+@dataclass(frozen=True)
+class RadiusDistribution:
+    """Constant radius (std = 0) or a normal distribution truncated to [min, max], m."""
+    mean: float
+    std: float = 0.0
+    min: Optional[float] = None
+    max: Optional[float] = None
+
+    @property
+    def largest(self) -> float:
+        return self.mean if self.std == 0.0 else float(self.max)
+
+    @property
+    def smallest(self) -> float:
+        return self.mean if self.std == 0.0 else float(self.min)
+
+
+@dataclass(frozen=True)
+class Region:
+    """A box (``box_min``/``box_max``) or a cylinder running from ``axis_point`` along the unit
+    ``axis_direction`` for ``length`` with ``radius``."""
+    kind: str                            # "box" | "cylinder"
+    box_min: Optional[Vec3] = None
+    box_max: Optional[Vec3] = None
+    axis_point: Optional[Vec3] = None
+    axis_direction: Optional[Vec3] = None
+    radius: Optional[float] = None
+    length: Optional[float] = None
+
+
+@dataclass(frozen=True, eq=False)
+class ParticleFill:
+    """An initial fill: ``count`` spheres placed without overlap in ``region``, or the explicit
+    particles of a CSV ``file`` (arrays already read, SI)."""
+    key: str                             # e.g. "particles[0]", for error messages
+    material: str
+    radius: Optional[RadiusDistribution] = None
+    count: int = 0
+    region: Optional[Region] = None
+    velocity: Vec3 = (0.0, 0.0, 0.0)
+    angular_velocity: Vec3 = (0.0, 0.0, 0.0)
+    temperature: Optional[float] = None
+    fixed: bool = False
+    file: Optional[str] = None
+    positions: Optional[np.ndarray] = None          # (n,3) from file
+    radii: Optional[np.ndarray] = None              # (n,)
+    velocities: Optional[np.ndarray] = None         # (n,3) or None
+    angular_velocities: Optional[np.ndarray] = None # (n,3) or None
+
+    @property
+    def largest_radius(self) -> float:
+        if self.radii is not None:
+            return float(np.max(self.radii)) if len(self.radii) else 0.0
+        return self.radius.largest
+
+    @property
+    def smallest_radius(self) -> float:
+        if self.radii is not None:
+            return float(np.min(self.radii)) if len(self.radii) else np.inf
+        return self.radius.smallest
+
+    @property
+    def expected_count(self) -> int:
+        return len(self.radii) if self.radii is not None else self.count
+
+
+@dataclass(frozen=True)
+class PlaneWall:
+    """An analytic infinite plane; particles live on the side ``normal`` points to."""
+    name: str
+    point: Vec3
+    normal: Vec3                         # unit
+    material: str
+    temperature: Optional[float] = None  # K; None = adiabatic
+
+
+@dataclass(frozen=True)
+class Output:
+    interval: float = 0.05               # s
+    rrd: Optional[str] = None
+    h5: Optional[str] = None
+    checkpoint_interval: Optional[float] = None
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    source: str                          # file path (or "<string>") for messages
+    text: str                            # the TOML text, stored in results
+    simulation: SimulationSettings
+    domain: Domain
+    materials: dict[str, Material]
+    interactions: dict[frozenset, Interaction]
+    fills: tuple[ParticleFill, ...] = ()
+    walls: tuple[PlaneWall, ...] = ()
+    output: Output = field(default_factory=Output)
+
+    def interaction(self, a: str, b: str) -> Interaction:
+        return self.interactions[frozenset((a, b))]
+
+    @property
+    def expected_particle_count(self) -> int:
+        return sum(f.expected_count for f in self.fills)

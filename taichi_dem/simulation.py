@@ -1,0 +1,254 @@
+"""The user's handle on one simulation: build from a scene, step, observe, record.
+
+    sim = Simulation.from_toml("scene.toml", arch="cpu")
+    sim.run(until=1.0)
+    sim.series["particles/kinetic_energy"]
+
+Several simulations can live in one process (they share the Taichi runtime; see backend.py)
+as long as they use the same arch and precision; ``close()`` frees a simulation's fields.
+"""
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time as _time
+from typing import Optional
+
+import numpy as np
+
+from . import backend
+from .effects import enabled_effects
+from .loader import load_scene, parse_scene
+from .model import build_pair_tables
+from .placement import place_fills
+from .scene import Scene, SceneError
+from .timestep import choose_time_step
+
+
+class DivergenceError(RuntimeError):
+    """The simulation blew up (non-finite state); the message says when and the likely fix."""
+
+
+class StaleSimulationError(RuntimeError):
+    pass
+
+
+class Simulation:
+    """One DEM simulation. Units SI throughout (m, kg, s, K, N)."""
+
+    def __init__(self, scene: Scene, *, arch: str = "cpu", precision: Optional[str] = None,
+                 threads: Optional[int] = None, h5: Optional[str] = None):
+        import taichi as ti
+        from .stepper import Engine
+
+        self.scene = scene
+        self.arch = arch
+        self.precision = precision or scene.simulation.precision
+        self._stale: Optional[str] = None
+        self._generation = backend.acquire(self, arch, self.precision, threads)
+        self.real = backend.real_type(self.precision)
+
+        rng = np.random.default_rng(scene.simulation.seed)
+        placed = place_fills(scene, rng)
+        self.placed = placed
+        self.n_initial = len(placed.radius)
+        if self.n_initial == 0:
+            raise SceneError(scene.source, "particles", "the scene has no particles")
+        self.tables = build_pair_tables(scene)
+        # placement numbers materials in sorted order too; make sure of it
+        assert list(placed.materials) == self.tables.names or not placed.materials
+        radii = placed.radius
+        mean_diameter = 2.0 * float(np.mean(radii))
+        self.skin = scene.simulation.skin if scene.simulation.skin else 0.1 * mean_diameter
+        speeds = np.linalg.norm(placed.velocity, axis=1)
+        self.timestep = choose_time_step(scene, radii, placed.material, self.tables.names,
+                                         speeds, self.skin)
+        self.dt = self.timestep.dt
+
+        self.engine = Engine(scene, self.tables, self.n_initial, self.real, self.skin,
+                             float(np.max(radii)), self.dt)
+        small = self.engine.grid.too_small_periodic_axes()
+        if small:
+            self.engine.destroy()
+            raise SceneError(scene.source, "domain.periodic",
+                             f"the periodic length along {', '.join(small)} is shorter than three "
+                             f"neighbour cells ({3 * (2 * float(np.max(radii)) + self.skin):.4g} m); "
+                             f"enlarge the domain along that axis")
+        self._upload(placed)
+        self.engine.start(self.n_initial)
+        self.step_count = 0
+        self.time = 0.0
+        self.output_every = max(1, int(round(scene.output.interval / self.dt)))
+        self._series: dict[str, list] = {}
+        self.recorder = None
+        h5 = h5 if h5 is not None else scene.output.h5
+        if h5:
+            from .recorders.hdf5 import HDF5Recorder
+            self.recorder = HDF5Recorder(h5, scene_text=scene.text, dt=self.dt, arch=arch,
+                                         precision=self.precision)
+        self.wall_seconds = 0.0
+        self._sample()
+
+    # ---------------------------------------------------------------- construction
+    @classmethod
+    def from_toml(cls, path: str, **kwargs) -> "Simulation":
+        """Load and validate a scene file (SceneError on bad input) and build it."""
+        return cls(load_scene(path), **kwargs)
+
+    @classmethod
+    def from_text(cls, text: str, *, base_dir: Optional[str] = None, source: str = "<string>",
+                  **kwargs) -> "Simulation":
+        return cls(parse_scene(text, source=source, base_dir=base_dir), **kwargs)
+
+    def _upload(self, placed):
+        s = self.engine.state
+        n = self.n_initial
+        cap = s.capacity
+        npf = np.float64 if self.precision == "f64" else np.float32
+
+        def vec(a):
+            out = np.zeros((cap, 3), npf)
+            out[:n] = a
+            return out
+
+        def scal(a, dtype=npf):
+            out = np.zeros(cap, dtype)
+            out[:n] = a
+            return out
+
+        density = self.tables.density[placed.material]
+        mass = 4.0 / 3.0 * math.pi * placed.radius ** 3 * density
+        movable = ~placed.fixed
+        s.position.from_numpy(vec(placed.position))
+        s.velocity.from_numpy(vec(placed.velocity * movable[:, None]))
+        s.angular_velocity.from_numpy(vec(placed.angular_velocity * movable[:, None]))
+        s.reference_position.from_numpy(vec(placed.position))
+        s.radius.from_numpy(scal(placed.radius))
+        s.mass.from_numpy(scal(mass))
+        s.inverse_mass.from_numpy(scal(np.where(movable, 1.0 / mass, 0.0)))
+        s.inverse_inertia.from_numpy(scal(np.where(movable, 1.0 / (0.4 * mass * placed.radius ** 2), 0.0)))
+        s.material.from_numpy(scal(placed.material, np.int32))
+        s.particle_id.from_numpy(scal(np.arange(n), np.int32))
+        s.alive.from_numpy(scal(np.ones(n), np.int32))
+
+    def _mark_stale(self, why: str):
+        self._stale = why
+
+    def _check_alive(self):
+        if self._stale:
+            raise StaleSimulationError(f"this simulation can no longer be used: {self._stale}")
+        if self.engine is None:
+            raise StaleSimulationError("this simulation was closed")
+
+    # ---------------------------------------------------------------- advancing
+    def step(self, n: int = 1):
+        """Advance ``n`` time steps, sampling series (and frames) at output intervals."""
+        self._check_alive()
+        t0 = _time.perf_counter()
+        remaining = int(n)
+        while remaining > 0:
+            to_output = self.output_every - (self.step_count % self.output_every)
+            chunk = min(remaining, to_output)
+            self.engine.advance(chunk, record_last=(chunk == to_output))
+            self.step_count += chunk
+            self.time = self.step_count * self.dt
+            remaining -= chunk
+            if self.step_count % self.output_every == 0:
+                self._sample()
+        self.wall_seconds += _time.perf_counter() - t0
+
+    def run(self, until: Optional[float] = None, *, progress: bool = False):
+        """Advance to simulated time ``until`` (s; default the scene's end_time)."""
+        until = self.scene.simulation.end_time if until is None else float(until)
+        steps = int(round((until - self.time) / self.dt))
+        if not progress:
+            self.step(max(steps, 0))
+            return
+        done = 0
+        t0 = _time.perf_counter()
+        block = max(self.output_every, 1)
+        while done < steps:
+            k = min(block, steps - done)
+            self.step(k)
+            done += k
+            wall = _time.perf_counter() - t0
+            rate = done * self.engine.count / wall if wall > 0 else 0.0
+            eta = wall / done * (steps - done)
+            print(f"\r  t = {self.time:8.4f} s   wall {wall:7.1f} s   "
+                  f"{rate / 1e6:6.2f} M particle-steps/s   ETA {eta:6.1f} s", end="",
+                  file=sys.stderr, flush=True)
+        print(file=sys.stderr)
+
+    # ---------------------------------------------------------------- observing
+    def _sample(self):
+        m = self.engine.measure()
+        if m["non_finite"]:
+            raise DivergenceError(
+                f"the simulation diverged near t = {self.time:.6g} s (non-finite velocity). "
+                f"Likely cause: a time step too large for the stiffest contact; reduce "
+                f"simulation.dt or rayleigh_fraction")
+        values = {"time": self.time, "particles/count": self.engine.count,
+                  "particles/kinetic_energy": m["kinetic_energy"],
+                  "particles/lost": self.engine.lost}
+        if self.scene.walls:
+            wf = self.engine.wall_force.to_numpy()
+            for k, w in enumerate(self.scene.walls):
+                values[f"walls/{w.name}/force"] = wf[k].astype(np.float64)
+        for name, v in values.items():
+            self._series.setdefault(name, []).append(np.asarray(v, dtype=np.float64))
+        if self.recorder is not None:
+            self.recorder.append_series(values)
+            arrays = self.particles()
+            self.recorder.append_frame(self.time, {k: arrays[k] for k in (
+                "id", "position", "velocity", "angular_velocity", "radius")})
+            self.recorder.flush()
+
+    @property
+    def series(self) -> dict[str, np.ndarray]:
+        """Sampled time series, numpy arrays under the names of /series (CONTRACT.md)."""
+        return {k: np.array(v) for k, v in self._series.items()}
+
+    def particles(self) -> dict[str, np.ndarray]:
+        """Alive particles in id order: id, position (m), velocity (m/s), angular_velocity
+        (rad/s), radius (m), mass (kg), fixed (bool)."""
+        self._check_alive()
+        s = self.engine.state
+        n = self.engine.count
+        ids = s.particle_id.to_numpy()[:n]
+        order = np.argsort(ids, kind="stable")
+        out = {"id": ids[order]}
+        for name in ("position", "velocity", "angular_velocity"):
+            out[name] = getattr(s, name).to_numpy()[:n][order].astype(np.float64)
+        for name in ("radius", "mass"):
+            out[name] = getattr(s, name).to_numpy()[:n][order].astype(np.float64)
+        out["fixed"] = s.inverse_mass.to_numpy()[:n][order] == 0.0
+        return out
+
+    def kinetic_energy(self) -> float:
+        """Translational plus rotational kinetic energy of the moving particles, J."""
+        self._check_alive()
+        return self.engine.measure()["kinetic_energy"]
+
+    @property
+    def particle_count(self) -> int:
+        return self.engine.count
+
+    @property
+    def effects(self):
+        return enabled_effects(self.scene)
+
+    def close(self):
+        """Free device memory and close the recorder."""
+        if self.recorder is not None:
+            self.recorder.close()
+            self.recorder = None
+        if getattr(self, "engine", None) is not None and not self._stale:
+            self.engine.destroy()
+        self.engine = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

@@ -1,0 +1,141 @@
+"""What the simulation *holds*: particle state as structure-of-arrays Taichi fields.
+
+Every simulation owns its fields through its own ``ti.FieldsBuilder`` trees, so several
+simulations live in one process and ``close()`` frees their memory. Optional per-particle
+arrays are allocated only when an enabled effect asks for them (``requests``), so a scene
+without plane walls has no wall history, one without EPSD rolling no rolling history.
+"""
+from __future__ import annotations
+
+import taichi as ti
+
+VEC = 3
+
+
+class FieldTree:
+    """A set of fields placed in one SNode tree that can be destroyed as a whole."""
+
+    def __init__(self):
+        self._builder = ti.FieldsBuilder()
+        self._tree = None
+        self.fields: dict[str, object] = {}
+
+    def add(self, name: str, dtype, shape, vector: bool = False):
+        f = ti.Vector.field(VEC, dtype) if vector else ti.field(dtype)
+        axes = ti.ij if isinstance(shape, tuple) and len(shape) == 2 else ti.i
+        self._builder.dense(axes, shape).place(f)
+        self.fields[name] = f
+        return f
+
+    def finalize(self):
+        self._tree = self._builder.finalize()
+        return self
+
+    def destroy(self):
+        if self._tree is not None:
+            self._tree.destroy()
+            self._tree = None
+        self.fields.clear()
+
+
+class ParticleState:
+    """Per-particle SoA fields, kept in spatial (cell) order; ``particle_id`` maps back to the
+    user's order. ``capacity`` slots, of which the first ``count`` are alive after a rebuild.
+
+    Units: position m, velocity m/s, angular_velocity rad/s, acceleration m/s^2,
+    angular_acceleration rad/s^2, radius m, mass kg, inverse_mass 1/kg (0 for fixed particles),
+    inverse_inertia 1/(kg m^2) (0 for fixed particles).
+    """
+
+    # name -> (is_vector, kind) ; kind "real" or "int"
+    CORE = {
+        "position": (True, "real"), "velocity": (True, "real"),
+        "angular_velocity": (True, "real"), "acceleration": (True, "real"),
+        "angular_acceleration": (True, "real"), "reference_position": (True, "real"),
+        "radius": (False, "real"), "mass": (False, "real"),
+        "inverse_mass": (False, "real"), "inverse_inertia": (False, "real"),
+        "material": (False, "int"), "particle_id": (False, "int"), "alive": (False, "int"),
+    }
+
+    def __init__(self, capacity: int, real, n_walls: int, rolling_history: bool):
+        self.capacity = capacity
+        self.real = real
+        self.n_walls = n_walls
+        self.tree = FieldTree()
+        self.names: list[str] = []
+        for name, (vec, kind) in self.CORE.items():
+            self._add(name, vec, kind)
+        if n_walls:
+            # tangential displacement of each particle's contact with each plane wall
+            self._add_wall("wall_tangential_history")
+            if rolling_history:
+                self._add_wall("wall_rolling_history")
+        # scratch for reordering: one shadow per dtype/shape
+        t = self.tree
+        self.shadow_vec = t.add("shadow_vec", real, capacity, vector=True)
+        self.shadow_real = t.add("shadow_real", real, capacity)
+        self.shadow_int = t.add("shadow_int", ti.i32, capacity)
+        self.cell = t.add("cell", ti.i32, capacity)
+        self.order = t.add("order", ti.i32, capacity)
+        self.inverse_order = t.add("inverse_order", ti.i32, capacity)
+        self.row_start = t.add("row_start", ti.i32, capacity + 1)
+        self.row_count = t.add("row_count", ti.i32, capacity)
+        # where each particle's neighbour row was before the last reorder (by particle id)
+        self.old_row_start_by_id = t.add("old_row_start_by_id", ti.i32, capacity)
+        self.old_row_count_by_id = t.add("old_row_count_by_id", ti.i32, capacity)
+        t.finalize()
+
+    def _add(self, name, vec, kind):
+        dtype = self.real if kind == "real" else ti.i32
+        setattr(self, name, self.tree.add(name, dtype, self.capacity, vector=vec))
+        self.names.append(name)
+
+    def _add_wall(self, name):
+        f = self.tree.add(name, self.real, (self.capacity, self.n_walls), vector=True)
+        setattr(self, name, f)
+        self.names.append(name)
+
+    def reorder_groups(self):
+        """(vector fields, real scalar fields, int fields, per-wall vector fields) to permute
+        together when particles are put back into cell order."""
+        vec = [getattr(self, n) for n, (v, k) in self.CORE.items() if v]
+        real = [getattr(self, n) for n, (v, k) in self.CORE.items() if not v and k == "real"]
+        ints = [getattr(self, n) for n, (v, k) in self.CORE.items() if not v and k == "int"]
+        walls = [getattr(self, n) for n in ("wall_tangential_history", "wall_rolling_history")
+                 if hasattr(self, n)]
+        return vec, real, ints, walls
+
+    def destroy(self):
+        self.tree.destroy()
+
+
+class PairState:
+    """Per-neighbour-entry fields of the full (both directions) neighbour list in CSR form.
+
+    Entry k of particle i's row names partner ``neighbour[k]``. The pair is computed once, by
+    its owner (the particle with the smaller ``particle_id``, stable across reorders), which
+    stores the force on itself and the torques on both; the other particle reads them through
+    ``mirror[k]`` (the owner's entry). The tangential (and EPSD rolling) history lives at the
+    owner's entry.
+    """
+
+    def __init__(self, capacity: int, real, rolling_history: bool):
+        self.capacity = capacity
+        t = self.tree = FieldTree()
+        self.neighbour = t.add("neighbour", ti.i32, capacity)
+        self.mirror = t.add("mirror", ti.i32, capacity)
+        self.tangential_history = t.add("tangential_history", real, capacity, vector=True)
+        self.force = t.add("force", real, capacity, vector=True)          # on the owner, N
+        self.torque_owner = t.add("torque_owner", real, capacity, vector=True)      # N m
+        self.torque_partner = t.add("torque_partner", real, capacity, vector=True)  # N m
+        self.rolling_history = (t.add("rolling_history", real, capacity, vector=True)
+                                if rolling_history else None)
+        # the previous list, by partner id, to carry history across rebuilds
+        self.old_partner_id = t.add("old_partner_id", ti.i32, capacity)
+        self.old_tangential_history = t.add("old_tangential_history", real, capacity, vector=True)
+        self.old_rolling_history = (t.add("old_rolling_history", real, capacity, vector=True)
+                                    if rolling_history else None)
+        t.finalize()
+
+    def destroy(self):
+        self.tree.destroy()

@@ -1,0 +1,330 @@
+"""What *advances* the simulation: the step, composed only of the effects the scene enables.
+
+One step (velocity Verlet):
+  drift:  v += a dt/2, w += alpha dt/2, x += v dt; wrap periodic faces; mark particles that
+          left the domain; flag a rebuild if any moved more than half the skin
+  rebuild neighbours when flagged (broadphase.py)
+  pair:   one kernel over owned neighbour entries computes the contact geometry once and runs
+          every enabled pair effect on it (Hertz-Mindlin, rolling friction), storing the force
+          on the owner and the torques on both partners per pair - no atomics
+  gather: each particle sums its pairs (its own entries, and its partners' through the mirror
+          index), adds plane walls and gravity, and completes the kick: v += a dt/2
+Effects not enabled are excluded with ``ti.static`` and so never compiled.
+"""
+
+import numpy as np
+import taichi as ti
+
+from .broadphase import Broadphase, GridSpec
+from .effects import effect_names
+from .effects.hertz_mindlin import contact_force
+from .effects import rolling
+from .model import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
+from .state import FieldTree, PairState, ParticleState
+
+
+class Engine:
+    """Owns the device state of one simulation and the kernels that advance it."""
+
+    def __init__(self, scene, tables: PairTables, capacity: int, real, skin: float,
+                 max_radius: float, dt: float):
+        self.scene = scene
+        self.tables = tables
+        self.real = real
+        self.skin = skin
+        self.dt = dt
+        self.effects = effect_names(scene)
+        self.rolling_cdt = "rolling_constant_torque" in self.effects
+        self.rolling_epsd = "rolling_epsd" in self.effects
+        self.trees: list[FieldTree] = []
+        self.walls = scene.walls
+        self.state = ParticleState(capacity, real, len(scene.walls), self.rolling_epsd)
+        self.trees.append(self.state.tree)
+        self.grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
+                             2.0 * max_radius + skin, capacity)
+        t = self.new_tree()
+        m = len(tables.names)
+        self.youngs_eff = t.add("youngs_eff", real, (m, m))
+        self.shear_eff = t.add("shear_eff", real, (m, m))
+        self.damping = t.add("damping", real, (m, m))
+        self.friction = t.add("friction", real, (m, m))
+        self.rolling_friction = t.add("rolling_friction", real, (m, m))
+        self.rolling_model = t.add("rolling_model", ti.i32, (m, m))
+        self.flags = t.add("flags", ti.i32, 2)                 # [rebuild needed, lost count]
+        self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
+        self.reduction = t.add("reduction", real, 4)
+        t.finalize()
+        for name in ("youngs_eff", "shear_eff", "damping", "friction", "rolling_friction"):
+            getattr(self, name).from_numpy(getattr(tables, name).astype(np.float64 if real == ti.f64 else np.float32))
+        self.rolling_model.from_numpy(tables.rolling_model.astype(np.int32))
+        self.pairs: "PairState | None" = None
+        self.broadphase = Broadphase(self)
+        self._compile_particle_kernels()
+
+    def new_tree(self) -> FieldTree:
+        t = FieldTree()
+        self.trees.append(t)
+        return t
+
+    def grow_pairs(self, capacity: int):
+        """(Re)allocate the pair arrays with room for ``capacity`` entries, keeping the saved
+        previous list (old_* arrays) so the history can still be carried."""
+        old = self.pairs
+        new = PairState(capacity, self.real, self.rolling_epsd)
+        if old is not None:
+            keep = old.capacity
+            new.old_partner_id.from_numpy(_pad(old.old_partner_id.to_numpy(), capacity))
+            new.old_tangential_history.from_numpy(_pad(old.old_tangential_history.to_numpy(), capacity))
+            if old.old_rolling_history is not None:
+                new.old_rolling_history.from_numpy(_pad(old.old_rolling_history.to_numpy(), capacity))
+            old.destroy()
+            del keep
+        self.pairs = new
+        self.broadphase.compile_pair_kernels(new)
+        self._compile_pair_kernels(new)
+
+    def destroy(self):
+        if self.pairs is not None:
+            self.pairs.destroy()
+        for t in self.trees:
+            t.destroy()
+        self.trees.clear()
+
+    # ------------------------------------------------------------------ kernels
+    def _compile_particle_kernels(self):
+        s = self.state
+        g = self.grid
+        lo = ti.Vector(list(g.lo))
+        hi = ti.Vector(list(g.hi))
+        span = ti.Vector(list(g.span))
+        half_skin_sq = (0.5 * self.skin) ** 2
+        real = self.real
+        flags = self.flags
+        red = self.reduction
+
+        @ti.func
+        def minimum_image(d):
+            for k in ti.static(range(3)):
+                if ti.static(g.periodic[k]):
+                    d[k] -= span[k] * ti.round(d[k] / span[k])
+            return d
+        self.minimum_image = minimum_image
+
+        @ti.kernel
+        def drift(n: ti.i32, dt: real):
+            for i in range(n):
+                if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
+                    v = s.velocity[i] + 0.5 * dt * s.acceleration[i]
+                    s.velocity[i] = v
+                    s.angular_velocity[i] += 0.5 * dt * s.angular_acceleration[i]
+                    x = s.position[i] + dt * v
+                    inside = True
+                    for k in ti.static(range(3)):
+                        if ti.static(g.periodic[k]):
+                            # wrap into [lo, hi): the particle re-enters through the opposite face
+                            if x[k] >= hi[k]:
+                                x[k] -= span[k]
+                            elif x[k] < lo[k]:
+                                x[k] += span[k]
+                        elif x[k] < lo[k] or x[k] > hi[k]:
+                            inside = False
+                    s.position[i] = x
+                    if not inside:
+                        s.alive[i] = 0
+                        flags[0] = 1
+                        ti.atomic_add(flags[1], 1)
+                    moved = minimum_image(x - s.reference_position[i])
+                    if moved.dot(moved) > half_skin_sq:
+                        flags[0] = 1          # benign race: every writer writes 1
+
+        @ti.kernel
+        def measure(n: ti.i32):
+            # kinetic energy (translational + rotational, J), largest speed, alive count
+            for k in ti.static(range(4)):
+                red[k] = 0.0
+            for i in range(n):
+                if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
+                    m = s.mass[i]
+                    inertia = 0.4 * m * s.radius[i] ** 2
+                    v2 = s.velocity[i].dot(s.velocity[i])
+                    red[0] += 0.5 * m * v2 + 0.5 * inertia * s.angular_velocity[i].dot(s.angular_velocity[i])
+                    ti.atomic_max(red[1], ti.sqrt(v2))
+                    if not (v2 >= 0.0 and v2 < 1e300):
+                        red[2] = 1.0      # NaN or overflow
+                    red[3] += 1.0
+
+        self._drift, self._measure = drift, measure
+
+    def _compile_pair_kernels(self, p: PairState):
+        s = self.state
+        minimum_image = self.minimum_image
+        E, G, Z, MU, MUR, RM = (self.youngs_eff, self.shear_eff, self.damping, self.friction,
+                                self.rolling_friction, self.rolling_model)
+        cdt, epsd = self.rolling_cdt, self.rolling_epsd
+        walls = [(tuple(w.point), tuple(w.normal), self.tables.index(w.material)) for w in self.walls]
+        n_walls = len(walls)
+        gravity = ti.Vector(list(self.scene.simulation.gravity))
+        wall_force = self.wall_force
+        real = self.real
+
+        @ti.func
+        def rolling_torque(pair_model, w_rel, normal, fn, sn, r_eff, mu_r, inertia_eff, history, dt):
+            torque = ti.Vector([0.0, 0.0, 0.0])
+            if ti.static(cdt):
+                if pair_model == ROLLING_CONSTANT_TORQUE:
+                    torque = rolling.constant_torque(w_rel, fn, r_eff, mu_r, inertia_eff, dt)
+            if ti.static(epsd):
+                if pair_model == ROLLING_EPSD:
+                    torque, history = rolling.epsd(w_rel, normal, fn, sn, r_eff, mu_r, history, dt)
+            return torque, history
+
+        @ti.kernel
+        def pair_forces(n: ti.i32, dt: real):
+            for i in range(n):
+                pid = s.particle_id[i]
+                xi, vi, wi = s.position[i], s.velocity[i], s.angular_velocity[i]
+                ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
+                for k in range(s.row_start[i], s.row_start[i] + s.row_count[i]):
+                    j = p.neighbour[k]
+                    if pid < s.particle_id[j]:
+                        d = minimum_image(xi - s.position[j])
+                        rj = s.radius[j]
+                        dist = d.norm()
+                        normal_overlap = ri + rj - dist
+                        force = ti.Vector([0.0, 0.0, 0.0])
+                        torque_i = ti.Vector([0.0, 0.0, 0.0])
+                        torque_j = ti.Vector([0.0, 0.0, 0.0])
+                        history = ti.Vector([0.0, 0.0, 0.0])
+                        rolling_history = ti.Vector([0.0, 0.0, 0.0])
+                        if normal_overlap > 0.0 and dist > 0.0:
+                            normal = d / dist                                   # from j to i
+                            r_eff = ri * rj / (ri + rj)
+                            m_eff = 1.0 / (inv_mi + s.inverse_mass[j])
+                            arm_i = ri - 0.5 * normal_overlap     # centre to contact point
+                            arm_j = rj - 0.5 * normal_overlap
+                            wj = s.angular_velocity[j]
+                            v_rel = vi - s.velocity[j] - (arm_i * wi + arm_j * wj).cross(normal)
+                            mj = s.material[j]
+                            fn, ft, history, sn = contact_force(
+                                normal, normal_overlap, r_eff, m_eff, v_rel,
+                                p.tangential_history[k], E[mi, mj], G[mi, mj], Z[mi, mj],
+                                MU[mi, mj], dt)
+                            force = fn * normal + ft
+                            lever = normal.cross(ft)
+                            torque_i = -arm_i * lever
+                            torque_j = -arm_j * lever
+                            if ti.static(cdt or epsd):
+                                if MUR[mi, mj] > 0.0:
+                                    prev = ti.Vector([0.0, 0.0, 0.0])
+                                    if ti.static(epsd):
+                                        prev = p.rolling_history[k]
+                                    tr, rolling_history = rolling_torque(
+                                        RM[mi, mj], wi - wj, normal, fn, sn, r_eff, MUR[mi, mj],
+                                        1.0 / (inv_ii + s.inverse_inertia[j]), prev, dt)
+                                    torque_i += tr
+                                    torque_j -= tr
+                        p.force[k] = force
+                        p.torque_owner[k] = torque_i
+                        p.torque_partner[k] = torque_j
+                        p.tangential_history[k] = history
+                        if ti.static(epsd):
+                            p.rolling_history[k] = rolling_history
+
+        @ti.kernel
+        def gather(n: ti.i32, dt: real, record: ti.i32):
+            for i in range(n):
+                pid = s.particle_id[i]
+                force = ti.Vector([0.0, 0.0, 0.0])
+                torque = ti.Vector([0.0, 0.0, 0.0])
+                for k in range(s.row_start[i], s.row_start[i] + s.row_count[i]):
+                    if pid < s.particle_id[p.neighbour[k]]:
+                        force += p.force[k]
+                        torque += p.torque_owner[k]
+                    else:
+                        m = p.mirror[k]
+                        if m >= 0:
+                            force -= p.force[m]
+                            torque += p.torque_partner[m]
+                inv_m = s.inverse_mass[i]
+                if ti.static(n_walls > 0):
+                    xi, vi, wi, ri, mi = s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i], s.material[i]
+                    for w in ti.static(range(n_walls)):
+                        wall_point = ti.Vector(walls[w][0])
+                        wall_normal = ti.Vector(walls[w][1])
+                        mw = ti.static(walls[w][2])
+                        normal_overlap = ri - (xi - wall_point).dot(wall_normal)
+                        history = ti.Vector([0.0, 0.0, 0.0])
+                        rolling_history = ti.Vector([0.0, 0.0, 0.0])
+                        if normal_overlap > 0.0 and inv_m > 0.0:
+                            arm = ri - 0.5 * normal_overlap
+                            v_rel = vi - arm * wi.cross(wall_normal)       # the wall is at rest
+                            fn, ft, history, sn = contact_force(
+                                wall_normal, normal_overlap, ri, s.mass[i], v_rel,
+                                s.wall_tangential_history[i, w], E[mi, mw], G[mi, mw],
+                                Z[mi, mw], MU[mi, mw], dt)
+                            wall_contact = fn * wall_normal + ft
+                            contact_torque = -arm * wall_normal.cross(ft)
+                            if ti.static(cdt or epsd):
+                                if MUR[mi, mw] > 0.0:
+                                    prev = ti.Vector([0.0, 0.0, 0.0])
+                                    if ti.static(epsd):
+                                        prev = s.wall_rolling_history[i, w]
+                                    tr, rolling_history = rolling_torque(
+                                        RM[mi, mw], wi, wall_normal, fn, sn, ri, MUR[mi, mw],
+                                        1.0 / s.inverse_inertia[i], prev, dt)
+                                    contact_torque += tr
+                            force += wall_contact
+                            torque += contact_torque
+                            if record != 0:
+                                wall_force[w] -= wall_contact
+                        s.wall_tangential_history[i, w] = history
+                        if ti.static(epsd):
+                            s.wall_rolling_history[i, w] = rolling_history
+                if inv_m > 0.0 and s.alive[i] != 0:
+                    a = force * inv_m + gravity
+                    alpha = torque * s.inverse_inertia[i]
+                    s.acceleration[i] = a
+                    s.angular_acceleration[i] = alpha
+                    s.velocity[i] += 0.5 * dt * a
+                    s.angular_velocity[i] += 0.5 * dt * alpha
+
+        self._pair_forces, self._gather = pair_forces, gather
+
+    # ------------------------------------------------------------------ driver
+    def start(self, n: int) -> int:
+        """Build the first neighbour list and the initial accelerations (no time advance)."""
+        self.count = self.broadphase.rebuild(n)
+        self._pair_forces(self.count, 0.0)
+        self._gather(self.count, 0.0, 0)
+        return self.count
+
+    def advance(self, steps: int, record_last: bool = False):
+        """Advance ``steps`` time steps of ``self.dt``."""
+        dt = self.dt
+        for k in range(steps):
+            n = self.count
+            self._drift(n, dt)
+            if self.flags[0] != 0:
+                self.flags[0] = 0
+                self.count = self.broadphase.rebuild(n)
+            record = 1 if (record_last and k == steps - 1) else 0
+            if record:
+                self.wall_force.fill(0.0)
+            self._pair_forces(self.count, dt)
+            self._gather(self.count, dt, record)
+
+    def measure(self) -> dict:
+        self._measure(self.count)
+        r = self.reduction.to_numpy()
+        return {"kinetic_energy": float(r[0]), "max_speed": float(r[1]), "non_finite": bool(r[2] > 0)}
+
+    @property
+    def lost(self) -> int:
+        return int(self.flags[1])
+
+
+def _pad(a: np.ndarray, n: int) -> np.ndarray:
+    out = np.zeros((n,) + a.shape[1:], dtype=a.dtype)
+    m = min(n, a.shape[0])
+    out[:m] = a[:m]
+    return out

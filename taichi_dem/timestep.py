@@ -1,0 +1,105 @@
+"""Choosing and checking the time step (PHYSICS.md, "Time step").
+
+Three bounds: the Rayleigh time of the smallest particle (EDEM's criterion, the user's
+``rayleigh_fraction``), the Hertz contact duration at the largest speed present (at least
+``MIN_STEPS_PER_CONTACT`` steps per contact so the impact is resolved), and a DEM Courant
+number U dt / skin, reported only: the engine checks every step whether any particle moved more
+than half the skin since the last neighbour rebuild and rebuilds before computing forces, so
+no contact is missed at any Courant number; a large one only means frequent rebuilds.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model import effective_youngs_modulus, hertz_contact_time, rayleigh_time
+from .scene import Scene, SceneError
+
+MIN_STEPS_PER_CONTACT = 20      # below this an impact is poorly resolved (auto dt avoids it)
+ERROR_STEPS_PER_CONTACT = 8     # an explicit dt giving fewer is refused: restitution and
+                                # overlap are then wrong by tens of percent, and it can diverge
+MAX_RAYLEIGH_FRACTION = 0.5     # explicit dt beyond half the Rayleigh time is refused
+
+
+@dataclass
+class TimeStepReport:
+    dt: float                    # s, the step that will be used
+    rayleigh_time: float         # s, of the smallest particle
+    contact_time: float          # s, Hertz duration at the largest expected speed
+    expected_speed: float        # m/s used for contact_time
+    courant_limit: float         # s, skin / (2 v)
+    limited_by: str              # which bound set dt
+    notes: list[str]
+
+
+def expected_max_speed(scene: Scene, initial_speeds: np.ndarray) -> float:
+    """Largest speed expected: initial speeds, and free fall across the domain (m/s)."""
+    g = float(np.linalg.norm(scene.simulation.gravity))
+    span = np.asarray(scene.domain.max) - np.asarray(scene.domain.min)
+    if g > 0:
+        gdir = np.abs(np.asarray(scene.simulation.gravity)) / g
+        # periodic axes do not bound a fall (a chute): cap those by the non-periodic span
+        height = float(np.dot(gdir, span))
+        fall = math.sqrt(2.0 * g * height)
+    else:
+        fall = 0.0
+    v0 = float(np.max(initial_speeds)) if len(initial_speeds) else 0.0
+    return max(v0, fall, 1e-3)
+
+
+def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
+                     material_names: list[str], initial_speeds: np.ndarray,
+                     skin: float) -> TimeStepReport:
+    """Automatic or checked explicit dt (s). Raises SceneError for an unstable explicit dt."""
+    notes: list[str] = []
+    t_rayleigh = math.inf
+    t_contact = math.inf
+    v = expected_max_speed(scene, initial_speeds)
+    for k, name in enumerate(material_names):
+        sel = materials == k
+        if not np.any(sel):
+            continue
+        mat = scene.materials[name]
+        r = float(np.min(radii[sel]))
+        t_rayleigh = min(t_rayleigh, rayleigh_time(r, mat))
+        # the stiffest partner this material can meet (particles or walls)
+        partners = set(material_names[j] for j in np.unique(materials)) | {w.material for w in scene.walls}
+        for pname in partners:
+            if frozenset((name, pname)) not in scene.interactions:
+                continue
+            e_eff = effective_youngs_modulus(mat, scene.materials[pname])
+            m = 4.0 / 3.0 * math.pi * r ** 3 * mat.density
+            # a small sphere against a wall: m* = m, R* = r (the shortest contact of this pair)
+            t_contact = min(t_contact, hertz_contact_time(m, r, e_eff, v))
+    if not math.isfinite(t_rayleigh):
+        t_rayleigh = 1e-3
+    courant = skin / (2.0 * v) if v > 0 else math.inf
+    sim = scene.simulation
+    if sim.dt is None:
+        candidates = {"rayleigh_fraction": sim.rayleigh_fraction * t_rayleigh,
+                      "contact_duration": t_contact / MIN_STEPS_PER_CONTACT}
+        limited_by = min(candidates, key=candidates.get)
+        dt = candidates[limited_by]
+        if limited_by != "rayleigh_fraction":
+            notes.append(f"dt reduced below {sim.rayleigh_fraction:g} x Rayleigh time by the "
+                         f"{limited_by.replace('_', ' ')} bound")
+    else:
+        dt = sim.dt
+        limited_by = "explicit"
+        if dt > MAX_RAYLEIGH_FRACTION * t_rayleigh:
+            raise SceneError(scene.source, "simulation.dt",
+                             f"dt = {dt:g} s exceeds {MAX_RAYLEIGH_FRACTION:g} x the Rayleigh time "
+                             f"{t_rayleigh:.3g} s of the smallest particle; the explicit "
+                             f"integration is unstable. Use dt <= {0.2 * t_rayleigh:.3g} s "
+                             f"(20 %) or dt = \"auto\"")
+        if dt > t_contact / ERROR_STEPS_PER_CONTACT:
+            raise SceneError(scene.source, "simulation.dt",
+                             f"dt = {dt:g} s resolves a contact at the expected {v:.3g} m/s "
+                             f"(Hertz duration {t_contact:.3g} s) in fewer than "
+                             f"{ERROR_STEPS_PER_CONTACT} steps; use dt <= "
+                             f"{t_contact / MIN_STEPS_PER_CONTACT:.3g} s or dt = \"auto\"")
+        if dt > t_contact / MIN_STEPS_PER_CONTACT:
+            notes.append(f"fewer than {MIN_STEPS_PER_CONTACT} steps per contact at {v:.3g} m/s")
+    return TimeStepReport(dt, t_rayleigh, t_contact, v, courant, limited_by, notes)

@@ -1,0 +1,337 @@
+import math
+import time
+
+import numpy as np
+import pytest
+
+from taichi_dem.loader import parse_scene
+from taichi_dem.placement import PlacedParticles, place_fills, sample_radii
+from taichi_dem.scene import RadiusDistribution, SceneError
+
+HEADER = """
+[simulation]
+seed = 1
+[domain]
+min = {dmin}
+max = {dmax}
+periodic = {periodic}
+[materials.ash]
+density = 870.0
+youngs_modulus = 1.1e7
+poisson_ratio = 0.25
+[materials.steel]
+density = 7800.0
+youngs_modulus = 2e11
+poisson_ratio = 0.3
+[[interactions]]
+pair = ["ash", "ash"]
+restitution = 0.5
+friction = 0.5
+[[interactions]]
+pair = ["ash", "steel"]
+restitution = 0.5
+friction = 0.5
+[[interactions]]
+pair = ["steel", "steel"]
+restitution = 0.5
+friction = 0.5
+"""
+
+
+def scene(body, dmin=(0, 0, 0), dmax=(1, 1, 1), periodic=(), base_dir=None):
+    text = HEADER.format(dmin=list(dmin), dmax=list(dmax),
+                         periodic="[" + ", ".join(f'"{a}"' for a in periodic) + "]") + body
+    return parse_scene(text, source="place.toml", base_dir=base_dir)
+
+
+def fill(material="ash", radius="0.01", count=100, region=None, extra=""):
+    region = region or 'box = { min = [0, 0, 0], max = [1, 1, 1] }'
+    return f"""
+[[particles]]
+material = "{material}"
+radius = {radius}
+count = {count}
+region = {{ {region} }}
+{extra}
+"""
+
+
+def min_image(d, scene_):
+    d = np.array(d, float)
+    lo, hi = np.array(scene_.domain.min), np.array(scene_.domain.max)
+    for a, ax in enumerate("xyz"):
+        if ax in scene_.domain.periodic:
+            L = hi[a] - lo[a]
+            d[..., a] -= L * np.round(d[..., a] / L)
+    return d
+
+
+def assert_no_overlap(p: PlacedParticles, scene_):
+    """Brute force over all pairs (chunked)."""
+    x, r = p.position, p.radius
+    n = len(r)
+    for s in range(0, n, 500):
+        d = min_image(x[s:s + 500, None, :] - x[None, :, :], scene_)
+        dist = np.sqrt((d * d).sum(-1))
+        reach = r[s:s + 500, None] + r[None, :]
+        idx = np.arange(s, min(s + 500, n))
+        dist[np.arange(len(idx)), idx] = np.inf
+        gap = dist - reach
+        assert gap.min() >= -1e-12, f"overlap {gap.min():g}"
+
+
+def assert_inside_box(p, lo, hi, tol=1e-12):
+    assert np.all(p.position - p.radius[:, None] >= np.asarray(lo) - tol)
+    assert np.all(p.position + p.radius[:, None] <= np.asarray(hi) + tol)
+
+
+def test_box_fill_count_inside_no_overlap():
+    s = scene(fill(count=3000, radius="0.008",
+                   region='box = { min = [0.1, 0.2, 0.0], max = [0.9, 0.8, 0.5] }'))
+    p = place_fills(s, np.random.default_rng(1))
+    assert p.n == len(p) == 3000
+    assert p.position.shape == (3000, 3) and p.position.dtype == np.float64
+    assert p.radius.shape == (3000,) and np.all(p.radius == 0.008)
+    assert_inside_box(p, (0.1, 0.2, 0.0), (0.9, 0.8, 0.5))
+    assert_no_overlap(p, s)
+
+
+def test_dense_box_fill_near_capacity():
+    # 0.2 m cube, r = 1 cm: the FCC lattice holds a few hundred; ask for most of them
+    s = scene(fill(count=500, radius="0.01",
+                   region='box = { min = [0, 0, 0], max = [0.2, 0.2, 0.2] }'))
+    p = place_fills(s, np.random.default_rng(3))
+    assert p.n == 500
+    assert_inside_box(p, (0, 0, 0), (0.2, 0.2, 0.2))
+    assert_no_overlap(p, s)
+
+
+def test_overfull_region_is_a_scene_error():
+    s = scene(fill(count=2000, radius="0.01",
+                   region='box = { min = [0, 0, 0], max = [0.2, 0.2, 0.2] }'))
+    with pytest.raises(SceneError) as e:
+        place_fills(s, np.random.default_rng(1))
+    assert e.value.key == "particles[0].count" and e.value.file == "place.toml"
+    assert "holds at most" in e.value.reason and "radius 0.01" in e.value.reason
+    assert "enlarge the region or reduce count" in e.value.reason
+
+
+def test_region_too_small_for_one_sphere():
+    s = scene(fill(count=1, radius="0.1",
+                   region='box = { min = [0, 0, 0], max = [0.15, 1, 1] }'))
+    with pytest.raises(SceneError) as e:
+        place_fills(s, np.random.default_rng(1))
+    assert "holds at most 0" in e.value.reason
+
+
+def test_cylinder_fill_inside():
+    region = ('cylinder = { axis_point = [0.1, 0.5, 0.5], axis_direction = [1, 1, 0], '
+              'radius = 0.2, length = 0.6 }')
+    s = scene(fill(count=2000, radius="0.008", region=region))
+    p = place_fills(s, np.random.default_rng(2))
+    assert p.n == 2000
+    a = np.array([1.0, 1.0, 0.0]) / math.sqrt(2)
+    rel = p.position - np.array([0.1, 0.5, 0.5])
+    u = rel @ a
+    radial = np.linalg.norm(rel - u[:, None] * a, axis=1)
+    assert np.all(u - p.radius >= -1e-12) and np.all(u + p.radius <= 0.6 + 1e-12)
+    assert np.all(radial + p.radius <= 0.2 + 1e-12)
+    assert_inside_box(p, (0, 0, 0), (1, 1, 1))
+    assert_no_overlap(p, s)
+
+
+def test_clear_of_walls():
+    walls = """
+[[walls]]
+name = "floor"
+plane = { point = [0, 0, 0.3], normal = [0, 0, 1] }
+material = "steel"
+[[walls]]
+name = "slope"
+plane = { point = [0.5, 0.5, 0.5], normal = [-1, 0, 1] }
+material = "steel"
+"""
+    s = scene(fill(count=1000, radius="0.01") + walls)
+    p = place_fills(s, np.random.default_rng(5))
+    assert p.n == 1000
+    for w in s.walls:
+        signed = (p.position - np.array(w.point)) @ np.array(w.normal)
+        assert np.all(signed >= p.radius - 1e-12)
+    assert_no_overlap(p, s)
+
+
+def test_walls_leave_no_room():
+    walls = """
+[[walls]]
+name = "lid"
+plane = { point = [0, 0, 0.5], normal = [0, 0, -1] }
+material = "steel"
+[[walls]]
+name = "floor"
+plane = { point = [0, 0, 0.45], normal = [0, 0, 1] }
+material = "steel"
+"""
+    s = scene(fill(count=1, radius="0.05") + walls)
+    with pytest.raises(SceneError) as e:
+        place_fills(s, np.random.default_rng(5))
+    assert e.value.key == "particles[0].count"
+
+
+@pytest.mark.parametrize("periodic", [("x",), ("x", "y"), ("x", "y", "z")])
+def test_clear_of_periodic_images(periodic):
+    # the region spans the whole domain: spheres near opposite faces must not meet through them
+    s = scene(fill(count=1500, radius="0.02",
+                   region='box = { min = [0, 0, 0], max = [0.5, 0.5, 0.5] }'),
+              dmin=(0, 0, 0), dmax=(0.5, 0.5, 0.5), periodic=periodic)
+    p = place_fills(s, np.random.default_rng(7))
+    assert p.n == 1500
+    assert_no_overlap(p, s)
+    assert_inside_box(p, (0, 0, 0), (0.5, 0.5, 0.5))
+
+
+def test_periodic_images_matter():
+    """Without the periodic check this dense fill would put spheres within reach of images."""
+    s = scene(fill(count=10, radius="0.1",
+                   region='box = { min = [0, 0, 0], max = [0.9, 0.25, 0.25] }'),
+              dmin=(0, 0, 0), dmax=(0.9, 0.25, 0.25), periodic=("x",))
+    # along x: ordinary spacing 0.21 gives 4 sites in [0.1, 0.8]; the image of x = 0.8 is at
+    # -0.1, only 0.2 from x = 0.1, so one must go
+    with pytest.raises(SceneError) as e:
+        place_fills(s, np.random.default_rng(1))
+    assert "holds at most 3" in e.value.reason
+    s2 = scene(fill(count=4, radius="0.1",
+                    region='box = { min = [0, 0, 0], max = [0.9, 0.25, 0.25] }'),
+               dmin=(0, 0, 0), dmax=(0.9, 0.25, 0.25))
+    assert place_fills(s2, np.random.default_rng(1)).n == 4
+    s3 = scene(fill(count=3, radius="0.1",
+                    region='box = { min = [0, 0, 0], max = [0.9, 0.25, 0.25] }'),
+               dmin=(0, 0, 0), dmax=(0.9, 0.25, 0.25), periodic=("x",))
+    assert_no_overlap(place_fills(s3, np.random.default_rng(1)), s3)
+
+
+def test_clear_of_earlier_fills_and_file_fills(tmp_path):
+    rng = np.random.default_rng(0)
+    # a file fill of big spheres on a coarse grid (given after the count fills: still avoided)
+    g = np.arange(0.1, 0.95, 0.2)
+    xyz = np.array(np.meshgrid(g, g, g)).reshape(3, -1).T
+    rows = "\n".join(f"{x},{y},{z},0.05,0,0,1" for x, y, z in xyz)
+    (tmp_path / "big.csv").write_text("x,y,z,radius,vx,vy,vz\n" + rows + "\n")
+    body = (fill(count=1500, radius="0.01", extra="temperature = 500.0") +
+            fill(material="steel", count=1500, radius="{ mean = 0.008, std = 0.002, min = 0.005, "
+                 "max = 0.012 }", extra="fixed = true\nvelocity = [1, 2, 3]") +
+            '\n[[particles]]\nmaterial = "ash"\nfile = "big.csv"\n')
+    s = scene(body, base_dir=tmp_path)
+    p = place_fills(s, rng)
+    n_file = len(xyz)
+    assert p.n == 3000 + n_file
+    assert_no_overlap(p, s)
+    assert p.materials == ("ash", "steel")
+    np.testing.assert_array_equal(p.fill, np.repeat([0, 1, 2], [1500, 1500, n_file]))
+    np.testing.assert_array_equal(p.material, np.repeat([0, 1, 0], [1500, 1500, n_file]))
+    assert p.fill.dtype == np.int32 and p.material.dtype == np.int32
+    assert p.fixed.dtype == bool and p.fixed[1500:3000].all() and not p.fixed[:1500].any()
+    assert np.all(p.temperature[:1500] == 500.0) and np.isnan(p.temperature[1500:]).all()
+    np.testing.assert_array_equal(p.velocity[1500:3000], np.tile([1.0, 2.0, 3.0], (1500, 1)))
+    np.testing.assert_array_equal(p.velocity[3000:], np.tile([0.0, 0.0, 1.0], (n_file, 1)))
+    np.testing.assert_array_equal(p.position[3000:], xyz)
+    assert np.all(p.angular_velocity == 0.0)
+
+
+def test_file_fill_defaults_and_angular_velocity(tmp_path):
+    (tmp_path / "f.csv").write_text("x,y,z,radius\n0.5,0.5,0.5,0.01\n0.2,0.2,0.2,0.01\n")
+    body = ('[[particles]]\nmaterial = "ash"\nfile = "f.csv"\nvelocity = [0, 0, -1]\n'
+            'angular_velocity = [0, 0, "60 rpm"]\n')
+    p = place_fills(scene(body, base_dir=tmp_path), np.random.default_rng(0))
+    assert p.n == 2
+    np.testing.assert_allclose(p.velocity, [[0, 0, -1]] * 2)
+    np.testing.assert_allclose(p.angular_velocity, [[0, 0, 2 * math.pi]] * 2)
+    assert np.isnan(p.temperature).all()
+
+
+def test_count_zero_and_no_fills():
+    p = place_fills(scene(fill(count=0)), np.random.default_rng(0))
+    assert p.n == 0 and p.position.shape == (0, 3) and p.velocity.shape == (0, 3)
+    p = place_fills(scene(""), np.random.default_rng(0))
+    assert p.n == 0 and p.position.shape == (0, 3) and p.material.dtype == np.int32
+
+
+def test_deterministic_for_seed():
+    s = scene(fill(count=500, radius="{ mean = 0.01, std = 0.002, min = 0.006, max = 0.014 }"))
+    a = place_fills(s, np.random.default_rng(42))
+    b = place_fills(s, np.random.default_rng(42))
+    c = place_fills(s, np.random.default_rng(43))
+    np.testing.assert_array_equal(a.position, b.position)
+    np.testing.assert_array_equal(a.radius, b.radius)
+    assert not np.array_equal(a.position, c.position)
+
+
+def test_positions_are_jittered_not_on_a_lattice():
+    s = scene(fill(count=300, radius="0.01"))
+    p = place_fills(s, np.random.default_rng(1))
+    # no two spheres share an x coordinate (a bare lattice would repeat them)
+    assert len(np.unique(np.round(p.position[:, 0], 12))) == p.n
+
+
+def truncnorm_mean(mu, sd, lo, hi):
+    phi = lambda x: math.exp(-0.5 * x * x) / math.sqrt(2 * math.pi)   # noqa: E731
+    Phi = lambda x: 0.5 * (1 + math.erf(x / math.sqrt(2)))             # noqa: E731
+    a, b = (lo - mu) / sd, (hi - mu) / sd
+    return mu + sd * (phi(a) - phi(b)) / (Phi(b) - Phi(a))
+
+
+@pytest.mark.parametrize("mu, sd, lo, hi", [
+    (0.01, 0.002, 0.006, 0.014),     # symmetric, normal proposal
+    (0.01, 0.002, 0.009, 0.02),      # asymmetric
+    (0.01, 0.05, 0.005, 0.012),      # wide std: uniform proposal
+])
+def test_truncated_normal_radii(mu, sd, lo, hi):
+    dist = RadiusDistribution(mean=mu, std=sd, min=lo, max=hi)
+    r = sample_radii(dist, 200_000, np.random.default_rng(9))
+    assert r.shape == (200_000,)
+    assert r.min() >= lo and r.max() <= hi
+    expected = truncnorm_mean(mu, sd, lo, hi)
+    assert r.mean() == pytest.approx(expected, abs=4 * r.std() / math.sqrt(len(r)))
+
+
+def test_fill_radii_within_bounds_and_mean():
+    s = scene(fill(count=4000, radius="{ mean = 0.006, std = 0.001, min = 0.004, max = 0.008 }"))
+    p = place_fills(s, np.random.default_rng(11))
+    assert p.radius.min() >= 0.004 and p.radius.max() <= 0.008
+    assert p.radius.mean() == pytest.approx(0.006, abs=1e-4)
+    assert_no_overlap(p, s)
+
+
+def test_constant_radius_sampling():
+    r = sample_radii(RadiusDistribution(mean=0.01), 5, np.random.default_rng(0))
+    np.testing.assert_array_equal(r, np.full(5, 0.01))
+    assert sample_radii(RadiusDistribution(mean=0.01), 0, np.random.default_rng(0)).shape == (0,)
+
+
+def test_sparse_fill_in_huge_region_is_fast():
+    s = scene(fill(count=50, radius="0.001", region='box = { min = [0, 0, 0], max = [10, 10, 10] }'),
+              dmax=(10, 10, 10))
+    t = time.perf_counter()
+    p = place_fills(s, np.random.default_rng(0))
+    assert time.perf_counter() - t < 2.0
+    assert p.n == 50
+    assert_no_overlap(p, s)
+
+
+def test_128k_spheres_in_a_few_seconds():
+    s = scene(fill(count=128_000, radius="{ mean = 0.0045, std = 0.0005, min = 0.004, "
+                                          "max = 0.005 }",
+                   region='box = { min = [0, 0, 0], max = [1, 1, 0.6] }') +
+              fill(count=10_000, radius="0.004",
+                   region='box = { min = [0, 0, 0.6], max = [1, 1, 1] }'),
+              periodic=("x", "y"))
+    t = time.perf_counter()
+    p = place_fills(s, np.random.default_rng(0))
+    elapsed = time.perf_counter() - t
+    assert p.n == 138_000
+    assert elapsed < 10.0, f"placement took {elapsed:.1f} s"
+    # spot-check overlaps on a sample against everything (brute force on a few thousand rows)
+    idx = np.random.default_rng(1).choice(p.n, 2000, replace=False)
+    d = min_image(p.position[idx, None, :] - p.position[None, :, :], s)
+    dist = np.sqrt((d * d).sum(-1))
+    dist[np.arange(len(idx)), idx] = np.inf
+    assert (dist - (p.radius[idx, None] + p.radius[None, :])).min() >= -1e-12
