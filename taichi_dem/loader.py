@@ -61,7 +61,7 @@ def load_scene(path) -> Scene:
 
 def parse_scene(text: str, source: str = "<string>", base_dir=None) -> Scene:
     """Validate TOML ``text``; relative particle files resolve against ``base_dir`` (default:
-    the current directory)."""
+    the directory of ``source`` when it is a path, else the current directory)."""
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
@@ -77,7 +77,9 @@ def parse_scene(text: str, source: str = "<string>", base_dir=None) -> Scene:
         else:
             reason = f"TOML syntax error: {msg}"
         raise SceneError(source, "", reason) from None
-    return _Parser(source, Path(base_dir) if base_dir is not None else Path.cwd()).scene(doc, text)
+    if base_dir is None:
+        base_dir = Path(source).parent if not source.startswith("<") else Path.cwd()
+    return _Parser(source, Path(base_dir)).scene(doc, text)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -200,7 +202,7 @@ class _Parser:
             raise self.err("domain", "required section [domain] is missing (min, max, periodic)")
         self.domain = self.parse_domain(doc["domain"])
         self.materials = self.parse_materials(doc.get("materials", {}))
-        interactions, where = self.parse_interactions(self.array_of_tables(doc, "interactions"))
+        interactions, _ = self.parse_interactions(self.array_of_tables(doc, "interactions"))
         walls = self.parse_walls(self.array_of_tables(doc, "walls"))
         fills = tuple(self.parse_fill(f, f"particles[{i}]")
                       for i, f in enumerate(self.array_of_tables(doc, "particles")))
@@ -447,7 +449,7 @@ class _Parser:
                 if k in t:
                     raise self.err(f"{key}.{k}", f"not allowed together with file (the file "
                                                  f"gives positions and radii); use either file "
-                                                 f"or count + region + radius")
+                                                 "or count + region + radius")
             fname = self.string(t["file"], f"{key}.file")
             arrays = self.read_csv(fname, f"{key}.file")
             return ParticleFill(key=key, material=material, file=fname, **arrays, **kw)

@@ -235,11 +235,12 @@ def _region_volume(region: Region) -> float:
     return float(np.pi * region.radius ** 2 * region.length)
 
 
-def _valid(scene: Scene, region: Region, origin, axes, local, world, r, grid, grid_r):
+def _valid(scene: Scene, region: Region, world, r, grid, grid_r):
     """Mask: sphere (world centre, radius r) inside region and domain, clear of walls and of
     earlier particles."""
     dlo, dhi = np.asarray(scene.domain.min), np.asarray(scene.domain.max)
-    ok = _inside_region(region, local, r)
+    origin, axes = _frame(region)
+    ok = _inside_region(region, (world - origin) @ axes.T, r)
     ok &= np.all((world - r[:, None] >= dlo) & (world + r[:, None] <= dhi), axis=1)
     for w in scene.walls:
         ok &= (world - np.asarray(w.point)) @ np.asarray(w.normal) >= r
@@ -249,11 +250,13 @@ def _valid(scene: Scene, region: Region, origin, axes, local, world, r, grid, gr
     return ok
 
 
-def _lattice(region: Region, spacing: float, margin: float):
-    """FCC sites (local coordinates) with nearest-neighbour distance ``spacing``, centred in the
-    region's local box shrunk by ``margin``; returns (points, parity) for both FCC sublattices."""
+def _lattice(region: Region, spacing: float, margin: float, kind: str):
+    """Lattice sites (local coordinates) with nearest-neighbour distance ``spacing``, centred in
+    the region's local box shrunk by ``margin``. ``kind`` "fcc" returns the full grid of pitch
+    spacing/sqrt(2) with a parity label (each parity is one FCC lattice); "sc" a simple cubic
+    grid of pitch ``spacing`` (parity 0), better in regions only a layer or two thick."""
     lo, hi = _local_bounds(region)
-    h = spacing / np.sqrt(2.0)
+    h = spacing / np.sqrt(2.0) if kind == "fcc" else spacing
     axes = []
     for a in range(3):
         span = hi[a] - lo[a] - 2.0 * margin
@@ -263,9 +266,12 @@ def _lattice(region: Region, spacing: float, margin: float):
         start = lo[a] + margin + 0.5 * (span - (n - 1) * h)
         axes.append((start + h * np.arange(n), np.arange(n)))
     gx, gy, gz = np.meshgrid(axes[0][0], axes[1][0], axes[2][0], indexing="ij")
-    ix, iy, iz = np.meshgrid(axes[0][1], axes[1][1], axes[2][1], indexing="ij")
     pts = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1)
-    parity = ((ix + iy + iz) % 2).ravel()
+    if kind == "fcc":
+        ix, iy, iz = np.meshgrid(axes[0][1], axes[1][1], axes[2][1], indexing="ij")
+        parity = ((ix + iy + iz) % 2).ravel()
+    else:
+        parity = np.zeros(len(pts), np.int64)
     if region.kind == "cylinder":
         room = region.radius - margin
         keep = pts[:, 1] ** 2 + pts[:, 2] ** 2 <= room * room
@@ -274,20 +280,26 @@ def _lattice(region: Region, spacing: float, margin: float):
 
 
 def _sites(scene: Scene, region: Region, spacing: float, r_max: float, grid, grid_r):
-    """Valid lattice sites (world coordinates) for spheres of radius <= r_max."""
+    """Valid lattice sites (world coordinates) for spheres of radius <= r_max: the best of the
+    two FCC sublattices and (for thin regions) a simple cubic lattice."""
     origin, axes = _frame(region)
-    local, parity = _lattice(region, spacing, r_max * (1.0 + 1e-6))
-    if len(local) == 0:
-        return np.empty((0, 3))
-    world = origin + local @ axes
-    ok = _valid(scene, region, origin, axes, local, world, np.full(len(local), r_max), grid,
-                grid_r)
-    best = None
-    for par in (0, 1):
-        sel = world[ok & (parity == par)]
-        sel = _drop_periodic_conflicts(scene, sel, spacing)
-        if best is None or len(sel) > len(best):
-            best = sel
+    lo, hi = _local_bounds(region)
+    margin = r_max * (1.0 + 1e-6)
+    kinds = ["fcc"]
+    if np.min(hi - lo - 2.0 * margin) < 3.0 * spacing:
+        kinds.append("sc")
+    best = np.empty((0, 3))
+    for kind in kinds:
+        local, parity = _lattice(region, spacing, margin, kind)
+        if len(local) == 0:
+            continue
+        world = origin + local @ axes
+        ok = _valid(scene, region, world, np.full(len(local), r_max), grid, grid_r)
+        for par in ((0, 1) if kind == "fcc" else (0,)):
+            sel = world[ok & (parity == par)]
+            sel = _drop_periodic_conflicts(scene, sel, spacing)
+            if len(sel) > len(best):
+                best = sel
     return best
 
 
@@ -365,12 +377,52 @@ def _place_region_fill(scene: Scene, fill: ParticleFill, rng: np.random.Generato
     direction = rng.normal(size=(count, 3))
     direction /= np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300)
     dist = room * rng.uniform(0.0, 1.0, count) ** (1.0 / 3.0)
-    moved = chosen + direction * dist[:, None]
-    origin, axes = _frame(region)
-    local = (moved - origin) @ axes.T
-    ok = _valid(scene, region, origin, axes, local, moved, radii, grid, prev_r)
+    moved = _fold_back(scene, region, chosen + direction * dist[:, None], radii)
+    # the fold-back never moves a sphere further from its site, but make sure
+    disp = moved - chosen
+    norm = np.linalg.norm(disp, axis=1)
+    scale = np.where(norm > room, room / np.maximum(norm, 1e-300), 1.0)
+    moved = chosen + disp * scale[:, None]
+    ok = _valid(scene, region, moved, radii, grid, prev_r)
+    for _ in range(3):                      # halve the jitter of the few still invalid
+        bad = np.nonzero(~ok)[0]
+        if len(bad) == 0:
+            break
+        moved[bad] = 0.5 * (moved[bad] + chosen[bad])
+        ok[bad] = _valid(scene, region, moved[bad], radii[bad], grid, prev_r)
     pos = np.where(ok[:, None], moved, chosen)
     return pos, radii
+
+
+def _reflect(x, lo, hi):
+    """Mirror coordinates below ``lo`` / above ``hi`` back inside, then clip."""
+    x = np.where(x < lo, 2.0 * lo - x, x)
+    x = np.where(x > hi, 2.0 * hi - x, x)
+    return np.clip(x, lo, hi)
+
+
+def _fold_back(scene: Scene, region: Region, p: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Mirror jittered centres back across the region, domain and wall limits they crossed (so
+    spheres near a boundary are not piled onto it); cylinders are projected radially."""
+    origin, axes = _frame(region)
+    local = (p - origin) @ axes.T
+    rr = r[:, None]
+    if region.kind == "box":
+        lo, hi = _local_bounds(region)
+        local = _reflect(local, lo + rr, hi - rr)
+    else:
+        local[:, 0] = _reflect(local[:, 0], r, region.length - r)
+        rho = np.hypot(local[:, 1], local[:, 2])
+        lim = np.maximum(region.radius - r, 0.0)
+        f = np.where(rho > lim, lim / np.maximum(rho, 1e-300), 1.0)
+        local[:, 1:] *= f[:, None]
+    p = origin + local @ axes
+    p = _reflect(p, np.asarray(scene.domain.min) + rr, np.asarray(scene.domain.max) - rr)
+    for w in scene.walls:
+        n = np.asarray(w.normal)
+        below = r - (p - np.asarray(w.point)) @ n
+        p = p + np.where(below > 0.0, 2.0 * below, 0.0)[:, None] * n
+    return p
 
 
 def place_fills(scene: Scene, rng: np.random.Generator) -> PlacedParticles:

@@ -1,0 +1,227 @@
+"""Command line: ``taichi-dem run|check|resume|demo|bench`` (CONTRACT.md).
+
+Exit status: 0 success; 2 bad input (one paragraph naming file, key and reason, never a
+traceback); 3 the simulation diverged.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .scene import SceneError
+
+DEMOS_DIR = Path(__file__).resolve().parent.parent / "demos"
+
+
+def _fail(message: str, code: int = 2) -> int:
+    print(f"taichi-dem: {message}", file=sys.stderr)
+    return code
+
+
+def _common_outputs(p: argparse.ArgumentParser):
+    p.add_argument("--until", type=float, help="simulated time to stop at, s (default end_time)")
+    p.add_argument("--out", help="directory for results (default: as the scene's [output] says)")
+    p.add_argument("--h5", help="HDF5 results file")
+    p.add_argument("--rrd", help="rerun recording file (headless)")
+    p.add_argument("--spawn", action="store_true", help="stream to a rerun viewer")
+    p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"])
+    p.add_argument("--precision", choices=["f32", "f64"])
+    p.add_argument("--threads", type=int, help="CPU threads (default: all cores)")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="taichi-dem", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="run a scene")
+    r.add_argument("scene")
+    _common_outputs(r)
+    c = sub.add_parser("check", help="validate a scene and print derived figures")
+    c.add_argument("scene", nargs="?")
+    c.add_argument("--builders", action="store_true", help="list the mesh builders")
+    rs = sub.add_parser("resume", help="continue from a checkpoint")
+    rs.add_argument("checkpoint")
+    _common_outputs(rs)
+    d = sub.add_parser("demo", help="run a bundled demo (no NAME: list them)")
+    d.add_argument("name", nargs="?")
+    _common_outputs(d)
+    b = sub.add_parser("bench", help="the chute performance benchmark")
+    b.add_argument("--steps", type=int, default=1000)
+    b.add_argument("--copies", type=float, default=1.0, help="chute size in units of 32k particles")
+    b.add_argument("--threads", type=int)
+    b.add_argument("--precision", default="f32", choices=["f32", "f64"])
+    return p
+
+
+def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "check":
+            return cmd_check(args)
+        if args.command == "run":
+            return cmd_run(args, args.scene)
+        if args.command == "demo":
+            return cmd_demo(args)
+        if args.command == "resume":
+            return _fail(f"{args.checkpoint}: checkpoints and resume are not supported yet by "
+                         f"this version of taichi_dem (planned)")
+        if args.command == "bench":
+            return cmd_bench(args)
+    except SceneError as err:
+        return _fail(str(err), 2)
+    except KeyboardInterrupt:
+        return _fail("interrupted", 130)
+    return 0
+
+
+# ---------------------------------------------------------------------------------- check
+def describe_scene(scene) -> str:
+    """The effect list and derived figures of a scene, without compiling anything."""
+    from .effects import enabled_effects
+    from .model import build_pair_tables
+    from .placement import place_fills
+    from .timestep import choose_time_step
+
+    placed = place_fills(scene, np.random.default_rng(scene.simulation.seed))
+    tables = build_pair_tables(scene)
+    n = len(placed.radius)
+    if n == 0:
+        raise SceneError(scene.source, "particles", "the scene has no particles")
+    skin = scene.simulation.skin or 0.2 * float(np.mean(placed.radius))
+    ts = choose_time_step(scene, placed.radius, placed.material, tables.names,
+                          np.linalg.norm(placed.velocity, axis=1), skin)
+    real_bytes = 8 if scene.simulation.precision == "f64" else 4
+    # per particle: 6 vec3 + 4 reals + 3 ints of state, shadows and rows (~12 ints)
+    per_particle = (6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes
+    # per neighbour entry (about 8 per particle at 1.5x headroom): ids, mirror, 5 vec3
+    per_entry = 3 * 4 + 5 * 3 * real_bytes
+    memory = n * per_particle + int(1.5 * 8 * n) * per_entry
+    steps = scene.simulation.end_time / ts.dt
+    lines = [f"scene: {scene.source}", "effects (compiled and run, in step order):"]
+    for e in enabled_effects(scene):
+        lines.append(f"  - {e.name:24s} {e.description}")
+    lines += [
+        f"particles: {n} ({', '.join(f'{c} {m}' for m, c in zip(tables.names, np.bincount(placed.material, minlength=len(tables.names))) if c)})"
+        f", radius {placed.radius.min():.4g} - {placed.radius.max():.4g} m",
+        f"Rayleigh time (smallest particle): {ts.rayleigh_time:.4g} s",
+        f"Hertz contact time at {ts.expected_speed:.3g} m/s: {ts.contact_time:.4g} s",
+        f"time step: {ts.dt:.4g} s ({ts.dt / ts.rayleigh_time:.1%} of Rayleigh; set by {ts.limited_by})",
+        f"steps to end_time {scene.simulation.end_time:g} s: {steps:,.0f}"
+        f" ({steps * n / 1e9:.3g} G particle-steps)",
+        f"Verlet skin: {skin:.4g} m",
+        f"precision: {scene.simulation.precision}; estimated device memory: {memory / 2**20:.1f} MiB",
+    ]
+    lines += [f"note: {note}" for note in ts.notes]
+    return "\n".join(lines)
+
+
+def cmd_check(args) -> int:
+    if args.builders:
+        print("mesh builders: none yet in this version (planned: box, drum, paddle_shaft, "
+              "screw, hopper, chute, STL/OBJ import)")
+        if not args.scene:
+            return 0
+    if not args.scene:
+        return _fail("check: give a scene file (or --builders)")
+    from .loader import load_scene
+    scene = load_scene(args.scene)
+    print(describe_scene(scene))
+    print("scene OK")
+    return 0
+
+
+# ---------------------------------------------------------------------------------- run
+def _output_path(explicit, configured, out_dir, scene_path, suffix):
+    if explicit:
+        return explicit
+    if out_dir:
+        name = Path(configured).name if configured else Path(scene_path).stem + suffix
+        return str(Path(out_dir) / name)
+    return configured
+
+
+def cmd_run(args, scene_path: str, summary=None) -> int:
+    from .loader import load_scene
+    from .simulation import DivergenceError, Simulation
+
+    scene = load_scene(scene_path)
+    h5 = _output_path(args.h5, scene.output.h5, args.out, scene_path, ".h5")
+    rrd = _output_path(args.rrd, scene.output.rrd, args.out, scene_path, ".rrd")
+    if rrd or args.spawn:
+        print("taichi-dem: note: rerun recording (--rrd/--spawn) is not supported yet by this "
+              "version; continuing without it", file=sys.stderr)
+    t0 = time.perf_counter()
+    sim = Simulation(scene, arch=args.arch, precision=args.precision, threads=args.threads,
+                     h5=h5 or "")
+    if not args.quiet:
+        print(f"{scene_path}: {sim.particle_count} particles, dt = {sim.dt:.4g} s, "
+              f"{len(sim.effects)} effects: {', '.join(e.name for e in sim.effects)}",
+              file=sys.stderr)
+    try:
+        sim.run(args.until, progress=not args.quiet)
+    except DivergenceError as err:
+        sim.close()
+        return _fail(str(err), 3)
+    wall = time.perf_counter() - t0
+    s = sim.series
+    print(f"simulated {sim.time:.4g} s in {wall:.1f} s wall ({sim.wall_seconds:.1f} s stepping); "
+          f"{sim.step_count:,} steps, {sim.step_count * sim.particle_count / max(sim.wall_seconds, 1e-9) / 1e6:.2f} "
+          f"M particle-steps/s")
+    print(f"particles: {sim.particle_count} (lost {int(s['particles/lost'][-1])}); "
+          f"kinetic energy {s['particles/kinetic_energy'][-1]:.4g} J")
+    for w in scene.walls:
+        f = s[f"walls/{w.name}/force"][-1]
+        print(f"wall {w.name}: force [{f[0]:.4g}, {f[1]:.4g}, {f[2]:.4g}] N")
+    if summary:
+        summary(sim)
+    if h5:
+        print(f"results: {h5}")
+    sim.close()
+    return 0
+
+
+# ---------------------------------------------------------------------------------- demo
+def _demos() -> dict[str, Path]:
+    return {p.stem: p for p in sorted(DEMOS_DIR.glob("*.toml"))}
+
+
+def cmd_demo(args) -> int:
+    demos = _demos()
+    if not args.name:
+        print("demos:")
+        for name, path in demos.items():
+            first = path.read_text().splitlines()[0].lstrip("# ")
+            print(f"  {name:20s} {first}")
+        return 0
+    if args.name not in demos:
+        return _fail(f"demo '{args.name}' not found; available: {', '.join(demos)}")
+    if not args.out and not args.h5:
+        args.out = "out"
+
+    def summary(sim):
+        p = sim.particles()
+        weight = float(np.sum(p["mass"][~p["fixed"]])) * float(np.linalg.norm(sim.scene.simulation.gravity))
+        floor = [w for w in sim.scene.walls if w.name == "floor"]
+        if floor:
+            fz = float(sim.series["walls/floor/force"][-1] @ np.asarray(floor[0].normal))
+            print(f"summary: the floor carries {-fz:.4g} N of the pile's {weight:.4g} N weight "
+                  f"({-fz / weight:.1%})")
+    return cmd_run(args, str(demos[args.name]), summary=summary)
+
+
+# ---------------------------------------------------------------------------------- bench
+def cmd_bench(args) -> int:
+    bench = Path(__file__).resolve().parent.parent / "bench" / "chute.py"
+    if not bench.exists():
+        return _fail("bench/chute.py not found (run from a source checkout)")
+    import runpy
+    sys.argv = [str(bench), "--steps", str(args.steps), "--copies", str(args.copies),
+                "--precision", args.precision] + (["--threads", str(args.threads)] if args.threads else [])
+    runpy.run_path(str(bench), run_name="__main__")
+    return 0

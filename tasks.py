@@ -1,0 +1,52 @@
+#!/usr/bin/env python3
+"""Set-up and everyday tasks with nothing but python3 (stdlib only).
+
+    python3 tasks.py demo    create .venv, install taichi_dem, run the main demo
+    python3 tasks.py test    create .venv, install taichi_dem with test extras, run the tests
+    python3 tasks.py setup   only create .venv and install
+"""
+import os
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+VENV = ROOT / ".venv"
+PY = VENV / ("Scripts/python.exe" if os.name == "nt" else "bin/python")
+MAIN_DEMO = "pile"
+
+
+def run(*cmd):
+    print("+", " ".join(str(c) for c in cmd), flush=True)
+    subprocess.run([str(c) for c in cmd], check=True, cwd=ROOT)
+
+
+def setup(extras: str = "test"):
+    if not PY.exists():
+        venv.create(VENV, with_pip=True)
+    run(PY, "-m", "pip", "install", "--quiet", "--upgrade", "pip")
+    run(PY, "-m", "pip", "install", "--quiet", "-e", f".[{extras}]")
+
+
+def main(argv):
+    task = argv[1] if len(argv) > 1 else "test"
+    try:
+        if task == "setup":
+            setup()
+        elif task == "demo":
+            setup()
+            run(PY, "-m", "taichi_dem", "demo", MAIN_DEMO, *argv[2:])
+        elif task == "test":
+            setup()
+            run(PY, "-m", "pytest", "-q", *argv[2:])
+        else:
+            print(__doc__)
+            return 2
+    except subprocess.CalledProcessError as err:
+        return err.returncode or 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
