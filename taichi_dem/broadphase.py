@@ -86,7 +86,7 @@ class Broadphase:
             for i in range(n):
                 pid = s.particle_id[i]
                 s.old_row_start_by_id[pid] = s.row_start[i]
-                s.old_row_count_by_id[pid] = s.row_count[i]
+                s.old_row_count_by_id[pid] = s.row_owned[i]
 
         @ti.kernel
         def sort_by_cell(n: ti.i32):
@@ -144,17 +144,26 @@ class Broadphase:
                 s.reference_position[k] = s.position[k]
 
         self._save_rows, self._sort_by_cell, self._permute = save_rows, sort_by_cell, permute
-        self._count_rows = self._make_neighbour_loop(count_only=True)
+        self._compile_search(32)
 
-    def _make_neighbour_loop(self, count_only: bool, pairs: "PairState | None" = None):
-        """Kernel visiting, for each particle, the candidates in the 27 surrounding cells that
-        lie within the cutoff r_i + r_j + skin (minimum image on periodic axes)."""
+    def _compile_search(self, width: int):
+        """(Re)allocate the candidate scratch (``width`` per particle) and compile the search:
+        for each particle, the partners in the 27 surrounding cells within the cutoff
+        r_i + r_j + skin (minimum image on periodic axes), in one pass. Rows longer than
+        ``width`` are counted but not stored; the driver then widens the scratch and repeats."""
+        if getattr(self, "scratch_tree", None) is not None:
+            self.scratch_tree.destroy()
+        self.scratch_width = width
+        t = self.scratch_tree = self.e.new_tree()
+        scratch = self.scratch = t.add("candidate", ti.i32, (self.e.state.capacity, width))
+        t.finalize()
         s = self.e.state
         g = self.grid
         dims = ti.Vector(list(g.dims))
         span = ti.Vector(list(g.span))
         skin = self.e.skin
         cell_start = self.cell_start
+        total = self.total
 
         @ti.func
         def minimum_image(d):
@@ -163,57 +172,15 @@ class Broadphase:
                     d[k] -= span[k] * ti.round(d[k] / span[k])
             return d
 
-        @ti.func
-        def is_candidate(i, j):
-            ok = False
-            if j != i and (s.inverse_mass[i] > 0.0 or s.inverse_mass[j] > 0.0):
-                d = minimum_image(s.position[i] - s.position[j])
-                cutoff = s.radius[i] + s.radius[j] + skin
-                ok = d.dot(d) < cutoff * cutoff
-            return ok
-
-        if count_only:
-            @ti.kernel
-            def count_rows(n: ti.i32) -> ti.i32:
-                for i in range(n):
-                    c = s.cell[i]
-                    cz = c % dims[2]
-                    cy = (c // dims[2]) % dims[1]
-                    cx = c // (dims[1] * dims[2])
-                    cnt = 0
-                    for offset in range(27):
-                        nb = ti.Vector([cx + offset // 9 - 1, cy + (offset // 3) % 3 - 1, cz + offset % 3 - 1])
-                        inside = True
-                        for k in ti.static(range(3)):
-                            if ti.static(g.periodic[k]):
-                                nb[k] = (nb[k] + dims[k]) % dims[k]
-                            elif nb[k] < 0 or nb[k] >= dims[k]:
-                                inside = False
-                        if inside:
-                            nc = (nb[0] * dims[1] + nb[1]) * dims[2] + nb[2]
-                            for j in range(cell_start[nc], cell_start[nc + 1]):
-                                if is_candidate(i, j):
-                                    cnt += 1
-                    s.row_count[i] = cnt
-                ti.loop_config(serialize=True)
-                for i in range(n + 1):
-                    if i == 0:
-                        s.row_start[0] = 0
-                    else:
-                        s.row_start[i] = s.row_start[i - 1] + s.row_count[i - 1]
-                return s.row_start[n]
-            return count_rows
-
-        p = pairs
-
         @ti.kernel
-        def fill_rows(n: ti.i32):
+        def find_candidates(n: ti.i32) -> ti.i32:
             for i in range(n):
                 c = s.cell[i]
                 cz = c % dims[2]
                 cy = (c // dims[2]) % dims[1]
                 cx = c // (dims[1] * dims[2])
-                slot = s.row_start[i]
+                xi, ri, movable_i = s.position[i], s.radius[i], s.inverse_mass[i] > 0.0
+                count = 0
                 for offset in range(27):
                     nb = ti.Vector([cx + offset // 9 - 1, cy + (offset // 3) % 3 - 1, cz + offset % 3 - 1])
                     inside = True
@@ -225,22 +192,65 @@ class Broadphase:
                     if inside:
                         nc = (nb[0] * dims[1] + nb[1]) * dims[2] + nb[2]
                         for j in range(cell_start[nc], cell_start[nc + 1]):
-                            if is_candidate(i, j):
-                                p.neighbour[slot] = j
-                                slot += 1
-        return fill_rows
+                            # two fixed particles never interact (LAMMPS: neigh_modify exclude)
+                            if j != i and (movable_i or s.inverse_mass[j] > 0.0):
+                                d = minimum_image(xi - s.position[j])
+                                cutoff = ri + s.radius[j] + skin
+                                if d.dot(d) < cutoff * cutoff:
+                                    if count < width:
+                                        scratch[i, count] = j
+                                    count += 1
+                s.row_count[i] = count
+            longest = 0
+            for i in range(n):
+                ti.atomic_max(longest, s.row_count[i])
+            ti.loop_config(serialize=True)
+            for i in range(n + 1):
+                if i == 0:
+                    s.row_start[0] = 0
+                else:
+                    s.row_start[i] = s.row_start[i - 1] + s.row_count[i - 1]
+            total[0] = s.row_start[n]
+            return longest
+
+        self._find_candidates = find_candidates
+
+    def _make_compact(self, pairs: "PairState"):
+        """Kernel copying the scratch rows into the CSR list, owned pairs (partner id larger)
+        at the front of each row, the others at the back."""
+        s = self.e.state
+        p = pairs
+        scratch_field = lambda: self.scratch  # noqa: E731  (the scratch may be reallocated)
+        scratch = scratch_field()
+
+        @ti.kernel
+        def compact(n: ti.i32):
+            for i in range(n):
+                front = s.row_start[i]
+                back = s.row_start[i] + s.row_count[i] - 1
+                pid = s.particle_id[i]
+                for c in range(s.row_count[i]):
+                    j = scratch[i, c]
+                    if pid < s.particle_id[j]:
+                        p.neighbour[front] = j
+                        front += 1
+                    else:
+                        p.neighbour[back] = j
+                        back -= 1
+                s.row_owned[i] = front - s.row_start[i]
+        return compact
 
     def compile_pair_kernels(self, pairs: PairState):
         """Kernels that touch the pair arrays; rebuilt whenever those are reallocated."""
         s = self.e.state
         p = pairs
         rolling_history = p.rolling_history is not None
-        self._fill_rows = self._make_neighbour_loop(count_only=False, pairs=p)
+        self._compact = self._make_compact(p)
 
         @ti.kernel
         def save_pairs(n: ti.i32):
             for i in range(n):
-                for k in range(s.row_start[i], s.row_start[i] + s.row_count[i]):
+                for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                     p.old_partner_id[k] = s.particle_id[p.neighbour[k]]
                     p.old_tangential_history[k] = p.tangential_history[k]
                     if ti.static(rolling_history):
@@ -252,30 +262,30 @@ class Broadphase:
                 pid = s.particle_id[i]
                 old_start = s.old_row_start_by_id[pid]
                 old_count = s.old_row_count_by_id[pid]
-                for k in range(s.row_start[i], s.row_start[i] + s.row_count[i]):
+                owned_end = s.row_start[i] + s.row_owned[i]
+                for k in range(s.row_start[i], owned_end):
+                    # owned: carry the history of this pair if it existed before the rebuild
+                    partner = s.particle_id[p.neighbour[k]]
+                    p.mirror[k] = -1
+                    history = ti.Vector([0.0, 0.0, 0.0])
+                    rolling = ti.Vector([0.0, 0.0, 0.0])
+                    for m in range(old_start, old_start + old_count):
+                        if p.old_partner_id[m] == partner:
+                            history = p.old_tangential_history[m]
+                            if ti.static(rolling_history):
+                                rolling = p.old_rolling_history[m]
+                            break
+                    p.tangential_history[k] = history
+                    if ti.static(rolling_history):
+                        p.rolling_history[k] = rolling
+                for k in range(owned_end, s.row_start[i] + s.row_count[i]):
+                    # not owned: the owner's entry of the same pair lies in j's owned part
                     j = p.neighbour[k]
-                    partner = s.particle_id[j]
-                    if pid < partner:
-                        # owner: carry the history of this pair if it existed before
-                        p.mirror[k] = -1
-                        history = ti.Vector([0.0, 0.0, 0.0])
-                        rolling = ti.Vector([0.0, 0.0, 0.0])
-                        for m in range(old_start, old_start + old_count):
-                            if p.old_partner_id[m] == partner:
-                                history = p.old_tangential_history[m]
-                                if ti.static(rolling_history):
-                                    rolling = p.old_rolling_history[m]
-                                break
-                        p.tangential_history[k] = history
-                        if ti.static(rolling_history):
-                            p.rolling_history[k] = rolling
-                    else:
-                        # the owner's entry of the same pair lies in j's row
-                        p.mirror[k] = -1
-                        for m in range(s.row_start[j], s.row_start[j] + s.row_count[j]):
-                            if p.neighbour[m] == i:
-                                p.mirror[k] = m
-                                break
+                    p.mirror[k] = -1
+                    for m in range(s.row_start[j], s.row_start[j] + s.row_owned[j]):
+                        if p.neighbour[m] == i:
+                            p.mirror[k] = m
+                            break
 
         self._save_pairs, self._link_and_carry = save_pairs, link_and_carry
 
@@ -291,10 +301,16 @@ class Broadphase:
         self._sort_by_cell(n)
         alive = int(self.total[1])
         self._permute(n)
-        entries = int(self._count_rows(alive))
+        longest = int(self._find_candidates(alive))
+        if longest > self.scratch_width:
+            self._compile_search(int(longest * 1.5) + 1)
+            if e.pairs is not None:
+                self._compact = self._make_compact(e.pairs)
+            longest = int(self._find_candidates(alive))
+        entries = int(self.total[0])
         if e.pairs is None or entries > e.pairs.capacity:
             e.grow_pairs(max(int(entries * 1.5), 1024))
-        self._fill_rows(alive)
+        self._compact(alive)
         self._link_and_carry(alive)
         self.rebuilds += 1
         self.entries = entries

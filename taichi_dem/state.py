@@ -80,6 +80,8 @@ class ParticleState:
         self.inverse_order = t.add("inverse_order", ti.i32, capacity)
         self.row_start = t.add("row_start", ti.i32, capacity + 1)
         self.row_count = t.add("row_count", ti.i32, capacity)
+        # the first row_owned entries of a row are the pairs this particle owns (computes)
+        self.row_owned = t.add("row_owned", ti.i32, capacity)
         # where each particle's neighbour row was before the last reorder (by particle id)
         self.old_row_start_by_id = t.add("old_row_start_by_id", ti.i32, capacity)
         self.old_row_count_by_id = t.add("old_row_count_by_id", ti.i32, capacity)
@@ -112,7 +114,8 @@ class ParticleState:
 class PairState:
     """Per-neighbour-entry fields of the full (both directions) neighbour list in CSR form.
 
-    Entry k of particle i's row names partner ``neighbour[k]``. The pair is computed once, by
+    Entry k of particle i's row names partner ``neighbour[k]``; a row lists the pairs the
+    particle owns first (``row_owned`` of them), then the others. The pair is computed once, by
     its owner (the particle with the smaller ``particle_id``, stable across reorders), which
     stores the force on itself and the torques on both; the other particle reads them through
     ``mirror[k]`` (the owner's entry). The tangential (and EPSD rolling) history lives at the

@@ -181,70 +181,67 @@ class Engine:
         @ti.kernel
         def pair_forces(n: ti.i32, dt: real):
             for i in range(n):
-                pid = s.particle_id[i]
                 xi, vi, wi = s.position[i], s.velocity[i], s.angular_velocity[i]
                 ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
-                for k in range(s.row_start[i], s.row_start[i] + s.row_count[i]):
+                for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                     j = p.neighbour[k]
-                    if pid < s.particle_id[j]:
-                        d = minimum_image(xi - s.position[j])
-                        rj = s.radius[j]
-                        dist = d.norm()
-                        normal_overlap = ri + rj - dist
-                        force = ti.Vector([0.0, 0.0, 0.0])
-                        torque_i = ti.Vector([0.0, 0.0, 0.0])
-                        torque_j = ti.Vector([0.0, 0.0, 0.0])
-                        history = ti.Vector([0.0, 0.0, 0.0])
-                        rolling_history = ti.Vector([0.0, 0.0, 0.0])
-                        if normal_overlap > 0.0 and dist > 0.0:
-                            normal = d / dist                                   # from j to i
-                            r_eff = ri * rj / (ri + rj)
-                            m_eff = 1.0 / (inv_mi + s.inverse_mass[j])
-                            arm_i = ri - 0.5 * normal_overlap     # centre to contact point
-                            arm_j = rj - 0.5 * normal_overlap
-                            wj = s.angular_velocity[j]
-                            v_rel = vi - s.velocity[j] - (arm_i * wi + arm_j * wj).cross(normal)
-                            mj = s.material[j]
-                            fn, ft, history, sn = contact_force(
-                                normal, normal_overlap, r_eff, m_eff, v_rel,
-                                p.tangential_history[k], E[mi, mj], G[mi, mj], Z[mi, mj],
-                                MU[mi, mj], dt)
-                            force = fn * normal + ft
-                            lever = normal.cross(ft)
-                            torque_i = -arm_i * lever
-                            torque_j = -arm_j * lever
-                            if ti.static(cdt or epsd):
-                                if MUR[mi, mj] > 0.0:
-                                    prev = ti.Vector([0.0, 0.0, 0.0])
-                                    if ti.static(epsd):
-                                        prev = p.rolling_history[k]
-                                    tr, rolling_history = rolling_torque(
-                                        RM[mi, mj], wi - wj, normal, fn, sn, r_eff, MUR[mi, mj],
-                                        1.0 / (inv_ii + s.inverse_inertia[j]), prev, dt)
-                                    torque_i += tr
-                                    torque_j -= tr
-                        p.force[k] = force
-                        p.torque_owner[k] = torque_i
-                        p.torque_partner[k] = torque_j
-                        p.tangential_history[k] = history
-                        if ti.static(epsd):
-                            p.rolling_history[k] = rolling_history
+                    d = minimum_image(xi - s.position[j])
+                    rj = s.radius[j]
+                    dist = d.norm()
+                    normal_overlap = ri + rj - dist
+                    force = ti.Vector([0.0, 0.0, 0.0])
+                    torque_i = ti.Vector([0.0, 0.0, 0.0])
+                    torque_j = ti.Vector([0.0, 0.0, 0.0])
+                    history = ti.Vector([0.0, 0.0, 0.0])
+                    rolling_history = ti.Vector([0.0, 0.0, 0.0])
+                    if normal_overlap > 0.0 and dist > 0.0:
+                        normal = d / dist                                   # from j to i
+                        r_eff = ri * rj / (ri + rj)
+                        m_eff = 1.0 / (inv_mi + s.inverse_mass[j])
+                        arm_i = ri - 0.5 * normal_overlap     # centre to contact point
+                        arm_j = rj - 0.5 * normal_overlap
+                        wj = s.angular_velocity[j]
+                        v_rel = vi - s.velocity[j] - (arm_i * wi + arm_j * wj).cross(normal)
+                        mj = s.material[j]
+                        fn, ft, history, sn = contact_force(
+                            normal, normal_overlap, r_eff, m_eff, v_rel,
+                            p.tangential_history[k], E[mi, mj], G[mi, mj], Z[mi, mj],
+                            MU[mi, mj], dt)
+                        force = fn * normal + ft
+                        lever = normal.cross(ft)
+                        torque_i = -arm_i * lever
+                        torque_j = -arm_j * lever
+                        if ti.static(cdt or epsd):
+                            if MUR[mi, mj] > 0.0:
+                                prev = ti.Vector([0.0, 0.0, 0.0])
+                                if ti.static(epsd):
+                                    prev = p.rolling_history[k]
+                                tr, rolling_history = rolling_torque(
+                                    RM[mi, mj], wi - wj, normal, fn, sn, r_eff, MUR[mi, mj],
+                                    1.0 / (inv_ii + s.inverse_inertia[j]), prev, dt)
+                                torque_i += tr
+                                torque_j -= tr
+                    p.force[k] = force
+                    p.torque_owner[k] = torque_i
+                    p.torque_partner[k] = torque_j
+                    p.tangential_history[k] = history
+                    if ti.static(epsd):
+                        p.rolling_history[k] = rolling_history
 
         @ti.kernel
         def gather(n: ti.i32, dt: real, record: ti.i32):
             for i in range(n):
-                pid = s.particle_id[i]
                 force = ti.Vector([0.0, 0.0, 0.0])
                 torque = ti.Vector([0.0, 0.0, 0.0])
-                for k in range(s.row_start[i], s.row_start[i] + s.row_count[i]):
-                    if pid < s.particle_id[p.neighbour[k]]:
-                        force += p.force[k]
-                        torque += p.torque_owner[k]
-                    else:
-                        m = p.mirror[k]
-                        if m >= 0:
-                            force -= p.force[m]
-                            torque += p.torque_partner[m]
+                owned_end = s.row_start[i] + s.row_owned[i]
+                for k in range(s.row_start[i], owned_end):
+                    force += p.force[k]
+                    torque += p.torque_owner[k]
+                for k in range(owned_end, s.row_start[i] + s.row_count[i]):
+                    m = p.mirror[k]
+                    if m >= 0:
+                        force -= p.force[m]
+                        torque += p.torque_partner[m]
                 inv_m = s.inverse_mass[i]
                 if ti.static(n_walls > 0):
                     xi, vi, wi, ri, mi = s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i], s.material[i]
