@@ -106,7 +106,11 @@ class Engine:
         def minimum_image(d):
             for k in ti.static(range(3)):
                 if ti.static(g.periodic[k]):
-                    d[k] -= span[k] * ti.round(d[k] / span[k])
+                    # positions are wrapped into the box, so one period at most separates images
+                    if d[k] > 0.5 * span[k]:
+                        d[k] -= span[k]
+                    elif d[k] < -0.5 * span[k]:
+                        d[k] += span[k]
             return d
         self.minimum_image = minimum_image
 

@@ -169,44 +169,44 @@ def test_test2_against_hertz(test2):
 # ------------------------------------------------------------------------------------ test 3
 RESTITUTIONS = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]
 SPEEDS = [0.1, 1.0, 10.0]
-RESTITUTION_TOL = 2e-3
+FIRST_ORDER_BOUND = 0.5     # |e - target| <= 0.5 / N (N steps per Hertz contact time); see docstring
+TABLE_TOL = 2e-4            # restitution.py: 1e-4 from its ODE table, plus O(1/N^2) left over
 
 
-@pytest.fixture(scope="module")
-def test3(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("co3")
+def _restitution_run(tmp, steps_per_contact):
+    """60 spheres (glass and aluminium alloy, R 10 mm; one material per target e), each falling
+    on a rigid wall at 0.1, 1 or 10 m/s. Returns the cases, the achieved e and, per case, the
+    number of steps per elastic Hertz contact time."""
     r = 0.01
     bases = {"glass": GLASS, "al": ALUMINIUM}
-    text_mats, names, fills, cases = "", [], "", []
+
+    def contact_time(mat, speed):
+        return h.hertz_impact(h.sphere_mass(r, mat["density"]), r,
+                              h.youngs_eff(mat["youngs_modulus"], mat["poisson_ratio"],
+                                           RIGID["youngs_modulus"], 0.0), speed)["time"]
+
+    # the shortest contact (stiffest material, highest speed) sets dt
+    t_short = min(contact_time(mat, max(SPEEDS)) for mat in bases.values())
+    t_long = max(contact_time(mat, min(SPEEDS)) for mat in bases.values())
+    dt = t_short / steps_per_contact
     spacing = 0.05
-    # the shortest contact: the stiffest material at the highest speed sets dt
-    t_short = min(h.hertz_impact(h.sphere_mass(r, mat["density"]), r,
-                                 h.youngs_eff(mat["youngs_modulus"], mat["poisson_ratio"],
-                                              RIGID["youngs_modulus"], 0.0), max(SPEEDS))["time"]
-                  for mat in bases.values())
-    t_long = max(h.hertz_impact(h.sphere_mass(r, mat["density"]), r,
-                                h.youngs_eff(mat["youngs_modulus"], mat["poisson_ratio"],
-                                             RIGID["youngs_modulus"], 0.0), min(SPEEDS))["time"]
-                 for mat in bases.values())
-    dt = t_short / STEPS_PER_CONTACT
-    inter = ""
+    mats, inter, fills, names, cases, steps = "", "", "", [], [], []
     row = 0
     for base, props in bases.items():
         for e in RESTITUTIONS:
             name = f"{base}_e{int(round(e * 100)):03d}"
             names.append(name)
-            text_mats += h.material(name, **props)
+            mats += h.material(name, **props)
             inter += h.interaction(name, "rigid", e, 0.0)
             pos = [[row * spacing, k * spacing, r + 2.5 * v * dt] for k, v in enumerate(SPEEDS)]
             vel = [[0.0, 0.0, -v] for v in SPEEDS]
-            fills += h.csv_fill(tmp, f"{name}.csv", name, pos, r, vel)
+            fills += h.csv_fill(tmp, f"{name}_{steps_per_contact}.csv", name, pos, r, vel)
             cases += [(base, e, v) for v in SPEEDS]
+            steps += [contact_time(props, v) / dt for v in SPEEDS]
             row += 1
-    lo = (-spacing, -spacing, -spacing)
-    hi = (row * spacing, len(SPEEDS) * spacing, 0.2)
-    text = (h.header(dt=dt, lo=lo, hi=hi) + text_mats + h.material("rigid", **RIGID)
-            + h.all_interactions(names) + inter + h.wall("floor", (0, 0, 0), (0, 0, 1), "rigid")
-            + fills)
+    text = (h.header(dt=dt, lo=(-spacing,) * 3, hi=(row * spacing, len(SPEEDS) * spacing, 0.2))
+            + mats + h.material("rigid", **RIGID) + h.all_interactions(names) + inter
+            + h.wall("floor", (0, 0, 0), (0, 0, 1), "rigid") + fills)
     with taichi_dem.Simulation.from_text(text, base_dir=str(tmp), arch="cpu", precision="f64") as sim:
         # a damped contact ends with the force at zero while some overlap remains; the sphere
         # then drifts off at its rebound speed. Step until every sphere has cleared the wall.
@@ -215,24 +215,38 @@ def test3(tmp_path_factory):
             p = sim.particles()
             if np.all(p["position"][:, 2] > r):
                 break
-            sim.step(STEPS_PER_CONTACT)
+            sim.step(steps_per_contact)
         assert np.all(p["position"][:, 2] > r), "every sphere has left the wall"
         vz = p["velocity"][:, 2]
-        print(f"\ntest 3: {sim.step_count} steps")
     achieved = np.array([vz[k] / v for k, (_, _, v) in enumerate(cases)])
-    return cases, achieved, dt, t_short
+    return cases, achieved, np.array(steps)
+
+
+@pytest.fixture(scope="module")
+def test3(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("co3")
+    coarse = _restitution_run(tmp, STEPS_PER_CONTACT)
+    fine = _restitution_run(tmp, 2 * STEPS_PER_CONTACT)
+    return coarse, fine
 
 
 def test_test3_restitution_equals_target(test3):
-    cases, achieved, dt, t_short = test3
-    err = np.array([a - e for a, (_, e, _) in zip(achieved, cases)])
-    print("\ntest 3: achieved restitution (rows e, columns glass/al x 0.1, 1, 10 m/s)")
+    (cases, e_n, steps), (_, e_2n, _) = test3
+    target = np.array([c[1] for c in cases])
+    extrapolated = 2.0 * e_2n - e_n          # Richardson, first order
+    print("\ntest 3: achieved e - target at N = 200 (glass 0.1, 1, 10 m/s | al 0.1, 1, 10 m/s), "
+          "and Richardson-extrapolated")
     for e in RESTITUTIONS:
-        vals = [a for a, c in zip(achieved, cases) if c[1] == e]
-        print(f"  e = {e:.1f}: " + "  ".join(f"{x:.5f}" for x in vals))
-    print(f"  max |e - target| = {np.abs(err).max():.2e}")
-    bad = [(c, a) for c, a, d in zip(cases, achieved, err) if abs(d) > RESTITUTION_TOL]
-    assert not bad, bad
+        sel = target == e
+        print(f"  e = {e:.1f}: " + " ".join(f"{x:+.1e}" for x in e_n[sel] - e) + "   extrap: "
+              + " ".join(f"{x:+.1e}" for x in extrapolated[sel] - e))
+    print(f"  max |e - target|: N = {STEPS_PER_CONTACT}: {np.abs(e_n - target).max():.2e}, "
+          f"2N: {np.abs(e_2n - target).max():.2e}, extrapolated: "
+          f"{np.abs(extrapolated - target).max():.2e}")
+    # first-order convergence to the target, and the limit is the target
+    assert np.all(np.abs(e_n - target) <= FIRST_ORDER_BOUND / steps), cases
+    assert np.all(np.abs(e_2n - target) <= FIRST_ORDER_BOUND / (2 * steps)), cases
+    assert np.all(np.abs(extrapolated - target) <= TABLE_TOL), cases
 
 
 # ------------------------------------------------------------------------------------ test 4
@@ -286,35 +300,78 @@ def test4(tmp_path_factory):
                 normal_e=normal_e, lateral=np.abs(v[:, 1]).max() + np.abs(w[:, [0, 2]]).max())
 
 
+# the impulse-weighted mean overlap over an elastic Hertz impact, as a fraction of d_max:
+# int d F dt / (d_max int F dt) = B(7/5, 1/2) / B(1, 1/2) (substitute x = (4/5) u^(5/2))
+MEAN_OVERLAP_FRACTION = (math.gamma(1.4) * math.gamma(0.5) / math.gamma(1.9)) / 2.0   # 0.81756
+
+
 def test_test4_gross_sliding_rigid_body(test4):
     a = test4["angles"]
     th = np.radians(a)
-    e_t_theory = 1.0 - MU * (1 + E4) / np.tan(th)
-    spin_theory = -5.0 * MU * (1 + E4) * V4 * np.cos(th) / (2 * R4)
+    e_n = test4["normal_e"]                                  # achieved normal restitution
+    e_t_theory = 1.0 - MU * (1 + e_n) / np.tan(th)
+    spin_rigid = -5.0 * MU * (1 + e_n) * V4 * np.cos(th) / (2 * R4)
+    # the engine applies the tangential force at the overlap centre, R - d/2 from the sphere
+    # centre (PHYSICS.md), so the spin is smaller than rigid-body theory by the impulse-weighted
+    # mean of d / (2R)
+    m = h.sphere_mass(R4, ALUMINA["density"])
+    e_eff = h.youngs_eff(ALUMINA["youngs_modulus"], ALUMINA["poisson_ratio"], RIGID["youngs_modulus"], 0.0)
+    d_max = np.array([h.hertz_impact(m, R4, e_eff, V4 * math.cos(t))["overlap"] for t in th])
+    spin_theory = spin_rigid * (1.0 - MEAN_OVERLAP_FRACTION * d_max / (2 * R4))
     sliding = np.tan(th) > 3.5 * MU * (1 + E4)
-    print("\ntest 4, gross sliding: angle, e_t, rigid-body, rel err, spin, rigid-body, rel err")
+    print("\ntest 4, gross sliding: angle, e_t, rigid-body, rel err | spin, rigid-body, rel err, "
+          "rel err after the lever-arm correction")
     for k in np.nonzero(sliding)[0]:
-        print(f"  {a[k]:6.2f}  {test4['e_t'][k]:.5f} {e_t_theory[k]:.5f} "
-              f"{test4['e_t'][k] / e_t_theory[k] - 1:+.2e}   {test4['spin'][k]:9.3f} "
-              f"{spin_theory[k]:9.3f} {test4['spin'][k] / spin_theory[k] - 1:+.2e}")
+        print(f"  {a[k]:6.2f}  {test4['e_t'][k]:.6f} {e_t_theory[k]:.6f} "
+              f"{test4['e_t'][k] / e_t_theory[k] - 1:+.1e} | {test4['spin'][k]:9.3f} "
+              f"{spin_rigid[k]:9.3f} {test4['spin'][k] / spin_rigid[k] - 1:+.1e} "
+              f"{test4['spin'][k] / spin_theory[k] - 1:+.1e}")
     assert test4["lateral"] < 1e-9
-    assert np.allclose(test4["normal_e"], E4, atol=RESTITUTION_TOL)
-    firm = a >= 40.0
-    assert np.allclose(test4["e_t"][firm], e_t_theory[firm], rtol=1e-2)
-    assert np.allclose(test4["spin"][firm], spin_theory[firm], rtol=1e-2)
+    steps = STEPS_PER_CONTACT * (1.0 / np.cos(th)) ** 0.2     # steps per contact at each angle
+    assert np.all(np.abs(e_n - E4) <= FIRST_ORDER_BOUND / steps)
+    # sliding throughout: the tangential impulse is exactly mu times the normal impulse, so
+    # e_t is exact up to round-off and the O(dt) error of the normal impulse (already in e_n)
+    assert np.allclose(test4["e_t"][sliding], e_t_theory[sliding], rtol=1e-5, atol=0)
+    # the lever-arm correction is itself first order in d/R: what is left is O((d/R)^2) ~ 1e-6
+    # and the damping's change of the overlap history at e = 0.98 (~1e-5 relative)
+    assert np.allclose(test4["spin"][sliding], spin_theory[sliding], rtol=5e-5, atol=0)
+    # and the uncorrected comparison, bounded by d_max / (2R) < 1.6e-3
+    assert np.all(np.abs(test4["spin"][sliding] / spin_rigid[sliding] - 1) <= d_max[sliding] / (2 * R4))
+
+
+KRATOS_TOL = {"tangential_restitution": 1.6e-2, "angular_velocity": 2.2e-2, "rebound_angle": 2.5e-2}
+
+
+def _l1_error(got, ref):
+    """The Kratos suite's measure: sum |DEM - reference| / sum |reference|."""
+    return float(np.abs(got - ref).sum() / np.abs(ref).sum())
 
 
 def test_test4_digitised_curves(test4):
+    """Against the digitised curves. The digitisation's own error shows where the curves can be
+    checked against exact theory (gross sliding, tan(theta) > 3.5 mu (1+e)): there the digitised
+    points differ from rigid-body theory by up to 0.003 in e_t, 3 % (3.7 rad/s) in the spin and
+    0.35 deg in the rebound angle, i.e. by as much as our results do. Pointwise tolerances at the
+    Kratos levels would therefore test the digitiser, not the engine; we assert the Kratos
+    suite's own aggregate measure (L1 error normalised by the L1 norm of the reference) at its
+    thresholds 1.6 %, 2.2 % and 2.5 %, and print every point."""
     a = test4["angles"]
-    results = {}
+    th = np.radians(a)
+    rigid = {"tangential_restitution": 1.0 - MU * (1 + E4) / np.tan(th),
+             "angular_velocity": -5.0 * MU * (1 + E4) * V4 * np.cos(th) / (2 * R4)}
     for name, key in (("tangential_restitution", "e_t"), ("angular_velocity", "spin"),
                       ("rebound_angle", "rebound_angle")):
         ang, ref = _digitised(name)
         idx = np.searchsorted(a, np.round(ang, 6))
         assert np.allclose(a[idx], np.round(ang, 6))
         got = test4[key][idx]
-        results[name] = (ang, ref, got)
-        print(f"\ntest 4 {name}: angle, digitised, measured, abs diff, rel diff")
-        for x, rf, g in zip(ang, ref, got):
-            print(f"  {x:6.2f}  {rf:10.4f} {g:10.4f} {g - rf:+9.4f} {(g - rf) / abs(rf):+.2%}")
-    # assertions: see module docstring / below
+        err = _l1_error(got, ref)
+        print(f"\ntest 4 {name}: angle, digitised, measured, abs diff, rel diff"
+              + (", digitised - rigid-body (sliding)" if name in rigid else ""))
+        for k, (x, rf, g) in enumerate(zip(ang, ref, got)):
+            line = f"  {x:6.2f}  {rf:10.4f} {g:10.4f} {g - rf:+9.4f} {(g - rf) / abs(rf):+7.2%}"
+            if name in rigid and math.tan(math.radians(x)) > 3.5 * MU * (1 + E4):
+                line += f"   {rf - rigid[name][idx[k]]:+9.4f}"
+            print(line)
+        print(f"  Kratos L1 error {err:.2%} (Kratos asserts {KRATOS_TOL[name]:.1%})")
+        assert err <= KRATOS_TOL[name], name

@@ -1,0 +1,61 @@
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+SMALL_SCENE = """
+[simulation]
+end_time = 0.02
+gravity = [0.0, 0.0, -9.81]
+precision = "{precision}"
+seed = 3
+
+[domain]
+min = [-0.05, -0.05, -0.01]
+max = [0.05, 0.05, 0.2]
+
+[[walls]]
+name = "floor"
+plane = {{ point = [0, 0, 0], normal = [0, 0, 1] }}
+material = "steel"
+
+[materials.glass]
+density = 2500.0
+youngs_modulus = 1e7
+poisson_ratio = 0.25
+
+[materials.steel]
+density = 7800.0
+youngs_modulus = 2e11
+poisson_ratio = 0.3
+
+[[interactions]]
+pair = ["glass", "glass"]
+restitution = 0.5
+friction = 0.5
+rolling_friction = {rolling}
+
+[[interactions]]
+pair = ["glass", "steel"]
+restitution = 0.5
+friction = 0.5
+rolling_friction = {rolling}
+
+[[particles]]
+material = "glass"
+radius = 0.004
+count = {count}
+region = {{ box = {{ min = [-0.04, -0.04, 0.005], max = [0.04, 0.04, 0.1] }} }}
+
+[output]
+interval = 0.005
+"""
+
+
+@pytest.fixture
+def small_scene_text():
+    def make(precision="f64", rolling=0.05, count=200):
+        return SMALL_SCENE.format(precision=precision, rolling=rolling, count=count)
+    return make
