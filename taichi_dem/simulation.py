@@ -188,6 +188,7 @@ class Simulation:
                 f"the simulation diverged near t = {self.time:.6g} s (non-finite velocity). "
                 f"Likely cause: a time step too large for the stiffest contact; reduce "
                 f"simulation.dt or rayleigh_fraction")
+        self._check_contact_resolution(m["max_speed"])
         values = {"time": self.time, "particles/count": self.engine.count,
                   "particles/kinetic_energy": m["kinetic_energy"],
                   "particles/lost": self.engine.lost}
@@ -203,6 +204,22 @@ class Simulation:
             self.recorder.append_frame(self.time, {k: arrays[k] for k in (
                 "id", "position", "velocity", "angular_velocity", "radius")})
             self.recorder.flush()
+
+    def _check_contact_resolution(self, max_speed: float):
+        """The Hertz contact time shrinks as v^(-1/5): warn once if the fastest particle now
+        present would be resolved in too few steps by the current dt."""
+        from .timestep import ERROR_STEPS_PER_CONTACT
+        ts = self.timestep
+        if getattr(self, "_warned_speed", False) or max_speed <= ts.expected_speed:
+            return
+        contact_time = ts.contact_time * (ts.expected_speed / max_speed) ** 0.2
+        if self.dt > contact_time / ERROR_STEPS_PER_CONTACT:
+            self._warned_speed = True
+            print(f"taichi-dem: warning: at t = {self.time:.4g} s a particle moves at "
+                  f"{max_speed:.3g} m/s, faster than the {ts.expected_speed:.3g} m/s the time "
+                  f"step was chosen for; its impacts last {contact_time:.3g} s, fewer than "
+                  f"{ERROR_STEPS_PER_CONTACT} steps of {self.dt:.3g} s. Reduce simulation.dt.",
+                  file=sys.stderr)
 
     @property
     def series(self) -> dict[str, np.ndarray]:
