@@ -8,7 +8,8 @@ One step (velocity Verlet):
           every enabled pair effect on it (Hertz-Mindlin, rolling friction), storing the force
           on the owner and the torques on both partners per pair - no atomics
   gather: each particle sums its pairs (its own entries, and its partners' through the mirror
-          index), adds plane walls and gravity, and completes the kick: v += a dt/2
+          index), adds plane walls and gravity, and completes the kick: v += a dt/2; within a
+          run of steps it goes on with the next step's drift (one pass over the particles less)
 Effects not enabled are excluded with ``ti.static`` and so never compiled.
 """
 
@@ -114,32 +115,38 @@ class Engine:
             return d
         self.minimum_image = minimum_image
 
+        @ti.func
+        def drift_particle(i, dt):
+            """First half of a velocity Verlet step for particle i: half kick, then drift."""
+            if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
+                v = s.velocity[i] + 0.5 * dt * s.acceleration[i]
+                s.velocity[i] = v
+                s.angular_velocity[i] += 0.5 * dt * s.angular_acceleration[i]
+                x = s.position[i] + dt * v
+                inside = True
+                for k in ti.static(range(3)):
+                    if ti.static(g.periodic[k]):
+                        # wrap into [lo, hi): the particle re-enters through the opposite face
+                        if x[k] >= hi[k]:
+                            x[k] -= span[k]
+                        elif x[k] < lo[k]:
+                            x[k] += span[k]
+                    elif x[k] < lo[k] or x[k] > hi[k]:
+                        inside = False
+                s.position[i] = x
+                if not inside:
+                    s.alive[i] = 0
+                    flags[0] = 1
+                    ti.atomic_add(flags[1], 1)
+                moved = minimum_image(x - s.reference_position[i])
+                if moved.dot(moved) > half_skin_sq:
+                    flags[0] = 1          # benign race: every writer writes 1
+        self.drift_particle = drift_particle
+
         @ti.kernel
         def drift(n: ti.i32, dt: real):
             for i in range(n):
-                if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
-                    v = s.velocity[i] + 0.5 * dt * s.acceleration[i]
-                    s.velocity[i] = v
-                    s.angular_velocity[i] += 0.5 * dt * s.angular_acceleration[i]
-                    x = s.position[i] + dt * v
-                    inside = True
-                    for k in ti.static(range(3)):
-                        if ti.static(g.periodic[k]):
-                            # wrap into [lo, hi): the particle re-enters through the opposite face
-                            if x[k] >= hi[k]:
-                                x[k] -= span[k]
-                            elif x[k] < lo[k]:
-                                x[k] += span[k]
-                        elif x[k] < lo[k] or x[k] > hi[k]:
-                            inside = False
-                    s.position[i] = x
-                    if not inside:
-                        s.alive[i] = 0
-                        flags[0] = 1
-                        ti.atomic_add(flags[1], 1)
-                    moved = minimum_image(x - s.reference_position[i])
-                    if moved.dot(moved) > half_skin_sq:
-                        flags[0] = 1          # benign race: every writer writes 1
+                drift_particle(i, dt)
 
         @ti.kernel
         def measure(n: ti.i32):
@@ -170,6 +177,7 @@ class Engine:
         gravity = ti.Vector(list(self.scene.simulation.gravity))
         wall_force = self.wall_force
         real = self.real
+        drift_particle = self.drift_particle
 
         @ti.func
         def rolling_torque(pair_model, w_rel, normal, fn, sn, r_eff, mu_r, inertia_eff, history, dt):
@@ -233,7 +241,7 @@ class Engine:
                         p.rolling_history[k] = rolling_history
 
         @ti.kernel
-        def gather(n: ti.i32, dt: real, record: ti.i32):
+        def gather(n: ti.i32, dt: real, record: ti.i32, then_drift: ti.i32):
             for i in range(n):
                 force = ti.Vector([0.0, 0.0, 0.0])
                 torque = ti.Vector([0.0, 0.0, 0.0])
@@ -288,6 +296,9 @@ class Engine:
                     s.angular_acceleration[i] = alpha
                     s.velocity[i] += 0.5 * dt * a
                     s.angular_velocity[i] += 0.5 * dt * alpha
+                if then_drift != 0:
+                    # the next step's first half, fused here to save a pass over the particles
+                    drift_particle(i, dt)
 
         self._pair_forces, self._gather = pair_forces, gather
 
@@ -296,7 +307,7 @@ class Engine:
         """Build the first neighbour list and the initial accelerations (no time advance)."""
         self.count = self.broadphase.rebuild(n)
         self._pair_forces(self.count, 0.0)
-        self._gather(self.count, 0.0, 0)
+        self._gather(self.count, 0.0, 0, 0)
         return self.count
 
     def advance(self, steps: int, record_last: bool = False):
@@ -304,15 +315,18 @@ class Engine:
         dt = self.dt
         for k in range(steps):
             n = self.count
-            self._drift(n, dt)
+            if k == 0:
+                self._drift(n, dt)      # later steps drifted at the end of the previous gather
             if self.flags[0] != 0:
                 self.flags[0] = 0
                 self.count = self.broadphase.rebuild(n)
-            record = 1 if (record_last and k == steps - 1) else 0
+            last = k == steps - 1
+            record = 1 if (record_last and last) else 0
             if record:
                 self.wall_force.fill(0.0)
             self._pair_forces(self.count, dt)
-            self._gather(self.count, dt, record)
+            # the state is left at a whole step (no pending drift) when advance returns
+            self._gather(self.count, dt, record, 0 if last else 1)
 
     def measure(self) -> dict:
         self._measure(self.count)
