@@ -28,7 +28,8 @@ SIMULATION_KEYS = ("end_time", "dt", "rayleigh_fraction", "gravity", "precision"
 DOMAIN_KEYS = ("min", "max", "periodic")
 MATERIAL_KEYS = ("density", "youngs_modulus", "poisson_ratio", "thermal_conductivity",
                  "heat_capacity", "emissivity", "real_youngs_modulus")
-INTERACTION_KEYS = ("pair", "restitution", "friction", "rolling_friction", "model")
+INTERACTION_KEYS = ("pair", "restitution", "friction", "rolling_friction", "model",
+                    "rolling_damping")
 ROLLING_MODELS = ("constant_torque", "epsd")
 PARTICLE_KEYS = ("material", "radius", "count", "region", "velocity", "angular_velocity",
                  "temperature", "fixed", "file")
@@ -338,8 +339,14 @@ class _Parser:
             if model not in ROLLING_MODELS:
                 raise self.err(f"{key}.model", f"must be \"constant_torque\" or \"epsd\", got "
                                                f"{_type_name(model)}")
+            eta = 0.3
+            if "rolling_damping" in t:
+                eta = self.q(t["rolling_damping"], "dimensionless", f"{key}.rolling_damping")
+                if not 0.0 <= eta <= 1.0:
+                    raise self.err(f"{key}.rolling_damping",
+                                   f"must be in [0, 1] (a fraction of critical damping), got {eta:g}")
             out[fs] = Interaction(pair=(a, b), restitution=e, friction=mu, rolling_friction=mur,
-                                  rolling_model=model)
+                                  rolling_model=model, rolling_damping=eta)
             where[fs] = key
         return out, where
 

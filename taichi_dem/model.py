@@ -49,6 +49,7 @@ class PairTables:
     friction: np.ndarray          # (M, M) mu_s
     rolling_friction: np.ndarray  # (M, M) mu_r
     rolling_model: np.ndarray     # (M, M) int code
+    rolling_damping: np.ndarray   # (M, M) eta_r, EPSD viscous fraction of critical
     density: np.ndarray           # (M,)
 
     def index(self, name: str) -> int:
@@ -65,7 +66,7 @@ def build_pair_tables(scene: Scene) -> PairTables:
     names = sorted(scene.materials)
     m = len(names)
     t = PairTables(names, *(np.zeros((m, m)) for _ in range(5)),
-                   np.zeros((m, m), dtype=np.int32),
+                   np.zeros((m, m), dtype=np.int32), np.zeros((m, m)),
                    np.array([scene.materials[n].density for n in names]))
     for a in range(m):
         for b in range(m):
@@ -79,6 +80,7 @@ def build_pair_tables(scene: Scene) -> PairTables:
             t.damping[a, b] = damping_ratio(inter.restitution)
             t.friction[a, b] = inter.friction
             t.rolling_friction[a, b] = inter.rolling_friction
+            t.rolling_damping[a, b] = inter.rolling_damping
             t.rolling_model[a, b] = (_ROLLING_CODES[inter.rolling_model]
                                      if inter.rolling_friction > 0 else ROLLING_NONE)
     return t

@@ -67,6 +67,7 @@ class Interaction:
     friction: float                      # Coulomb sliding coefficient mu_s >= 0
     rolling_friction: float = 0.0        # mu_r >= 0; 0 disables
     rolling_model: str = "constant_torque"   # "constant_torque" | "epsd"
+    rolling_damping: float = 0.3         # EPSD viscous part, fraction of critical (Ai et al. 2011)
 
 
 @dataclass(frozen=True)

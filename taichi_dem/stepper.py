@@ -51,11 +51,13 @@ class Engine:
         self.friction = t.add("friction", real, (m, m))
         self.rolling_friction = t.add("rolling_friction", real, (m, m))
         self.rolling_model = t.add("rolling_model", ti.i32, (m, m))
+        self.rolling_damping = t.add("rolling_damping", real, (m, m))
         self.flags = t.add("flags", ti.i32, 2)                 # [rebuild needed, lost count]
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
         self.reduction = t.add("reduction", real, 4)
         t.finalize()
-        for name in ("youngs_eff", "shear_eff", "damping", "friction", "rolling_friction"):
+        for name in ("youngs_eff", "shear_eff", "damping", "friction", "rolling_friction",
+                     "rolling_damping"):
             getattr(self, name).from_numpy(getattr(tables, name).astype(np.float64 if real == ti.f64 else np.float32))
         self.rolling_model.from_numpy(tables.rolling_model.astype(np.int32))
         self.pairs: "PairState | None" = None
@@ -169,8 +171,8 @@ class Engine:
     def _compile_pair_kernels(self, p: PairState):
         s = self.state
         minimum_image = self.minimum_image
-        E, G, Z, MU, MUR, RM = (self.youngs_eff, self.shear_eff, self.damping, self.friction,
-                                self.rolling_friction, self.rolling_model)
+        E, G, Z, MU, MUR, RM, RD = (self.youngs_eff, self.shear_eff, self.damping, self.friction,
+                                    self.rolling_friction, self.rolling_model, self.rolling_damping)
         cdt, epsd = self.rolling_cdt, self.rolling_epsd
         walls = [(tuple(w.point), tuple(w.normal), self.tables.index(w.material)) for w in self.walls]
         n_walls = len(walls)
@@ -180,14 +182,16 @@ class Engine:
         drift_particle = self.drift_particle
 
         @ti.func
-        def rolling_torque(pair_model, w_rel, normal, fn, sn, r_eff, mu_r, inertia_eff, history, dt):
+        def rolling_torque(pair_model, w_rel, normal, fn, sn, r_eff, mu_r, eta_r, inertia_eff,
+                           rolling_inertia, history, dt):
             torque = ti.Vector([0.0, 0.0, 0.0])
             if ti.static(cdt):
                 if pair_model == ROLLING_CONSTANT_TORQUE:
                     torque = rolling.constant_torque(w_rel, fn, r_eff, mu_r, inertia_eff, dt)
             if ti.static(epsd):
                 if pair_model == ROLLING_EPSD:
-                    torque, history = rolling.epsd(w_rel, normal, fn, sn, r_eff, mu_r, history, dt)
+                    torque, history = rolling.epsd(w_rel, normal, fn, sn, r_eff, mu_r, eta_r,
+                                                   rolling_inertia, history, dt)
             return torque, history
 
         @ti.kernel
@@ -215,8 +219,9 @@ class Engine:
                         wj = s.angular_velocity[j]
                         v_rel = vi - s.velocity[j] - (arm_i * wi + arm_j * wj).cross(normal)
                         mj = s.material[j]
+                        normal_acceleration = (s.acceleration[i] - s.acceleration[j]).dot(normal)
                         fn, ft, history, sn = contact_force(
-                            normal, normal_overlap, r_eff, m_eff, v_rel,
+                            normal, normal_overlap, r_eff, m_eff, v_rel, normal_acceleration,
                             p.tangential_history[k], E[mi, mj], G[mi, mj], Z[mi, mj],
                             MU[mi, mj], dt)
                         force = fn * normal + ft
@@ -230,7 +235,11 @@ class Engine:
                                     prev = p.rolling_history[k]
                                 tr, rolling_history = rolling_torque(
                                     RM[mi, mj], wi - wj, normal, fn, sn, r_eff, MUR[mi, mj],
-                                    1.0 / (inv_ii + s.inverse_inertia[j]), prev, dt)
+                                    RD[mi, mj], 1.0 / (inv_ii + s.inverse_inertia[j]),
+                                    1.0 / (rolling.rolling_inverse_inertia(inv_mi, inv_ii, ri)
+                                           + rolling.rolling_inverse_inertia(
+                                               s.inverse_mass[j], s.inverse_inertia[j], rj)),
+                                    prev, dt)
                                 torque_i += tr
                                 torque_j -= tr
                     p.force[k] = force
@@ -269,6 +278,7 @@ class Engine:
                             v_rel = vi - arm * wi.cross(wall_normal)       # the wall is at rest
                             fn, ft, history, sn = contact_force(
                                 wall_normal, normal_overlap, ri, s.mass[i], v_rel,
+                                s.acceleration[i].dot(wall_normal),
                                 s.wall_tangential_history[i, w], E[mi, mw], G[mi, mw],
                                 Z[mi, mw], MU[mi, mw], dt)
                             wall_contact = fn * wall_normal + ft
@@ -280,7 +290,10 @@ class Engine:
                                         prev = s.wall_rolling_history[i, w]
                                     tr, rolling_history = rolling_torque(
                                         RM[mi, mw], wi, wall_normal, fn, sn, ri, MUR[mi, mw],
-                                        1.0 / s.inverse_inertia[i], prev, dt)
+                                        RD[mi, mw], 1.0 / s.inverse_inertia[i],
+                                        1.0 / rolling.rolling_inverse_inertia(
+                                            inv_m, s.inverse_inertia[i], ri),
+                                        prev, dt)
                                     contact_torque += tr
                             force += wall_contact
                             torque += contact_torque

@@ -28,18 +28,23 @@ def rotate_into_tangent_plane(history, normal):
 
 
 @ti.func
-def contact_force(normal, normal_overlap, r_eff, m_eff, v_rel, tangential_history,
-                  youngs_eff, shear_eff, damping, friction, dt):
+def contact_force(normal, normal_overlap, r_eff, m_eff, v_rel, normal_acceleration,
+                  tangential_history, youngs_eff, shear_eff, damping, friction, dt):
     """One Hertz-Mindlin contact. ``normal`` is the unit vector from the partner to this
     particle, ``v_rel`` the velocity of this particle relative to the partner at the contact
-    point (m/s). Returns (normal force magnitude N (clamped total, >= 0), tangential force on
+    point (m/s, at the half step), ``normal_acceleration`` the relative acceleration along
+    ``normal`` at the last step (m/s^2). Returns (normal force magnitude N (clamped total, >= 0), tangential force on
     this particle N, updated tangential displacement m, normal stiffness S_n N/m)."""
     contact_stiffness_root = ti.sqrt(r_eff * normal_overlap)           # sqrt(R* d_n)
     normal_stiffness = 2.0 * youngs_eff * contact_stiffness_root        # S_n
     tangential_stiffness = 8.0 * shear_eff * contact_stiffness_root     # S_t
     normal_speed = v_rel.dot(normal)                                    # < 0 approaching
+    # velocity Verlet knows v at the half step only; damping with it lags the force by dt/2
+    # and makes the achieved restitution first-order wrong in dt (-0.23/N at e = 0.1, N steps
+    # per contact). Predicting v_n at the full step, v + a dt/2, makes it second order.
+    predicted_normal_speed = normal_speed + 0.5 * dt * normal_acceleration
     elastic_normal = 4.0 / 3.0 * youngs_eff * contact_stiffness_root * normal_overlap
-    normal_force = elastic_normal - damping * ti.sqrt(normal_stiffness * m_eff) * normal_speed
+    normal_force = elastic_normal - damping * ti.sqrt(normal_stiffness * m_eff) * predicted_normal_speed
     normal_force = ti.max(normal_force, 0.0)
 
     tangential_velocity = v_rel - normal_speed * normal

@@ -23,16 +23,39 @@ def constant_torque(relative_spin, normal_force, r_eff, rolling_friction, inerti
 
 
 @ti.func
+def rolling_inverse_inertia(inverse_mass, inverse_inertia, radius):
+    """1 / (I + m r^2), the inertia for rolling about the contact point (1/(kg m^2)); 0 for a
+    fixed particle."""
+    result = 0.0 * inverse_mass
+    if inverse_mass > 0.0:
+        result = inverse_inertia * inverse_mass / (inverse_mass + radius * radius * inverse_inertia)
+    return result
+
+
+@ti.func
 def epsd(relative_spin, normal, normal_force, normal_stiffness, r_eff, rolling_friction,
-         rolling_history, dt):
-    """EPSD rolling resistance: a spring k_r = 2.25 S_n mu_r^2 R*^2 on the relative rolling
-    rotation, capped at mu_r R* F_n. Returns (torque on this particle N m, updated spring
-    torque history N m)."""
+         rolling_damping, rolling_inertia, rolling_history, dt):
+    """EPSD rolling resistance (Ai et al. 2011, model C): a spring k_r = 2.25 S_n mu_r^2 R*^2
+    on the relative rolling rotation, capped at mu_r R* F_n, plus a viscous torque
+    -eta_r 2 sqrt(I_r k_r) w_r while the spring is below its cap (none once fully mobilised),
+    the sum also capped at mu_r R* F_n.
+    Without the viscous part a sphere rocks on its rolling spring for ever. ``rolling_inertia``
+    is I_r = 1 / (1/(I_i + m_i r_i^2) + 1/(I_j + m_j r_j^2)), kg m^2. Returns (torque on this
+    particle N m, updated spring torque N m)."""
     rolling_spin = relative_spin - relative_spin.dot(normal) * normal   # no twisting part
     stiffness = 2.25 * normal_stiffness * (rolling_friction * r_eff) ** 2
-    torque = rotate_into_tangent_plane(rolling_history, normal) - stiffness * rolling_spin * dt
+    spring = rotate_into_tangent_plane(rolling_history, normal) - stiffness * rolling_spin * dt
     limit = rolling_friction * r_eff * normal_force
-    magnitude = torque.norm()
+    magnitude = spring.norm()
+    torque = spring
     if magnitude > limit:
-        torque *= limit / magnitude
-    return torque, torque
+        spring *= limit / magnitude
+        torque = spring
+    else:
+        torque = spring - rolling_damping * 2.0 * ti.sqrt(rolling_inertia * stiffness) * rolling_spin
+        # the whole rolling resistance stays within mu_r R* F_n: at the onset of rolling the
+        # spring is slack and the viscous torque alone would otherwise exceed it many times
+        total = torque.norm()
+        if total > limit:
+            torque *= limit / total
+    return torque, spring

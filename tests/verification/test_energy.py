@@ -213,9 +213,10 @@ def test_floor_carries_the_weight(bed):
     assert -f[late, 2].mean() == pytest.approx(w, rel=REST_ACCELERATION)
 
 
-@pytest.mark.xfail(reason="constant-torque rolling friction flip-flops in a static bed: the floor's "
-                          "lateral force alternates sign every step (+-1e-3 W, period 2), although "
-                          "the bed does not move; see the report", strict=False)
+@pytest.mark.xfail(reason="a known limit of the constant-torque rolling model (README): in a "
+                          "static bed the floor's lateral force alternates sign every step "
+                          "(+-1e-3 W, period 2) although the bed does not move; EPSD does not",
+                   strict=True)
 def test_floor_lateral_force_vanishes_at_rest(bed):
     f = bed["series"]["walls/floor/force"]
     t = bed["series"]["time"]

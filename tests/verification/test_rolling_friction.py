@@ -12,8 +12,10 @@ Checks, all in one simulation (independent spheres 5 cm apart on one floor, grav
 2. A sphere resting on the floor with a tiny initial spin (1e-3 rad/s) settles and then stays
    at rest: |w| and the drift stay at round-off level over 10^4 steps. Without the limiter the
    torque would flip the spin every step with amplitude mu_r g dt / (0.4 R) ~ 1e-2 rad/s.
-3. (xfail, engine issue) A sphere on an incline with tan(a) = mu_r / 2 must be held at rest by
-   the rolling resistance; with the constant-torque model it creeps downhill for ever.
+3. A sphere on an incline with tan(a) = mu_r / 2 must be held at rest by the rolling
+   resistance: EPSD holds it (its spring gives a static torque; its viscous part, Ai et al.
+   2011 model C, damps the rocking on that spring). The constant-torque model creeps downhill
+   for ever (a known limit of the model; xfail, strict, so a fix shows up).
 4. A sphere set spinning (w0, v = 0) on the floor slides (friction mu), reaches rolling and
    then stops under rolling friction: CDT and EPSD. Analytic: during sliding
    dv/dt = mu g, dw/dt = -(mu + mu_r) g / (0.4 R) (the rolling torque acts too), rolling starts
@@ -150,9 +152,6 @@ def test_cdt_comes_to_rest(rolling):
         assert np.linalg.norm(p["angular_velocity"][k]) * R < 1e-6 * step_dv, k
 
 
-@pytest.mark.xfail(reason="EPSD without its viscous part (effects/rolling.py) leaves an undamped "
-                          "rocking oscillation on the rolling spring: |w| ~ 1e-2 rad/s decays by "
-                          "~5 % per 0.5 s", strict=False)
 def test_epsd_comes_to_rest(rolling):
     p = rolling["final"]
     step_dv = 5 / 7 * MU_R * G * rolling["dt"]
@@ -186,11 +185,13 @@ def test_resting_sphere_no_chatter(rolling):
     assert np.abs(x[settled] - x[1]).max() < 1e-12
 
 
-@pytest.mark.xfail(reason="constant-torque rolling friction cannot hold a static torque: the "
-                          "spin limiter acts like a viscous term I/dt, so the sphere creeps "
-                          "downhill at w ~ g sin(a) dt / (0.4 R) for ever (see the report)",
-                   strict=False)
-def test_sphere_held_on_gentle_incline(tmp_path):
+@pytest.mark.parametrize("model", [
+    pytest.param("constant_torque", marks=pytest.mark.xfail(
+        strict=True, reason="a known limit of the constant-torque model (README): it cannot hold "
+        "a static torque; the spin limiter acts like a viscous term I/dt, so the sphere creeps "
+        "downhill at w ~ g sin(a) dt / (0.4 R) for ever. Use EPSD for static piles.")),
+    "epsd"])
+def test_sphere_held_on_gentle_incline(tmp_path, model):
     """A sphere on an incline with tan(a) = mu_r / 2 (the rolling resistance mu_r F_n R exceeds
     the downhill torque ~ m g sin(a) R) must come to rest and stay: its centre moves less than
     1e-9 m over the last 10^4 steps (a thousandth of the static overlap; a creep at the
@@ -199,7 +200,8 @@ def test_sphere_held_on_gentle_incline(tmp_path):
     n = (0.0, math.sin(a), math.cos(a))
     text = (h.header(gravity=(0, 0, -G), lo=(-0.05,) * 3, hi=(0.05,) * 3)
             + h.material("ball", **BALL) + h.material("floor", **FLOOR)
-            + h.interaction("ball", "floor", 0.5, MU, MU_R) + h.all_interactions(["ball"], 0.5, MU)
+            + h.interaction("ball", "floor", 0.5, MU, MU_R, model)
+            + h.all_interactions(["ball"], 0.5, MU)
             + h.wall("slope", (0, 0, 0), n, "floor")
             + h.csv_fill(tmp_path, "slope.csv", "ball", [[R * c for c in n]], R))
     with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), arch="cpu", precision="f64") as sim:
