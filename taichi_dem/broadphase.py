@@ -256,6 +256,7 @@ class Broadphase:
             for i in range(n):
                 for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                     p.old_partner_id[k] = s.particle_id[p.neighbour[k]]
+                    p.old_contact[k] = p.contact[k]
                     p.old_tangential_history[k] = p.tangential_history[k]
                     if ti.static(rolling_history):
                         p.old_rolling_history[k] = p.rolling_history[k]
@@ -273,12 +274,15 @@ class Broadphase:
                     p.mirror[k] = -1
                     history = ti.Vector([0.0, 0.0, 0.0])
                     rolling = ti.Vector([0.0, 0.0, 0.0])
+                    touching = ti.u8(0)
                     for m in range(old_start, old_start + old_count):
                         if p.old_partner_id[m] == partner:
+                            touching = p.old_contact[m]
                             history = p.old_tangential_history[m]
                             if ti.static(rolling_history):
                                 rolling = p.old_rolling_history[m]
                             break
+                    p.contact[k] = touching
                     p.tangential_history[k] = history
                     if ti.static(rolling_history):
                         p.rolling_history[k] = rolling

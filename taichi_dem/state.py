@@ -75,6 +75,9 @@ class ParticleState:
         self.shadow_vec = t.add("shadow_vec", real, capacity, vector=True)
         self.shadow_real = t.add("shadow_real", real, capacity)
         self.shadow_int = t.add("shadow_int", ti.i32, capacity)
+        # force (N) and torque (N m) of the pairs this particle owns, summed by the pair kernel
+        self.owned_force = t.add("owned_force", real, capacity, vector=True)
+        self.owned_torque = t.add("owned_torque", real, capacity, vector=True)
         self.cell = t.add("cell", ti.i32, capacity)
         self.order = t.add("order", ti.i32, capacity)
         self.inverse_order = t.add("inverse_order", ti.i32, capacity)
@@ -117,8 +120,8 @@ class PairState:
     Entry k of particle i's row names partner ``neighbour[k]``; a row lists the pairs the
     particle owns first (``row_owned`` of them), then the others. The pair is computed once, by
     its owner (the particle with the smaller ``particle_id``, stable across reorders), which
-    stores the force on itself and the torques on both; the other particle reads them through
-    ``mirror[k]`` (the owner's entry). The tangential (and EPSD rolling) history lives at the
+    sums its own share per particle and stores the partner's force and torque at the entry;
+    the partner reads them through ``mirror[k]`` (the owner's entry). The tangential (and EPSD rolling) history lives at the
     owner's entry.
     """
 
@@ -127,14 +130,17 @@ class PairState:
         t = self.tree = FieldTree()
         self.neighbour = t.add("neighbour", ti.i32, capacity)
         self.mirror = t.add("mirror", ti.i32, capacity)
+        # 1 while the pair touches; the partner's force and torque are valid only then, and the
+        # history is zero whenever it is 0 (so non-touching pairs cost one byte per step)
+        self.contact = t.add("contact", ti.u8, capacity)
         self.tangential_history = t.add("tangential_history", real, capacity, vector=True)
-        self.force = t.add("force", real, capacity, vector=True)          # on the owner, N
-        self.torque_owner = t.add("torque_owner", real, capacity, vector=True)      # N m
-        self.torque_partner = t.add("torque_partner", real, capacity, vector=True)  # N m
+        self.partner_force = t.add("partner_force", real, capacity, vector=True)    # N
+        self.partner_torque = t.add("partner_torque", real, capacity, vector=True)  # N m
         self.rolling_history = (t.add("rolling_history", real, capacity, vector=True)
                                 if rolling_history else None)
         # the previous list, by partner id, to carry history across rebuilds
         self.old_partner_id = t.add("old_partner_id", ti.i32, capacity)
+        self.old_contact = t.add("old_contact", ti.u8, capacity)
         self.old_tangential_history = t.add("old_tangential_history", real, capacity, vector=True)
         self.old_rolling_history = (t.add("old_rolling_history", real, capacity, vector=True)
                                     if rolling_history else None)

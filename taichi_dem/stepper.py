@@ -5,10 +5,10 @@ One step (velocity Verlet):
           left the domain; flag a rebuild if any moved more than half the skin
   rebuild neighbours when flagged (broadphase.py)
   pair:   one kernel over owned neighbour entries computes the contact geometry once and runs
-          every enabled pair effect on it (Hertz-Mindlin, rolling friction), storing the force
-          on the owner and the torques on both partners per pair - no atomics
-  gather: each particle sums its pairs (its own entries, and its partners' through the mirror
-          index), adds plane walls and gravity, and completes the kick: v += a dt/2; within a
+          every enabled pair effect on it (Hertz-Mindlin, rolling friction); the owner sums its
+          own share, the partner's share is stored at the entry (only while touching) - no
+          atomics
+  gather: each particle adds its partners' shares through the mirror index, adds plane walls and gravity, and completes the kick: v += a dt/2; within a
           run of steps it goes on with the next step's drift (one pass over the particles less)
 Effects not enabled are excluded with ``ti.static`` and so never compiled.
 """
@@ -199,17 +199,14 @@ class Engine:
             for i in range(n):
                 xi, vi, wi = s.position[i], s.velocity[i], s.angular_velocity[i]
                 ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
+                owned_force = ti.Vector([0.0, 0.0, 0.0])
+                owned_torque = ti.Vector([0.0, 0.0, 0.0])
                 for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                     j = p.neighbour[k]
                     d = minimum_image(xi - s.position[j])
                     rj = s.radius[j]
                     dist = d.norm()
                     normal_overlap = ri + rj - dist
-                    force = ti.Vector([0.0, 0.0, 0.0])
-                    torque_i = ti.Vector([0.0, 0.0, 0.0])
-                    torque_j = ti.Vector([0.0, 0.0, 0.0])
-                    history = ti.Vector([0.0, 0.0, 0.0])
-                    rolling_history = ti.Vector([0.0, 0.0, 0.0])
                     if normal_overlap > 0.0 and dist > 0.0:
                         normal = d / dist                                   # from j to i
                         r_eff = ri * rj / (ri + rj)
@@ -242,27 +239,34 @@ class Engine:
                                     prev, dt)
                                 torque_i += tr
                                 torque_j -= tr
-                    p.force[k] = force
-                    p.torque_owner[k] = torque_i
-                    p.torque_partner[k] = torque_j
-                    p.tangential_history[k] = history
-                    if ti.static(epsd):
-                        p.rolling_history[k] = rolling_history
+                                if ti.static(epsd):
+                                    p.rolling_history[k] = rolling_history
+                        owned_force += force
+                        owned_torque += torque_i
+                        p.partner_force[k] = -force
+                        p.partner_torque[k] = torque_j
+                        p.tangential_history[k] = history
+                        p.contact[k] = ti.u8(1)
+                    elif p.contact[k] != 0:
+                        # the contact opened: its history is discarded
+                        p.contact[k] = ti.u8(0)
+                        p.tangential_history[k] = ti.Vector([0.0, 0.0, 0.0])
+                        if ti.static(epsd):
+                            p.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
+                s.owned_force[i] = owned_force
+                s.owned_torque[i] = owned_torque
 
         @ti.kernel
         def gather(n: ti.i32, dt: real, record: ti.i32, then_drift: ti.i32):
             for i in range(n):
-                force = ti.Vector([0.0, 0.0, 0.0])
-                torque = ti.Vector([0.0, 0.0, 0.0])
-                owned_end = s.row_start[i] + s.row_owned[i]
-                for k in range(s.row_start[i], owned_end):
-                    force += p.force[k]
-                    torque += p.torque_owner[k]
-                for k in range(owned_end, s.row_start[i] + s.row_count[i]):
+                force = s.owned_force[i]
+                torque = s.owned_torque[i]
+                for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
                     m = p.mirror[k]
                     if m >= 0:
-                        force -= p.force[m]
-                        torque += p.torque_partner[m]
+                        if p.contact[m] != 0:
+                            force += p.partner_force[m]
+                            torque += p.partner_torque[m]
                 inv_m = s.inverse_mass[i]
                 if ti.static(n_walls > 0):
                     xi, vi, wi, ri, mi = s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i], s.material[i]
