@@ -205,9 +205,10 @@ class Engine:
                     j = p.neighbour[k]
                     d = minimum_image(xi - s.position[j])
                     rj = s.radius[j]
-                    dist = d.norm()
-                    normal_overlap = ri + rj - dist
-                    if normal_overlap > 0.0 and dist > 0.0:
+                    distance_sq = d.dot(d)
+                    if distance_sq < (ri + rj) * (ri + rj) and distance_sq > 0.0:
+                        dist = ti.sqrt(distance_sq)
+                        normal_overlap = ri + rj - dist
                         normal = d / dist                                   # from j to i
                         r_eff = ri * rj / (ri + rj)
                         m_eff = 1.0 / (inv_mi + s.inverse_mass[j])

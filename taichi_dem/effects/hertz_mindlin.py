@@ -18,12 +18,11 @@ import taichi as ti
 def rotate_into_tangent_plane(history, normal):
     """Project a stored tangential vector onto the plane normal to ``normal``, keeping its
     length: the contact frame has rotated since the last step (LIGGGHTS-style)."""
-    length = history.norm()
     projected = history - history.dot(normal) * normal
-    projected_length = projected.norm()
+    projected_sq = projected.dot(projected)
     result = projected * 0.0
-    if projected_length > 0.0:
-        result = projected * (length / projected_length)
+    if projected_sq > 0.0:
+        result = projected * ti.sqrt(history.dot(history) / projected_sq)
     return result
 
 
@@ -49,12 +48,13 @@ def contact_force(normal, normal_overlap, r_eff, m_eff, v_rel, normal_accelerati
 
     tangential_velocity = v_rel - normal_speed * normal
     displacement = rotate_into_tangent_plane(tangential_history, normal) + tangential_velocity * dt
-    tangential_force = (-tangential_stiffness * displacement
-                        - damping * ti.sqrt(tangential_stiffness * m_eff) * tangential_velocity)
+    # sqrt(S_t m*) = sqrt(S_n m*) sqrt(4 G*/E*): one square root less per contact
+    tangential_damping = damping * ti.sqrt(normal_stiffness * m_eff * 4.0 * shear_eff / youngs_eff)
+    tangential_force = -tangential_stiffness * displacement - tangential_damping * tangential_velocity
     limit = friction * normal_force
-    magnitude = tangential_force.norm()
-    if magnitude > limit:
+    magnitude_sq = tangential_force.dot(tangential_force)
+    if magnitude_sq > limit * limit:
         # sliding: the force sits on the Coulomb cone and the spring is reset to hold it there
-        tangential_force *= limit / magnitude
+        tangential_force *= limit / ti.sqrt(magnitude_sq)
         displacement = -tangential_force / tangential_stiffness
     return normal_force, tangential_force, displacement, normal_stiffness
