@@ -304,8 +304,12 @@ class Broadphase:
         if e.pairs is not None:
             self._save_rows(n)
             self._save_pairs(n)
+            if e.mesh is not None:
+                e.mesh.save_rows(n)
         else:
             e.state.old_row_count_by_id.fill(0)
+            if e.mesh is not None:
+                e.mesh.old_count_by_id.fill(0)
         self._sort_by_cell(n)
         alive = int(self.total[1])
         self._permute(n)
@@ -320,6 +324,8 @@ class Broadphase:
             e.grow_pairs(max(int(entries * 1.5), 1024))
         self._compact(alive)
         self._link_and_carry(alive)
+        if e.mesh is not None and e.mesh.rebuild_rows(alive, e.time):
+            e.recompile_pair_kernels()     # the mesh entry arrays were reallocated
         self.rebuilds += 1
         self.entries = entries
         return alive

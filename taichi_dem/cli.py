@@ -123,8 +123,8 @@ def describe_scene(scene) -> str:
 
 def cmd_check(args) -> int:
     if args.builders:
-        print("mesh builders: none yet in this version (planned: box, drum, paddle_shaft, "
-              "screw, hopper, chute, STL/OBJ import)")
+        import geometry
+        print(geometry.describe_builders())
         if not args.scene:
             return 0
     if not args.scene:

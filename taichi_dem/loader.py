@@ -17,12 +17,14 @@ from typing import Any, Optional
 
 import numpy as np
 
-from .scene import (Domain, Interaction, Material, Output, ParticleFill, PlaneWall,
-                    RadiusDistribution, Region, Scene, SceneError, SimulationSettings)
+from .scene import (Body, Domain, Interaction, Material, Motion, Output, ParticleFill,
+                    PlaneWall, RadiusDistribution, Region, Scene, SceneError,
+                    SimulationSettings, SpeedSchedule)
 from .units import parse_quantity, parse_vec3
 
-SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "output")
-PLANNED_SECTIONS = ("bodies", "factories", "outlets", "sensors", "thermal", "mobility")
+SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "bodies",
+            "output")
+PLANNED_SECTIONS = ("factories", "outlets", "sensors", "thermal", "mobility")
 
 SIMULATION_KEYS = ("end_time", "dt", "rayleigh_fraction", "gravity", "precision", "seed", "skin")
 DOMAIN_KEYS = ("min", "max", "periodic")
@@ -39,6 +41,12 @@ BOX_KEYS = ("min", "max")
 CYLINDER_KEYS = ("axis_point", "axis_direction", "radius", "length")
 WALL_KEYS = ("name", "plane", "material", "temperature")
 PLANE_KEYS = ("point", "normal")
+BODY_KEYS = ("name", "material", "mesh", "motion", "temperature")
+MOTION_KEYS = ("rotate", "translate")
+ROTATE_KEYS = ("axis_point", "axis_direction", "speed")
+TRANSLATE_KEYS = ("velocity",)
+# a body's mesh may reach this fraction of the domain's size beyond each face of the domain
+BODY_DOMAIN_MARGIN = 0.1
 OUTPUT_KEYS = ("interval", "rrd", "h5", "checkpoint_interval")
 CSV_COLUMNS = ("x", "y", "z", "radius", "vx", "vy", "vz", "wx", "wy", "wz")
 AXES = ("x", "y", "z")
@@ -205,13 +213,14 @@ class _Parser:
         self.materials = self.parse_materials(doc.get("materials", {}))
         interactions, _ = self.parse_interactions(self.array_of_tables(doc, "interactions"))
         walls = self.parse_walls(self.array_of_tables(doc, "walls"))
+        bodies = self.parse_bodies(self.array_of_tables(doc, "bodies"), walls)
         fills = tuple(self.parse_fill(f, f"particles[{i}]")
                       for i, f in enumerate(self.array_of_tables(doc, "particles")))
         output = self.parse_output(doc.get("output", {}))
-        self.check_coverage(interactions, fills, walls)
+        self.check_coverage(interactions, fills, walls, bodies)
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
-                     walls=walls, output=output)
+                     walls=walls, bodies=bodies, output=output)
 
     def simulation(self, value: Any) -> SimulationSettings:
         key = "simulation"
@@ -376,6 +385,140 @@ class _Parser:
             out.append(PlaneWall(name=name, point=point, normal=normal, material=material,
                                  temperature=temp))
         return tuple(out)
+
+    # -- [[bodies]] ------------------------------------------------------------------------------
+    def parse_bodies(self, items: list[dict], walls) -> tuple[Body, ...]:
+        out: list[Body] = []
+        names: dict[str, str] = {w.name: f"walls[{i}]" for i, w in enumerate(walls)}
+        for i, t in enumerate(items):
+            key = f"bodies[{i}]"
+            self.check_keys(t, key, BODY_KEYS, required=("name", "material", "mesh"))
+            name = self.string(t["name"], f"{key}.name")
+            if not name.strip():
+                raise self.err(f"{key}.name", "must be a non-empty name")
+            if name in names:
+                raise self.err(f"{key}.name", f"duplicate name '{name}' (also {names[name]}); "
+                                              "bodies and walls need distinct names")
+            names[name] = key
+            material = self.material_name(t["material"], f"{key}.material")
+            mesh = self.parse_mesh(t["mesh"], f"{key}.mesh")
+            motion = Motion()
+            if "motion" in t:
+                motion = self.parse_motion(t["motion"], f"{key}.motion", t["mesh"], f"{key}.mesh")
+            temp = None
+            if "temperature" in t:
+                temp = self.positive(t["temperature"], "temperature", f"{key}.temperature")
+            vertices = np.array(mesh.vertices, dtype=np.float64).reshape(-1, 3)
+            faces = np.array(mesh.faces, dtype=np.int64).reshape(-1, 3)
+            self.check_inside_domain(vertices, f"{key}.mesh")
+            out.append(Body(key=key, name=name, material=material, vertices=vertices,
+                            faces=faces, motion=motion, temperature=temp))
+        return tuple(out)
+
+    def parse_mesh(self, spec: Any, key: str):
+        """Build (and validate) a body's ``mesh`` through :mod:`geometry`."""
+        import geometry
+        try:
+            mesh = geometry.build_mesh(spec, key=key, base_dir=self.base_dir)
+            return mesh.validate(key)
+        except geometry.GeometryError as e:
+            raise self.err(e.key or key, e.reason) from None
+
+    def check_inside_domain(self, vertices: np.ndarray, key: str) -> None:
+        dlo, dhi = np.array(self.domain.min, float), np.array(self.domain.max, float)
+        margin = BODY_DOMAIN_MARGIN * (dhi - dlo)
+        elo, ehi = dlo - margin, dhi + margin
+        vlo, vhi = vertices.min(axis=0), vertices.max(axis=0)
+        for i, ax in enumerate(AXES):
+            if ax in self.domain.periodic:
+                continue
+            if vlo[i] < elo[i] or vhi[i] > ehi[i]:
+                raise self.err(key, f"the body's mesh lies outside the domain: on {ax} it spans "
+                                    f"{vlo[i]:g} to {vhi[i]:g} m, the domain {dlo[i]:g} to "
+                                    f"{dhi[i]:g} m (a mesh may reach "
+                                    f"{100 * BODY_DOMAIN_MARGIN:g} % of the domain's size beyond "
+                                    f"it: {elo[i]:g} to {ehi[i]:g} m); enlarge [domain] or move "
+                                    "the mesh (origin)")
+
+    def parse_motion(self, value: Any, key: str, mesh_spec: Any, mesh_key: str) -> Motion:
+        t = self.table(value, key, "a table { rotate = { axis_point, axis_direction, speed } "
+                                   "} and/or { translate = { velocity } }")
+        self.check_keys(t, key, MOTION_KEYS)
+        kw: dict[str, Any] = {}
+        if "translate" in t:
+            k = f"{key}.translate"
+            tr = self.table(t["translate"], k, "a table { velocity = [vx, vy, vz] }")
+            self.check_keys(tr, k, TRANSLATE_KEYS, required=TRANSLATE_KEYS)
+            kw["velocity"] = self.vec3(tr["velocity"], "speed", f"{k}.velocity")
+        if "rotate" in t:
+            k = f"{key}.rotate"
+            rot = self.table(t["rotate"], k, "a table { axis_point, axis_direction, speed }")
+            self.check_keys(rot, k, ROTATE_KEYS, required=("speed",))
+            kw["speed"] = self.parse_speed(rot["speed"], f"{k}.speed")
+            point = direction = None
+            if "axis_point" in rot:
+                point = self.vec3(rot["axis_point"], "length", f"{k}.axis_point")
+            if "axis_direction" in rot:
+                direction = self.direction(rot["axis_direction"], f"{k}.axis_direction")
+            if point is None or direction is None:
+                missing = "axis_point" if point is None else "axis_direction"
+                axis = self.builder_axis(mesh_spec, mesh_key)
+                if axis is None:
+                    raise self.err(f"{k}.{missing}",
+                                   "required key is missing: the mesh is not made by a builder, "
+                                   "so it has no axis of its own to rotate about")
+                if point is None:
+                    point = tuple(float(c) for c in axis[0])
+                if direction is None:
+                    d = np.asarray(axis[1], float)
+                    direction = tuple(float(c) for c in d / np.linalg.norm(d))
+            kw["axis_point"] = point
+            kw["axis_direction"] = direction
+        return Motion(**kw)
+
+    def builder_axis(self, spec: Any, key: str):
+        """The placed +x axis ``(point, direction)`` of the first mesh of ``spec`` when a
+        builder makes it, else None (an imported file has no axis of its own)."""
+        import geometry
+        body_axis = getattr(geometry, "body_axis", None)
+        first = spec[0] if isinstance(spec, list) and spec else spec
+        if body_axis is None or not isinstance(first, dict) or "builder" not in first \
+                or first.get("builder") == "file":
+            return None
+        try:
+            return body_axis(first, key=f"{key}[0]" if isinstance(spec, list) else key)
+        except geometry.GeometryError as e:
+            raise self.err(e.key or key, e.reason) from None
+
+    def parse_speed(self, value: Any, key: str) -> SpeedSchedule:
+        """An angular speed ("10 rpm", rad/s) or a schedule [[t0 = 0, w0], [t1, w1], ...]."""
+        if not isinstance(value, list):
+            try:
+                w = self.q(value, "angular_speed", key)
+            except SceneError as e:
+                raise self.err(key, f"{e.reason}; speed is an angular speed (\"10 rpm\", rad/s) "
+                                    "or a schedule [[0.0, \"10 rpm\"], [30.0, \"20 rpm\"]]") from None
+            return SpeedSchedule(points=((0.0, w),))
+        if not value:
+            raise self.err(key, "an empty schedule; give [[0.0, \"10 rpm\"], ...] (start time, "
+                                "angular speed)")
+        points: list[tuple[float, float]] = []
+        for j, item in enumerate(value):
+            k = f"{key}[{j}]"
+            if not isinstance(item, list) or len(item) != 2:
+                raise self.err(k, f"expected [start time, angular speed], e.g. [30.0, \"20 rpm\"], "
+                                  f"got {_type_name(item)}"
+                                  + (f" of length {len(item)}" if isinstance(item, list) else ""))
+            start = self.nonnegative(item[0], "time", f"{k}[0]")
+            w = self.q(item[1], "angular_speed", f"{k}[1]")
+            if j == 0 and start != 0.0:
+                raise self.err(f"{k}[0]", f"the schedule must start at time 0, got {start:g} s "
+                                          "(the speed before the first entry would be undefined)")
+            if points and not start > points[-1][0]:
+                raise self.err(f"{k}[0]", f"start times must increase: {start:g} s follows "
+                                          f"{points[-1][0]:g} s")
+            points.append((start, w))
+        return SpeedSchedule(points=tuple(points))
 
     def parse_radius(self, value: Any, key: str) -> RadiusDistribution:
         if isinstance(value, dict):
@@ -559,7 +702,7 @@ class _Parser:
                                                       f"{key}.checkpoint_interval")
         return Output(**kw)
 
-    def check_coverage(self, interactions: dict, fills, walls) -> None:
+    def check_coverage(self, interactions: dict, fills, walls, bodies=()) -> None:
         """Every pair of materials that can meet needs an [[interactions]] entry."""
         particle_mats: list[str] = []
         for f in fills:
@@ -572,6 +715,9 @@ class _Parser:
         for w in walls:
             for a in particle_mats:
                 needed.append((a, w.material, f"particles of '{a}' and wall '{w.name}'"))
+        for b in bodies:
+            for a in particle_mats:
+                needed.append((a, b.material, f"particles of '{a}' and body '{b.name}'"))
         for a, b, why in needed:
             if frozenset((a, b)) not in interactions:
                 raise self.err("interactions",

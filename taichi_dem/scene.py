@@ -164,6 +164,7 @@ class Scene:
     interactions: dict[frozenset, Interaction]
     fills: tuple[ParticleFill, ...] = ()
     walls: tuple[PlaneWall, ...] = ()
+    bodies: tuple["Body", ...] = ()
     output: Output = field(default_factory=Output)
 
     def interaction(self, a: str, b: str) -> Interaction:
@@ -172,3 +173,40 @@ class Scene:
     @property
     def expected_particle_count(self) -> int:
         return sum(f.expected_count for f in self.fills)
+
+
+@dataclass(frozen=True)
+class SpeedSchedule:
+    """Piecewise-constant angular speed: ``points`` = ((start time s, speed rad/s), ...),
+    sorted by time; the first starts at 0."""
+    points: tuple[tuple[float, float], ...]
+
+    def at(self, time: float) -> float:
+        """Angular speed at ``time``, rad/s."""
+        speed = self.points[0][1]
+        for start, value in self.points:
+            if time >= start:
+                speed = value
+        return speed
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Prescribed rigid motion: rotation about an axis (speed schedule, rad/s, right-handed
+    about ``axis_direction``) and/or translation at constant ``velocity`` (m/s)."""
+    axis_point: Vec3 = (0.0, 0.0, 0.0)
+    axis_direction: Vec3 = (1.0, 0.0, 0.0)          # unit
+    speed: Optional[SpeedSchedule] = None            # None: no rotation
+    velocity: Vec3 = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """A rigid triangle-mesh body (one or several meshes), its material and motion."""
+    key: str                             # "bodies[0]"
+    name: str
+    material: str
+    vertices: np.ndarray                 # (V, 3) m, all meshes merged, at t = 0
+    faces: np.ndarray                    # (F, 3) int
+    motion: Motion = field(default_factory=Motion)
+    temperature: Optional[float] = None  # K; None = adiabatic

@@ -192,6 +192,20 @@ class Simulation:
         values = {"time": self.time, "particles/count": self.engine.count,
                   "particles/kinetic_energy": m["kinetic_energy"],
                   "particles/lost": self.engine.lost}
+        mesh = self.engine.mesh
+        if mesh is not None:
+            forces, torques = mesh.take_loads()
+            for k, body in enumerate(self.scene.bodies):
+                axis = np.asarray(body.motion.axis_direction, float)
+                speed = self.engine.kinematics.speed(k, self.time)
+                axial = float(torques[k] @ axis)
+                prefix = f"bodies/{body.name}/"
+                values[prefix + "force"] = forces[k]
+                values[prefix + "torque"] = torques[k]
+                values[prefix + "axial_torque"] = axial
+                values[prefix + "angular_speed"] = speed
+                # the particles' torque resists the turning; the drive supplies -T w
+                values[prefix + "power"] = -axial * speed
         if self.scene.walls:
             wf = self.engine.wall_force.to_numpy()
             for k, w in enumerate(self.scene.walls):
@@ -220,6 +234,26 @@ class Simulation:
                   f"step was chosen for; its impacts last {contact_time:.3g} s, fewer than "
                   f"{ERROR_STEPS_PER_CONTACT} steps of {self.dt:.3g} s. Reduce simulation.dt.",
                   file=sys.stderr)
+
+    def set_speed(self, body: str, speed) -> None:
+        """From now on, turn ``body`` at ``speed`` (rad/s, or a quantity string such as
+        "20 rpm") about its axis. Warns when the new speed is too fast for the time step."""
+        from .units import parse_quantity
+        from .timestep import BODY_STEP_ERROR
+        self._check_alive()
+        names = [b.name for b in self.scene.bodies]
+        if body not in names:
+            raise SceneError("set_speed", body, f"no body named '{body}'; bodies: {', '.join(names) or 'none'}")
+        value = parse_quantity(speed, "angular_speed", file="set_speed", key=body)
+        k = names.index(body)
+        kin = self.engine.kinematics
+        kin.set_speed(k, self.time, value)
+        self.engine.mesh.upload_schedules()
+        r_min = float(np.min(self.placed.radius))
+        if kin.surface_speed(k, self.time) * self.dt > BODY_STEP_ERROR * r_min:
+            print(f"taichi-dem: warning: at {value:.3g} rad/s the surface of '{body}' moves "
+                  f"{kin.surface_speed(k, self.time) * self.dt / r_min:.2f} of the smallest radius "
+                  f"per step; thin parts may pass through particles. Reduce dt.", file=sys.stderr)
 
     @property
     def series(self) -> dict[str, np.ndarray]:

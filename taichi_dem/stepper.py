@@ -60,14 +60,25 @@ class Engine:
                      "rolling_damping"):
             getattr(self, name).from_numpy(getattr(tables, name).astype(np.float64 if real == ti.f64 else np.float32))
         self.rolling_model.from_numpy(tables.rolling_model.astype(np.int32))
+        self.max_radius = max_radius
+        self.time = 0.0
         self.pairs: "PairState | None" = None
         self.broadphase = Broadphase(self)
+        self.mesh = None
+        if scene.bodies:
+            from .bodies import BodyKinematics, MeshContacts
+            self.kinematics = BodyKinematics(scene.bodies)
+            self.mesh = MeshContacts(self, self.kinematics)
         self._compile_particle_kernels()
 
     def new_tree(self) -> FieldTree:
         t = FieldTree()
         self.trees.append(t)
         return t
+
+    def recompile_pair_kernels(self):
+        """New kernel objects after arrays they use were reallocated (compiled on first use)."""
+        self._compile_pair_kernels(self.pairs)
 
     def grow_pairs(self, capacity: int):
         """(Re)allocate the pair arrays with room for ``capacity`` entries, keeping the saved
@@ -180,6 +191,7 @@ class Engine:
         wall_force = self.wall_force
         real = self.real
         drift_particle = self.drift_particle
+        has_mesh = self.mesh is not None
 
         @ti.func
         def rolling_torque(pair_model, w_rel, normal, fn, sn, r_eff, mu_r, eta_r, inertia_eff,
@@ -257,6 +269,8 @@ class Engine:
                 s.owned_force[i] = owned_force
                 s.owned_torque[i] = owned_torque
 
+        mesh_contacts = self.mesh.make_particle_contacts(rolling_torque) if has_mesh else None
+
         @ti.kernel
         def gather(n: ti.i32, dt: real, record: ti.i32, then_drift: ti.i32):
             for i in range(n):
@@ -307,6 +321,13 @@ class Engine:
                         s.wall_tangential_history[i, w] = history
                         if ti.static(epsd):
                             s.wall_rolling_history[i, w] = rolling_history
+                if ti.static(has_mesh):
+                    if inv_m > 0.0:
+                        mesh_force, mesh_torque = mesh_contacts(
+                            i, s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i],
+                            s.mass[i], s.inverse_inertia[i], s.acceleration[i], s.material[i], dt)
+                        force += mesh_force
+                        torque += mesh_torque
                 if inv_m > 0.0 and s.alive[i] != 0:
                     a = force * inv_m + gravity
                     alpha = torque * s.inverse_inertia[i]
@@ -323,6 +344,8 @@ class Engine:
     # ------------------------------------------------------------------ driver
     def start(self, n: int) -> int:
         """Build the first neighbour list and the initial accelerations (no time advance)."""
+        if self.mesh is not None:
+            self.mesh.update_frames(self.time)
         self.count = self.broadphase.rebuild(n)
         self._pair_forces(self.count, 0.0)
         self._gather(self.count, 0.0, 0, 0)
@@ -335,7 +358,13 @@ class Engine:
             n = self.count
             if k == 0:
                 self._drift(n, dt)      # later steps drifted at the end of the previous gather
-            if self.flags[0] != 0:
+            self.time += dt
+            rebuild = self.flags[0] != 0
+            if self.mesh is not None:
+                self.mesh.update_frames(self.time)
+                self.mesh.interval_steps += 1
+                rebuild = rebuild or self.mesh.needs_rebinning(self.time)
+            if rebuild:
                 self.flags[0] = 0
                 self.count = self.broadphase.rebuild(n)
             last = k == steps - 1

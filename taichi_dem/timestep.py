@@ -21,6 +21,9 @@ MIN_STEPS_PER_CONTACT = 20      # below this an impact is poorly resolved (auto 
 ERROR_STEPS_PER_CONTACT = 8     # an explicit dt giving fewer is refused: restitution and
                                 # overlap are then wrong by tens of percent, and it can diverge
 MAX_RAYLEIGH_FRACTION = 0.5     # explicit dt beyond half the Rayleigh time is refused
+BODY_STEP_FRACTION = 0.1        # auto dt: a body surface moves at most 0.1 r_min per step
+BODY_STEP_ERROR = 0.3           # explicit dt moving a body surface more than 0.3 r_min per
+                                # step is refused: a thin paddle could pass through a particle
 
 
 @dataclass
@@ -32,6 +35,20 @@ class TimeStepReport:
     courant_limit: float         # s, skin / (2 v)
     limited_by: str              # which bound set dt
     notes: list[str]
+
+
+def body_surface_speed(scene: Scene) -> float:
+    """Largest speed of any point of any body over its whole speed schedule, m/s."""
+    best = 0.0
+    for b in scene.bodies:
+        m = b.motion
+        w = max((abs(p[1]) for p in m.speed.points), default=0.0) if m.speed else 0.0
+        rel = np.asarray(b.vertices, float) - np.asarray(m.axis_point, float)
+        axis = np.asarray(m.axis_direction, float)
+        radial = rel - np.outer(rel @ axis, axis)
+        reach = float(np.max(np.linalg.norm(radial, axis=1))) if len(rel) else 0.0
+        best = max(best, w * reach + float(np.linalg.norm(m.velocity)))
+    return best
 
 
 def expected_max_speed(scene: Scene, initial_speeds: np.ndarray) -> float:
@@ -46,7 +63,8 @@ def expected_max_speed(scene: Scene, initial_speeds: np.ndarray) -> float:
     else:
         fall = 0.0
     v0 = float(np.max(initial_speeds)) if len(initial_speeds) else 0.0
-    return max(v0, fall, 1e-3)
+    # a particle falling onto a moving paddle meets it at both speeds
+    return max(v0, fall, 1e-3) + body_surface_speed(scene)
 
 
 def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
@@ -65,7 +83,8 @@ def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
         r = float(np.min(radii[sel]))
         t_rayleigh = min(t_rayleigh, rayleigh_time(r, mat))
         # the stiffest partner this material can meet (particles or walls)
-        partners = set(material_names[j] for j in np.unique(materials)) | {w.material for w in scene.walls}
+        partners = (set(material_names[j] for j in np.unique(materials))
+                    | {w.material for w in scene.walls} | {b.material for b in scene.bodies})
         for pname in partners:
             if frozenset((name, pname)) not in scene.interactions:
                 continue
@@ -77,9 +96,13 @@ def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
         t_rayleigh = 1e-3
     courant = skin / (2.0 * v) if v > 0 else math.inf
     sim = scene.simulation
+    r_min = float(np.min(radii)) if len(radii) else math.inf
+    v_body = body_surface_speed(scene)
     if sim.dt is None:
         candidates = {"rayleigh_fraction": sim.rayleigh_fraction * t_rayleigh,
                       "contact_duration": t_contact / MIN_STEPS_PER_CONTACT}
+        if v_body > 0:
+            candidates["body_speed"] = BODY_STEP_FRACTION * r_min / v_body
         limited_by = min(candidates, key=candidates.get)
         dt = candidates[limited_by]
         if limited_by != "rayleigh_fraction":
@@ -100,6 +123,12 @@ def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
                              f"(Hertz duration {t_contact:.3g} s) in fewer than "
                              f"{ERROR_STEPS_PER_CONTACT} steps; use dt <= "
                              f"{t_contact / MIN_STEPS_PER_CONTACT:.3g} s or dt = \"auto\"")
+        if v_body > 0 and v_body * dt > BODY_STEP_ERROR * r_min:
+            raise SceneError(scene.source, "simulation.dt",
+                             f"dt = {dt:g} s lets a body surface moving at {v_body:.3g} m/s travel "
+                             f"{v_body * dt / r_min:.2f} of the smallest radius per step; a thin "
+                             f"paddle or flight could pass through a particle. Use dt <= "
+                             f"{BODY_STEP_FRACTION * r_min / v_body:.3g} s or dt = \"auto\"")
         if dt > t_contact / MIN_STEPS_PER_CONTACT:
             notes.append(f"fewer than {MIN_STEPS_PER_CONTACT} steps per contact at {v:.3g} m/s")
     return TimeStepReport(dt, t_rayleigh, t_contact, v, courant, limited_by, notes)

@@ -36,6 +36,11 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
     if scene.walls:
         effects.append(Effect("plane_walls", "particle",
                               f"{len(scene.walls)} analytic plane wall(s)"))
+    if scene.bodies:
+        n_tri = sum(len(b.faces) for b in scene.bodies)
+        effects.append(Effect("mesh_contact", "particle",
+                              f"{len(scene.bodies)} triangle-mesh bodies ({n_tri} triangles): "
+                              "Hertz-Mindlin with history, loads on each body"))
     if scene.domain.periodic:
         effects.append(Effect("periodic", "integrate",
                               "periodic faces: " + ", ".join(scene.domain.periodic)))

@@ -1,0 +1,874 @@
+"""Mesh builders and their registry (``builder = "..."`` in a scene's ``[[bodies]] mesh``).
+
+Every builder takes keyword parameters in SI (lengths in m; angles in degrees where the name
+ends in ``_deg``), places its axis along +x from x = 0, centred on y = z = 0, and returns a
+:class:`~geometry.mesh.TriMesh`. Common keys, applied after the shape is made, in this order:
+``roll_deg`` (turn about the builder's own +x axis); then, for the builders that take one,
+``incline_deg`` (tilt +x down about +y); ``axis_direction`` (turn +x onto it, no roll: see
+:func:`geometry._shapes.align_x_to`); ``origin`` (translate); ``max_edge`` (subdivide so no
+triangle edge is longer). :func:`body_axis` gives the resulting axis, e.g. for a rotate motion.
+
+A value may be a number (SI, or degrees for ``*_deg``) or a quantity string such as
+``"15 mm"`` or ``"0.5 rad"``. ``build(name, params, key=...)`` checks everything and raises
+:class:`~geometry.mesh.GeometryError` naming the key (``bodies[0].mesh.flight_height``).
+
+Several meshes make one body through :func:`build_mesh` with a list: for the seed study's
+optimised cooler, a ``paddle_shaft`` (which carries the whole shaft) plus a ``screw`` with
+``include_shaft = false`` over the inlet section, the paddle rows starting after it::
+
+    mesh = [
+      { builder = "paddle_shaft", length = 6.0, shaft_radius = 0.08, start = 1.35, rows = 19,
+        paddles_per_row = 4, paddle_length = 0.3, paddle_width = 0.15, paddle_pitch_deg = 30 },
+      { builder = "screw", length = 1.2, shaft_radius = 0.08, outer_radius = 0.38,
+        pitch = 0.3, turns_direction = "left", include_shaft = false },
+    ]
+
+Sense conventions (positive rotation = right-hand rule about the body's +x axis):
+a plate's stored normal is the face that leads (pushes) under positive rotation; a positive
+``paddle_pitch_deg`` conveys towards +x under positive rotation; a right-hand screw flight
+turned positively conveys towards -x (like a nut on a bolt), a left-hand one towards +x.
+"""
+from __future__ import annotations
+
+import difflib
+import inspect
+import math
+import re
+import textwrap
+from dataclasses import dataclass
+from typing import Any, Callable, Optional
+
+import numpy as np
+
+from . import _shapes as sh
+from .mesh import GeometryError, TriMesh
+
+REQUIRED = inspect.Parameter.empty
+
+# ------------------------------------------------------------------------------ parameters
+# kind -> (unit shown in the table, phrase for messages)
+KINDS = {
+    "length": ("m", "a positive length"),
+    "length0": ("m", "a length >= 0"),
+    "coord": ("m", "a coordinate (m)"),
+    "angle": ("deg", "an angle"),
+    "count": ("-", "a whole number >= 1"),
+    "count0": ("-", "a whole number >= 0"),
+    "bool": ("-", "true or false"),
+    "choice": ("-", "one of the listed words"),
+    "point": ("m", "a point [x, y, z]"),
+    "direction": ("-", "a direction [x, y, z]"),
+    "factor": ("-", "a positive number"),
+    "path": ("-", "a file path"),
+}
+
+_LENGTH_UNITS = {"m": 1.0, "km": 1e3, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6,
+                 "μm": 1e-6, "in": 0.0254, "inch": 0.0254, "ft": 0.3048}
+_ANGLE_UNITS_DEG = {"deg": 1.0, "°": 1.0, "rad": 180.0 / math.pi, "mrad": 0.18 / math.pi}
+_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S.*?)?\s*$")
+
+
+@dataclass(frozen=True)
+class Param:
+    name: str
+    kind: str
+    default: Any                  # REQUIRED, None (optional, derived) or a value
+    description: str
+    choices: tuple = ()
+
+    @property
+    def unit(self) -> str:
+        return KINDS[self.kind][0]
+
+    @property
+    def default_text(self) -> str:
+        if self.default is REQUIRED:
+            return "required"
+        if self.default is None:
+            return "optional"
+        if isinstance(self.default, bool):
+            return "true" if self.default else "false"
+        if isinstance(self.default, str):
+            return f'"{self.default}"'
+        if isinstance(self.default, tuple):
+            return "[" + ", ".join(f"{c:g}" for c in self.default) + "]"
+        return f"{self.default:g}"
+
+
+class _Bad(GeometryError):
+    """Raised inside a builder about one of its parameters; build() prefixes the key."""
+
+    def __init__(self, param: str, reason: str):
+        super().__init__(param, reason)
+
+
+def _number(value, what: str, param: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise _Bad(param, f"expected {what}, got {_type_name(value)} {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise _Bad(param, f"expected {what}, got {value!r}")
+    return x
+
+
+def _type_name(v) -> str:
+    return {bool: "a boolean", str: "a string", int: "a number", float: "a number",
+            list: "a list", dict: "a table"}.get(type(v), type(v).__name__)
+
+
+def _quantity(value, units: dict, what: str, param: str) -> float:
+    if isinstance(value, str):
+        m = _QUANTITY.match(value)
+        if not m:
+            raise _Bad(param, f"expected {what}, got {value!r}")
+        unit = (m.group(2) or "").strip()
+        if unit not in units:
+            raise _Bad(param, f"unknown or wrong unit {unit!r} in {value!r} for {what}; "
+                              f"use one of: {', '.join(units)}")
+        return float(m.group(1)) * units[unit]
+    return _number(value, what, param)
+
+
+def _parse(p: Param, value):
+    what = KINDS[p.kind][1]
+    name = p.name
+    if p.kind in ("length", "length0", "coord"):
+        x = _quantity(value, _LENGTH_UNITS, what, name)
+        if p.kind == "length" and x <= 0.0:
+            raise _Bad(name, f"must be a positive length, got {x:g} m")
+        if p.kind == "length0" and x < 0.0:
+            raise _Bad(name, f"must be >= 0, got {x:g} m")
+        return x
+    if p.kind == "angle":
+        return _quantity(value, _ANGLE_UNITS_DEG, "an angle (a number of degrees or a "
+                                                  "string such as \"0.5 rad\")", name)
+    if p.kind in ("count", "count0"):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value):
+            raise _Bad(name, f"expected {what}, got {value!r}")
+        lo = 1 if p.kind == "count" else 0
+        if int(value) < lo:
+            raise _Bad(name, f"must be {'>= 1' if lo else '>= 0'}, got {int(value)}")
+        return int(value)
+    if p.kind == "bool":
+        if not isinstance(value, bool):
+            raise _Bad(name, f"expected true or false, got {value!r}")
+        return value
+    if p.kind == "choice":
+        if not isinstance(value, str) or value not in p.choices:
+            raise _Bad(name, f"expected one of {', '.join(repr(c) for c in p.choices)}, got "
+                             f"{value!r}" + _suggest(str(value), p.choices))
+        return value
+    if p.kind in ("point", "direction"):
+        if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 3:
+            raise _Bad(name, f"expected {what}, got {value!r}")
+        units = _LENGTH_UNITS if p.kind == "point" else {"": 1.0}
+        v = tuple(_quantity(c, units, what, name) for c in value)
+        if p.kind == "direction" and math.hypot(*v) == 0.0:
+            raise _Bad(name, "the direction must not be zero")
+        return v
+    if p.kind == "factor":
+        x = _number(value, what, name)
+        if x <= 0.0:
+            raise _Bad(name, f"must be positive, got {x:g}")
+        return x
+    if p.kind == "path":
+        if not isinstance(value, str) or not value:
+            raise _Bad(name, f"expected a file path, got {value!r}")
+        return value
+    raise AssertionError(p.kind)
+
+
+def _suggest(word: str, options) -> str:
+    options = list(options)
+    lower = {o.lower(): o for o in options}
+    close = difflib.get_close_matches(word.lower(), list(lower), n=1, cutoff=0.5)
+    return f" (did you mean {lower[close[0]]!r}?)" if close else ""
+
+
+# ------------------------------------------------------------------------------ registry
+COMMON = (
+    Param("origin", "point", (0.0, 0.0, 0.0), "where the builder's x = 0 point goes"),
+    Param("axis_direction", "direction", (1.0, 0.0, 0.0),
+          "the builder's +x axis is turned onto this (no roll: builder +z stays upward)"),
+    Param("roll_deg", "angle", 0.0, "turn about the builder's own +x axis first"),
+    Param("max_edge", "length", None, "subdivide until no triangle edge is longer (m); "
+                                      "default: the builder's own resolution"),
+)
+_COMMON_NAMES = {p.name for p in COMMON}
+
+
+@dataclass(frozen=True)
+class Builder:
+    """A registered mesh builder: ``function`` makes the shape in builder coordinates from
+    parsed parameters; :meth:`build` parses, checks, places and validates."""
+    name: str
+    function: Callable[..., TriMesh]
+    description: str
+    params: tuple[Param, ...]
+    aliases: tuple[tuple[str, str], ...] = ()     # (alias, parameter)
+
+    def param(self, name: str) -> Param:
+        for p in self.params + COMMON:
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+    def build(self, params: dict, *, key: str = "", base_dir=None) -> TriMesh:
+        key = key or self.name
+        given = dict(params)
+        aliases = dict(self.aliases)
+        for alias, target in self.aliases:
+            if alias in given:
+                if target in given:
+                    raise GeometryError(f"{key}.{alias}", f"{alias!r} and {target!r} are the "
+                                                          "same parameter; give one")
+                given[target] = given.pop(alias)
+        known = {p.name: p for p in self.params + COMMON}
+        for name in given:
+            if name not in known:
+                options = list(known) + list(aliases)
+                raise GeometryError(f"{key}.{name}", f"unknown parameter for builder "
+                                    f"{self.name!r}{_suggest(name, options)}; it takes: "
+                                    f"{', '.join(p.name for p in self.params)} (and "
+                                    f"{', '.join(p.name for p in COMMON)})")
+        values = {}
+        try:
+            for p in self.params + COMMON:
+                if p.name in given and given[p.name] is not None:
+                    values[p.name] = _parse(p, given[p.name])
+                elif p.default is REQUIRED:
+                    raise _Bad(p.name, f"missing: builder {self.name!r} needs {p.name}: "
+                                       f"{p.description}")
+                else:
+                    values[p.name] = p.default
+            common = {n: values.pop(n) for n in _COMMON_NAMES}
+            if self.name == "file":
+                values["base_dir"] = base_dir
+            mesh = self.function(**values)
+            # a builder's incline is applied here, after roll_deg and before axis_direction
+            mesh = place(mesh, incline_deg=values.get("incline_deg", 0.0), **common)
+        except _Bad as e:
+            raise GeometryError(f"{key}.{e.key}", e.reason) from None
+        return mesh.validate(key)
+
+    def __call__(self, **params) -> TriMesh:
+        """Python use: ``geometry.builders.drum(radius=1.0, length=3.0)``."""
+        base_dir = params.pop("base_dir", None)
+        return self.build(params, key=self.name, base_dir=base_dir)
+
+
+BUILDERS: dict[str, Builder] = {}
+
+
+def _register(name: str, description: str, spec: dict, aliases: dict | None = None):
+    """Declare a builder: defaults and required-ness come from the function's signature,
+    kind and description (and choices) from ``spec[name] = (kind, description[, choices])``."""
+
+    def deco(fn):
+        params = []
+        sig = inspect.signature(fn)
+        names = [n for n in sig.parameters if n != "base_dir"]
+        assert set(names) == set(spec), (name, set(names) ^ set(spec))
+        for n in names:
+            kind, desc, *rest = spec[n]
+            default = sig.parameters[n].default
+            params.append(Param(n, kind, default, desc, tuple(rest[0]) if rest else ()))
+        b = Builder(name, fn, description, tuple(params), tuple((aliases or {}).items()))
+        BUILDERS[name] = b
+        return b
+    return deco
+
+
+def place(mesh: TriMesh, *, origin=(0.0, 0.0, 0.0), axis_direction=(1.0, 0.0, 0.0),
+          roll_deg: float = 0.0, incline_deg: float = 0.0,
+          max_edge: Optional[float] = None) -> TriMesh:
+    """Apply the common keys: turn by ``roll_deg`` about +x, tilt +x down by ``incline_deg``
+    (about +y, for the builders that take an incline), turn +x onto ``axis_direction``,
+    translate by ``origin``, then subdivide to ``max_edge``."""
+    r = (sh.align_x_to(axis_direction) @ sh.rotation_y(math.radians(incline_deg))
+         @ sh.rotation_x(math.radians(roll_deg)))
+    mesh = mesh.transformed(r, np.asarray(origin, dtype=np.float64))
+    if max_edge is not None:
+        mesh = subdivided(mesh, max_edge)
+    return mesh
+
+
+def subdivided(mesh: TriMesh, max_edge: float) -> TriMesh:
+    """Split triangles (conformingly, no cracks) until no edge exceeds ``max_edge``."""
+    from trimesh.remesh import subdivide_to_size
+    extent = mesh.extent
+    if extent / max_edge > 1e4:
+        raise _Bad("max_edge", f"{max_edge:g} m is too small for a mesh {extent:.3g} m across "
+                               "(it would make more than 1e8 triangles)")
+    iters = max(10, int(math.ceil(math.log2(max(1.0, extent / max_edge)))) + 4)
+    v, f, idx = subdivide_to_size(mesh.vertices, mesh.faces, max_edge, max_iter=iters,
+                                  return_index=True)
+    return TriMesh(v, f, mesh.two_sided[idx])
+
+
+def body_axis(spec, *, key: str = "mesh") -> tuple[np.ndarray, np.ndarray]:
+    """``(point, unit direction)`` of a mesh spec's placed +x axis (origin, axis_direction and
+    incline_deg applied), without building it: the natural ``rotate`` axis of a drum or shaft.
+    For a list of meshes, the first one's."""
+    if isinstance(spec, (list, tuple)):
+        spec = spec[0] if spec else {}
+    if not isinstance(spec, dict):
+        raise GeometryError(key, f"expected a mesh table, got {_type_name(spec)}")
+    name = spec.get("builder", "file")
+    b = BUILDERS.get(name)
+    if b is None:
+        return build(name, {}, key=key)       # raises the unknown-builder error
+    values = {}
+    try:
+        for p in COMMON + tuple(q for q in b.params if q.name == "incline_deg"):
+            v = spec.get(p.name)
+            values[p.name] = _parse(p, v) if v is not None else p.default
+    except _Bad as e:
+        raise GeometryError(f"{key}.{e.key}", e.reason) from None
+    r = (sh.align_x_to(values["axis_direction"])
+         @ sh.rotation_y(math.radians(values.get("incline_deg", 0.0))))
+    return np.asarray(values["origin"], dtype=np.float64), r[:, 0].copy()
+
+
+def build(name: str, params: dict, *, key: str = "", base_dir=None) -> TriMesh:
+    """Build mesh ``name`` from ``params``; errors name ``key`` + "." + the parameter."""
+    if name not in BUILDERS:
+        raise GeometryError(f"{key}.builder" if key else "builder",
+                            f"unknown builder {name!r}{_suggest(str(name), BUILDERS)}; "
+                            f"known: {', '.join(BUILDERS)}")
+    return BUILDERS[name].build(params, key=key or name, base_dir=base_dir)
+
+
+def build_mesh(spec, *, key: str = "mesh", base_dir=None) -> TriMesh:
+    """A scene's ``mesh`` value: ``{builder = "drum", ...}``, ``{file = "part.stl", ...}``, or
+    a list of those, merged into one body (e.g. a paddle shaft plus a screw flight)."""
+    if isinstance(spec, (list, tuple)):
+        if not spec:
+            raise GeometryError(key, "an empty list of meshes")
+        return TriMesh.concatenate(build_mesh(s, key=f"{key}[{i}]", base_dir=base_dir)
+                                   for i, s in enumerate(spec))
+    if not isinstance(spec, dict):
+        raise GeometryError(key, f"expected a table {{ builder = \"...\", ... }} or "
+                                 f"{{ file = \"part.stl\" }}, got {_type_name(spec)}")
+    params = dict(spec)
+    name = params.pop("builder", None)
+    if name is None:
+        if "file" not in params:
+            raise GeometryError(key, "give builder = \"...\" (one of "
+                                     f"{', '.join(BUILDERS)}) or file = \"part.stl\"")
+        name = "file"
+    elif not isinstance(name, str):
+        raise GeometryError(f"{key}.builder", f"expected a builder name, got {name!r}")
+    return build(name, params, key=key, base_dir=base_dir)
+
+
+def describe_builders() -> str:
+    """The table printed by ``taichi-dem check --builders``."""
+    lines = ["Mesh builders ([[bodies]] mesh = { builder = \"NAME\", ... }). Each places its axis "
+             "along +x from x = 0, centred on y = z = 0. Lengths in m, angles in degrees; a "
+             "quantity string such as \"15 mm\" also works. Normals point to the particle side; "
+             "zero-thickness plates are single-layer and two-sided. A list of meshes makes "
+             "one body."]
+    lines = [textwrap.fill(lines[0], 100)]
+    width = max(len(p.name) for b in BUILDERS.values() for p in b.params + COMMON) + 2
+
+    def rows(params):
+        for p in params:
+            desc = p.description
+            if p.choices:
+                desc += " (" + " | ".join(f'"{c}"' for c in p.choices) + ")"
+            head = f"    {p.name:<{width}}{p.unit:<5}{p.default_text:<12}"
+            yield textwrap.fill(desc, 100, initial_indent=head,
+                                subsequent_indent=" " * len(head))
+
+    for b in BUILDERS.values():
+        lines += ["", textwrap.fill(f"{b.name}: {b.description}", 100, initial_indent="  ",
+                                    subsequent_indent="    ")]
+        lines += rows(b.params)
+        for alias, target in b.aliases:
+            lines.append(f"    ({alias} = {target})")
+    lines += ["", "  common to every builder (applied in this order: roll_deg, the builder's "
+              "incline_deg, axis_direction, origin, max_edge):"]
+    lines += rows(COMMON)
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------------ helpers
+def default_segments(multiple_of: int = 4, chord_error: float = 0.01) -> int:
+    """Fewest polygon sides, a multiple of ``multiple_of``, with a sagitta (chord error)
+    below ``chord_error`` x radius: R (1 - cos(pi/n)) < 0.01 R needs n >= 23."""
+    n_min = math.ceil(math.pi / math.acos(1.0 - chord_error))
+    m = max(1, multiple_of)
+    return m * math.ceil(n_min / m)
+
+
+# Surfaces of revolution are cut axially into pieces up to this many times the
+# circumferential chord: fewer triangles, still compact bounding boxes for the broadphase.
+AXIAL_ASPECT = 3.0
+
+
+def _chord(radius: float, n: int) -> float:
+    return 2.0 * radius * math.sin(math.pi / n)
+
+
+def _frame(theta: float):
+    """Unit radial and tangential (increasing angle, from +y towards +z) vectors."""
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array([0.0, c, s]), np.array([0.0, -s, c])
+
+
+def _closed_shaft(length: float, radius: float, n: int, phase: float = 0.0) -> TriMesh:
+    prof = [(0.0, 0.0), (0.0, radius), (length, radius), (length, 0.0)]
+    return sh.revolve(prof, n, phase=phase, normals="left", target=AXIAL_ASPECT * _chord(radius, n))
+
+
+# ------------------------------------------------------------------------------ box
+@_register("box", "an axis-aligned box; a container (normals inward) unless normals = "
+                  "\"outward\"", {
+    "min": ("point", "one corner"),
+    "max": ("point", "the opposite corner"),
+    "normals": ("choice", "inward: particles inside (a container); outward: a solid block",
+                ("inward", "outward")),
+    "open_top": ("bool", "leave out the +z face (an open bin)"),
+})
+def box(*, min, max, normals="inward", open_top=False) -> TriMesh:
+    lo, hi = np.asarray(min, dtype=np.float64), np.asarray(max, dtype=np.float64)
+    for i, axis in enumerate("xyz"):
+        if hi[i] <= lo[i]:
+            raise _Bad("max", f"max.{axis} = {hi[i]:g} must exceed min.{axis} = {lo[i]:g}")
+    c = np.array([[lo[0] if i & 1 == 0 else hi[0], lo[1] if i & 2 == 0 else hi[1],
+                   lo[2] if i & 4 == 0 else hi[2]] for i in range(8)])
+    # outward-wound quads: -x, +x, -y, +y, -z, +z
+    quads = [(0, 4, 6, 2), (1, 3, 7, 5), (0, 1, 5, 4), (2, 6, 7, 3), (0, 2, 3, 1), (4, 5, 7, 6)]
+    if open_top:
+        quads = quads[:-1]
+    f = np.array([t for a, b, cc, d in quads for t in ((a, b, cc), (a, cc, d))])
+    mesh = TriMesh(c, f)
+    return mesh.flipped() if normals == "inward" else mesh
+
+
+# ------------------------------------------------------------------------------ drum
+@_register("drum", "a rotary drum: cylindrical shell (normals towards the axis), optional "
+                   "end walls, lifting flights (straight or L-shaped plates), incline", {
+    "radius": ("length", "inner shell radius (polygon vertices lie on it)"),
+    "length": ("length", "shell length along the axis"),
+    "end_walls": ("bool", "close both ends (normals into the drum)"),
+    "end_hole_radius": ("length0", "radius of a central opening in each end wall "
+                                   "(inlet/outlet, a shaft); 0 = solid discs"),
+    "include_shell": ("bool", "false: flights (and end walls) only, e.g. a second flight "
+                              "section on the same drum"),
+    "flights": ("count0", "number of lifting flights, evenly spaced"),
+    "flight_height": ("length", "radial height of a flight (required when flights > 0)"),
+    "flight_shape": ("choice", "cross-section of a flight", ("straight", "L")),
+    "flight_lip": ("length", "length of the L foot (lip) at the flight tip (required for "
+                             "flight_shape = \"L\")"),
+    "flight_lip_angle_deg": ("angle", "angle between the radial plate and the lip; 90 = L"),
+    "flight_lip_side": ("choice", "which way the lip points: leading = towards increasing "
+                                  "angle (the leading side under positive rotation)",
+                        ("leading", "trailing")),
+    "flight_thickness": ("length0", "0 = single-layer two-sided plates; > 0 = closed solids"),
+    "flight_start": ("length0", "x where the flights begin"),
+    "flight_end": ("length", "x where the flights end (default: length)"),
+    "flight_phase_deg": ("angle", "angle of the first flight, from +y towards +z"),
+    "incline_deg": ("angle", "axis tilted down by this along +x: axis = (cos a, 0, -sin a) "
+                             "before axis_direction; give the same axis to the rotate motion"),
+    "segments": ("count", "polygon sides of the shell (default: chord error < 1 % of radius, "
+                          "a multiple of flights)"),
+})
+def drum(*, radius, length, end_walls=True, end_hole_radius=0.0, include_shell=True,
+         flights=0, flight_height=None, flight_shape="straight", flight_lip=None,
+         flight_lip_angle_deg=90.0, flight_lip_side="leading", flight_thickness=0.0,
+         flight_start=0.0, flight_end=None, flight_phase_deg=0.0, incline_deg=0.0,
+         segments=None) -> TriMesh:
+    R, L = radius, length
+    if end_hole_radius >= R:
+        raise _Bad("end_hole_radius", f"{end_hole_radius:g} m must be smaller than the "
+                                      f"radius {R:g} m")
+    if not -45.0 < incline_deg < 45.0:
+        raise _Bad("incline_deg", f"{incline_deg:g} deg is not a drum incline (|a| < 45 deg)")
+    n = segments if segments is not None else default_segments(max(flights, 4))
+    if n < 3:
+        raise _Bad("segments", f"a polygon needs at least 3 sides, got {n}")
+    phase = math.radians(flight_phase_deg)
+    target = AXIAL_ASPECT * _chord(R, n)
+    parts = []
+    h = end_hole_radius
+    if include_shell:
+        prof = [(0.0, h), (0.0, R), (L, R), (L, h)] if end_walls else [(0.0, R), (L, R)]
+        parts.append(sh.revolve(prof, n, phase=phase, normals="right", target=target))
+    elif end_walls:
+        parts.append(sh.revolve([(0.0, h), (0.0, R)], n, phase=phase, target=target))
+        parts.append(sh.revolve([(L, R), (L, h)], n, phase=phase, target=target))
+    if flights > 0:
+        parts += _drum_flights(R, L, flights, flight_height, flight_shape, flight_lip,
+                               flight_lip_angle_deg, flight_lip_side, flight_thickness,
+                               flight_start, flight_end, phase, target)
+    if not parts:
+        raise _Bad("include_shell", "nothing to build: no shell, no end walls, no flights")
+    return sh.weld(TriMesh.concatenate(parts))      # incline_deg: applied by place()
+
+
+def _drum_flights(R, L, count, height, shape, lip, lip_angle_deg, lip_side, thickness,
+                  x0, x1, phase, target):
+    if height is None:
+        raise _Bad("flight_height", f"missing: {count} flights need flight_height")
+    if height >= R:
+        raise _Bad("flight_height", f"{height:g} m must be smaller than the radius {R:g} m")
+    x1 = L if x1 is None else x1
+    if x1 > L + 1e-12:
+        raise _Bad("flight_end", f"{x1:g} m is beyond the drum length {L:g} m")
+    if x1 <= x0:
+        raise _Bad("flight_start", f"flight_start {x0:g} m must be before flight_end {x1:g} m")
+    # cross-section in (radial, tangential) coordinates
+    section = [(R, 0.0), (R - height, 0.0)]
+    if shape == "L":
+        if lip is None:
+            raise _Bad("flight_lip", "missing: L-shaped flights need flight_lip (the foot length)")
+        a = math.radians(lip_angle_deg)
+        if not 0.0 < a < math.pi:
+            raise _Bad("flight_lip_angle_deg", f"{lip_angle_deg:g} deg: must be between 0 and "
+                                               "180 (90 = L)")
+        sign = 1.0 if lip_side == "leading" else -1.0
+        end = (R - height - lip * math.cos(a), sign * lip * math.sin(a))
+        r_end = math.hypot(*end)
+        if r_end >= R - 0.5 * thickness:
+            raise _Bad("flight_lip", f"the lip reaches r = {r_end:.4g} m, through the shell "
+                                     f"(radius {R:g} m); shorten it or raise flight_height")
+        section.append(end)
+    elif lip is not None:
+        raise _Bad("flight_lip", "a lip needs flight_shape = \"L\"")
+    if thickness > 0 and count > 1 and thickness >= _chord(R - height, count):
+        raise _Bad("flight_thickness", f"{thickness:g} m: thicker than the flight spacing")
+    sec = sh.subdivide_polyline(np.asarray(section), target)
+    xs = np.linspace(x0, x1, max(1, math.ceil((x1 - x0) / target - 1e-9)) + 1)
+    # 2-D normals of the section polyline (for thick flights), mitred at corners
+    seg = np.diff(sec, axis=0)
+    seg /= np.linalg.norm(seg, axis=1, keepdims=True)
+    seg_n = np.stack([-seg[:, 1], seg[:, 0]], axis=1)
+    vn = np.zeros_like(sec)
+    vn[:-1] += seg_n
+    vn[1:] += seg_n
+    vn /= np.linalg.norm(vn, axis=1, keepdims=True)
+    cosines = np.ones(len(sec))
+    for k in range(1, len(sec) - 1):
+        cosines[k] = max(0.2, float(vn[k] @ seg_n[k]))
+    vn /= cosines[:, None]
+    out = []
+    for k in range(count):
+        e_r, e_t = _frame(phase + 2.0 * math.pi * k / count)
+        p2 = sec[:, :1] * e_r + sec[:, 1:] * e_t                 # (m, 3), x = 0
+        grid = xs[:, None, None] * np.array([1.0, 0.0, 0.0]) + p2[None]   # (nx, m, 3)
+        if thickness > 0.0:
+            off = (vn[:, :1] * e_r + vn[:, 1:] * e_t) * thickness
+            out.append(sh.slab(grid, np.broadcast_to(off, grid.shape)))
+        else:
+            # dP/dx x dP/dsection = x x (-e_r) = -e_t: flip so the normal leads (+e_t)
+            out.append(sh.sheet(grid, two_sided=True, flip=True))
+    return out
+
+
+# ------------------------------------------------------------------------------ paddle shaft
+@_register("paddle_shaft", "a shaft with rows of flat paddles (pitched plates), as in a "
+                           "paddle cooler or mixer", {
+    "length": ("length", "shaft length along the axis"),
+    "shaft_radius": ("length", "shaft radius"),
+    "rows": ("count", "number of paddle rows along the shaft"),
+    "paddles_per_row": ("count", "paddles per row, evenly spaced round the shaft"),
+    "paddle_length": ("length", "radial length from the shaft surface to the tip (default: "
+                                "up to shell_radius - clearance, else 3 x shaft_radius)"),
+    "paddle_width": ("length", "width of the plate (default: half the row spacing)"),
+    "paddle_thickness": ("length0", "0 = single-layer two-sided plates; > 0 = closed boxes"),
+    "paddle_pitch_deg": ("angle", "angle of the paddle face to the axis: 0 = face contains "
+                                  "the axis (no conveying), > 0 conveys towards +x under "
+                                  "positive rotation"),
+    "stagger_deg": ("angle", "phase shift of each row relative to the previous one"),
+    "phase_deg": ("angle", "angle of the first paddle of the first row, from +y towards +z"),
+    "start": ("length0", "x of the first row's centre (default: the pattern is centred)"),
+    "row_spacing": ("length", "axial distance between rows (default: length / rows, or what "
+                              "fits after start)"),
+    "include_shaft": ("bool", "false: paddles only (to share a shaft with another mesh)"),
+    "shell_radius": ("length", "radius of the surrounding shell, to check the tip clearance"),
+    "clearance": ("length", "tip clearance for the default paddle_length (default: 5 % of "
+                            "shell_radius)"),
+    "segments": ("count", "polygon sides of the shaft (default: chord error < 1 %)"),
+})
+def paddle_shaft(*, length, shaft_radius, rows, paddles_per_row, paddle_length=None,
+                 paddle_width=None, paddle_thickness=0.0, paddle_pitch_deg=0.0, stagger_deg=0.0,
+                 phase_deg=0.0, start=None, row_spacing=None, include_shaft=True,
+                 shell_radius=None, clearance=None, segments=None) -> TriMesh:
+    L, rs = length, shaft_radius
+    if shell_radius is not None and shell_radius <= rs:
+        raise _Bad("shell_radius", f"{shell_radius:g} m must exceed shaft_radius {rs:g} m")
+    if clearance is not None and shell_radius is None:
+        raise _Bad("clearance", "needs shell_radius")
+    if paddle_length is None:
+        if shell_radius is not None:
+            gap = clearance if clearance is not None else 0.05 * shell_radius
+            paddle_length = shell_radius - gap - rs
+            if paddle_length <= 0:
+                raise _Bad("clearance", f"{gap:g} m leaves no room for paddles between the "
+                                        f"shaft ({rs:g} m) and the shell ({shell_radius:g} m)")
+        else:
+            paddle_length = 3.0 * rs
+    # row placement
+    if row_spacing is None:
+        if start is None:
+            row_spacing, start = L / rows, 0.5 * L / rows
+        else:
+            if start >= L:
+                raise _Bad("start", f"{start:g} m is beyond the shaft length {L:g} m")
+            row_spacing = (L - start) / (rows - 0.5)
+    elif start is None:
+        start = 0.5 * (L - (rows - 1) * row_spacing)
+    W = 0.5 * row_spacing if paddle_width is None else paddle_width
+    t = paddle_thickness
+    beta = math.radians(paddle_pitch_deg)
+    if not -90.0 <= paddle_pitch_deg <= 90.0:
+        raise _Bad("paddle_pitch_deg", f"{paddle_pitch_deg:g}: must be within [-90, 90]")
+    half_axial = 0.5 * (W * abs(math.cos(beta)) + t * abs(math.sin(beta)))
+    last = start + (rows - 1) * row_spacing
+    if start - half_axial < -1e-9 * L:
+        raise _Bad("start", f"the first row at x = {start:g} m reaches x = "
+                            f"{start - half_axial:.4g} m, off the shaft's start (x = 0)")
+    if last + half_axial > L * (1 + 1e-9):
+        raise _Bad("rows", f"{rows} rows {row_spacing:.4g} m apart from x = {start:.4g} m "
+                           f"reach x = {last + half_axial:.4g} m, beyond the shaft length "
+                           f"{L:g} m (fewer rows, a smaller row_spacing or start)")
+    tip = rs + paddle_length
+    corner = math.hypot(tip, 0.5 * W * abs(math.sin(beta)) + 0.5 * t * abs(math.cos(beta)))
+    if shell_radius is not None and corner >= shell_radius:
+        raise _Bad("paddle_length", f"the paddle tips reach r = {corner:.4g} m, not inside the "
+                                    f"shell (radius {shell_radius:g} m, gap to the shaft "
+                                    f"{shell_radius - rs:.4g} m)")
+    n = segments if segments is not None else default_segments(max(4, paddles_per_row))
+    parts = [_closed_shaft(L, rs, n)] if include_shaft else []
+    na = max(1, round(paddle_length / W))
+    a = np.linspace(0.0, paddle_length, na + 1)
+    b = np.array([-0.5 * W, 0.5 * W])
+    ex = np.array([1.0, 0.0, 0.0])
+    for i in range(rows):
+        xc = start + i * row_spacing
+        for j in range(paddles_per_row):
+            theta = math.radians(phase_deg + i * stagger_deg) + 2 * math.pi * j / paddles_per_row
+            e_r, e_t = _frame(theta)
+            w = math.cos(beta) * ex - math.sin(beta) * e_t
+            lead = math.cos(beta) * e_t + math.sin(beta) * ex       # = -(e_r x w)
+            grid = (xc * ex + (rs + a)[:, None, None] * e_r + b[None, :, None] * w)
+            if t > 0.0:
+                parts.append(sh.slab(grid, lead * t))
+            else:
+                # dP/da x dP/db = e_r x w = -lead: flip so the normal is the leading face
+                parts.append(sh.sheet(grid, two_sided=True, flip=True))
+    if not parts:
+        raise _Bad("include_shaft", "nothing to build")
+    return TriMesh.concatenate(parts)
+
+
+# ------------------------------------------------------------------------------ screw
+@_register("screw", "a helicoid screw flight (one or more starts) on a shaft; can share a "
+                    "shaft with paddles (include_shaft = false on one of them)", {
+    "length": ("length", "axial length of the flighted part (or give turns)"),
+    "shaft_radius": ("length", "shaft radius = inner radius of the flight"),
+    "outer_radius": ("length", "outer radius of the flight"),
+    "pitch": ("length", "axial advance per turn"),
+    "turns": ("factor", "number of turns (default: length / pitch)"),
+    "turns_direction": ("choice", "handedness of the helix; a right-hand flight turned in the "
+                                  "positive sense conveys towards -x", ("right", "left")),
+    "starts": ("count", "number of intertwined flights (multi-start screw)"),
+    "start": ("length0", "x where the flight begins"),
+    "phase_deg": ("angle", "angle where the flight begins, from +y towards +z"),
+    "flight_thickness": ("length0", "0 = single-layer two-sided sheet; > 0 = closed solid, "
+                                    "thickness along the axis"),
+    "include_shaft": ("bool", "false: the flight only (to share a shaft with another mesh)"),
+    "shaft_length": ("length", "shaft from x = 0 to this (default: start + length)"),
+    "shell_radius": ("length", "radius of the surrounding trough/shell, to check clearance"),
+    "segments_per_turn": ("count", "angular resolution (default: chord error < 1 % of "
+                                   "outer_radius)"),
+    "radial_segments": ("count", "radial resolution (default: near-square triangles)"),
+}, aliases={"handedness": "turns_direction"})
+def screw(*, length=None, shaft_radius, outer_radius, pitch, turns=None,
+          turns_direction="right", starts=1, start=0.0, phase_deg=0.0, flight_thickness=0.0,
+          include_shaft=True, shaft_length=None, shell_radius=None, segments_per_turn=None,
+          radial_segments=None) -> TriMesh:
+    rs, ro, p = shaft_radius, outer_radius, pitch
+    if ro <= rs:
+        raise _Bad("outer_radius", f"{ro:g} m must exceed shaft_radius {rs:g} m")
+    if shell_radius is not None and ro >= shell_radius:
+        raise _Bad("outer_radius", f"{ro:g} m: the flight does not fit in the shell "
+                                   f"(radius {shell_radius:g} m)")
+    if length is None and turns is None:
+        raise _Bad("length", "missing: give length (of the flighted part) or turns")
+    if length is None:
+        length = turns * p
+    elif turns is None:
+        turns = length / p
+    elif abs(turns * p - length) > 1e-6 * length:
+        raise _Bad("turns", f"{turns:g} turns of pitch {p:g} m make {turns * p:.6g} m, not "
+                            f"length = {length:g} m; give one of them")
+    if flight_thickness > 0 and flight_thickness >= p / starts:
+        raise _Bad("flight_thickness", f"{flight_thickness:g} m: not less than the distance "
+                                       f"between flights, {p / starts:.4g} m")
+    if shaft_length is None:
+        shaft_length = start + length
+    elif shaft_length < start + length - 1e-9:
+        raise _Bad("shaft_length", f"{shaft_length:g} m is shorter than the flighted part, "
+                                   f"which ends at x = {start + length:g} m")
+    spt = segments_per_turn if segments_per_turn is not None else default_segments(4)
+    n_theta = max(2, math.ceil(turns * spt - 1e-9))
+    arc = 2.0 * math.pi * ro / spt
+    nr = radial_segments if radial_segments is not None else \
+        max(1, math.ceil((ro - rs) / math.hypot(arc, p / spt) - 1e-9))
+    s = 1.0 if turns_direction == "right" else -1.0
+    u = np.linspace(0.0, 2.0 * math.pi * turns, n_theta + 1)        # helix parameter
+    r = np.linspace(rs, ro, nr + 1)
+    parts = [_closed_shaft(shaft_length, rs, default_segments(4))] if include_shaft else []
+    for k in range(starts):
+        phi = math.radians(phase_deg) + s * u + 2.0 * math.pi * k / starts
+        x = start + p * u / (2.0 * math.pi)
+        grid = np.stack([np.broadcast_to(x[:, None], (len(u), len(r))),
+                         r[None, :] * np.cos(phi)[:, None],
+                         r[None, :] * np.sin(phi)[:, None]], axis=2)
+        if flight_thickness > 0.0:
+            parts.append(sh.slab(grid, np.array([flight_thickness, 0.0, 0.0])))
+        else:
+            # dP/du x dP/dr: the face that pushes under positive rotation (-x for right-hand)
+            parts.append(sh.sheet(grid, two_sided=True))
+    return TriMesh.concatenate(parts)
+
+
+def helicoid_area(inner_radius: float, outer_radius: float, pitch: float,
+                  turns: float = 1.0) -> float:
+    """Analytic area of a helicoid flight, m^2: turns x 2 pi x [F(r)] from inner to outer,
+    F(r) = (r sqrt(r^2 + c^2) + c^2 ln(r + sqrt(r^2 + c^2))) / 2, c = pitch / (2 pi)."""
+    c = pitch / (2.0 * math.pi)
+
+    def F(r):
+        q = math.sqrt(r * r + c * c)
+        return 0.5 * (r * q + c * c * math.log(r + q))
+    return turns * 2.0 * math.pi * (F(outer_radius) - F(inner_radius))
+
+
+# ------------------------------------------------------------------------------ hopper
+@_register("hopper", "a conical or wedge (plane-flow) hopper, open at the orifice and the "
+                     "top, normals inward; the axis runs from the orifice (x = 0) up, so give "
+                     "axis_direction = [0, 0, 1] to stand it upright", {
+    "kind": ("choice", "shape", ("conical", "wedge")),
+    "height": ("length", "axial height of the converging section"),
+    "top_radius": ("length", "conical: radius at the top"),
+    "orifice_radius": ("length", "conical: radius of the orifice"),
+    "top_width": ("length", "wedge: width at the top (across y)"),
+    "orifice_width": ("length", "wedge: width of the slot orifice"),
+    "depth": ("length", "wedge: depth of the slot (along z, the flat end walls)"),
+    "spout_length": ("length0", "straight section below the converging one, x from 0"),
+    "bin_height": ("length0", "straight section above the converging one"),
+    "segments": ("count", "conical: polygon sides (default: chord error < 1 %)"),
+})
+def hopper(*, kind="conical", height, top_radius=None, orifice_radius=None, top_width=None,
+           orifice_width=None, depth=None, spout_length=0.0, bin_height=0.0,
+           segments=None) -> TriMesh:
+    needs = {"conical": ("top_radius", "orifice_radius"),
+             "wedge": ("top_width", "orifice_width", "depth")}
+    given = {"top_radius": top_radius, "orifice_radius": orifice_radius, "top_width": top_width,
+             "orifice_width": orifice_width, "depth": depth}
+    other = "wedge" if kind == "conical" else "conical"
+    for name in needs[other]:
+        if given[name] is not None and name not in needs[kind]:
+            raise _Bad(name, f"is for kind = \"{other}\"; a {kind} hopper takes "
+                             f"{', '.join(needs[kind])}")
+    for name in needs[kind]:
+        if given[name] is None:
+            raise _Bad(name, f"missing: a {kind} hopper needs {', '.join(needs[kind])}")
+    top = top_radius if kind == "conical" else 0.5 * top_width
+    ori = orifice_radius if kind == "conical" else 0.5 * orifice_width
+    if ori >= top:
+        name = "orifice_radius" if kind == "conical" else "orifice_width"
+        raise _Bad(name, f"the orifice must be smaller than the top "
+                         f"({2 * ori if kind == 'wedge' else ori:g} m vs "
+                         f"{2 * top if kind == 'wedge' else top:g} m)")
+    x1, x2 = spout_length, spout_length + height
+    prof = [(x1, ori), (x2, top)]
+    if spout_length > 0:
+        prof.insert(0, (0.0, ori))
+    if bin_height > 0:
+        prof.append((x2 + bin_height, top))
+    prof = np.asarray(prof)
+    if kind == "conical":
+        n = segments if segments is not None else default_segments(4)
+        return sh.revolve(prof, n, normals="right", target=_chord(top, n))
+    # wedge: half-width w(x) across y, depth along z
+    target = min(depth, 2 * top) / 2
+    pts = sh.subdivide_polyline(prof, target)
+    xs, ws = pts[:, 0], pts[:, 1]
+    nz = max(1, math.ceil(depth / target - 1e-9))
+    zs = np.linspace(-0.5 * depth, 0.5 * depth, nz + 1)
+    parts = []
+    for side in (-1.0, 1.0):
+        grid = np.stack([np.broadcast_to(xs[:, None], (len(xs), len(zs))),
+                         side * np.broadcast_to(ws[:, None], (len(xs), len(zs))),
+                         np.broadcast_to(zs[None, :], (len(xs), len(zs)))], axis=2)
+        parts.append(sh.sheet_facing(grid, [0.0, -side, 0.0]))
+    ny = max(1, math.ceil(2 * top / target - 1e-9))
+    frac = np.linspace(-1.0, 1.0, ny + 1)
+    for side in (-1.0, 1.0):
+        grid = np.stack([np.broadcast_to(xs[:, None], (len(xs), len(frac))),
+                         ws[:, None] * frac[None, :],
+                         np.full((len(xs), len(frac)), side * 0.5 * depth)], axis=2)
+        parts.append(sh.sheet_facing(grid, [0.0, 0.0, -side]))
+    return sh.weld(TriMesh.concatenate(parts))
+
+
+# ------------------------------------------------------------------------------ chute
+@_register("chute", "an open chute: a floor along +x (normal up) with optional side walls "
+                    "(normals inward), inclined downwards along +x", {
+    "length": ("length", "length of the floor along the flow direction"),
+    "width": ("length", "width of the floor (across y)"),
+    "incline_deg": ("angle", "the floor descends by this angle along +x"),
+    "side_walls": ("bool", "walls along both edges"),
+    "wall_height": ("length", "height of the side walls (default: half the width)"),
+    "back_wall": ("bool", "a wall across the upstream end (x = 0)"),
+})
+def chute(*, length, width, incline_deg=0.0, side_walls=True, wall_height=None,
+          back_wall=False) -> TriMesh:
+    if not -90.0 < incline_deg < 90.0:
+        raise _Bad("incline_deg", f"{incline_deg:g}: must be between -90 and 90 deg")
+    h = 0.5 * width if wall_height is None else wall_height
+    if not (side_walls or back_wall) and wall_height is not None:
+        raise _Bad("wall_height", "there are no walls (side_walls = false)")
+    target = width / 2
+    nx = max(1, math.ceil(length / target - 1e-9))
+    ny = max(1, math.ceil(width / target - 1e-9))
+    nz = max(1, math.ceil(h / target - 1e-9))
+    xs = np.linspace(0.0, length, nx + 1)
+    ys = np.linspace(-0.5 * width, 0.5 * width, ny + 1)
+    zs = np.linspace(0.0, h, nz + 1)
+
+    def grid(a, b, f):
+        A, B = np.meshgrid(a, b, indexing="ij")
+        return np.stack(f(A, B), axis=2)
+    parts = [sh.sheet_facing(grid(xs, ys, lambda x, y: (x, y, 0 * x)), [0, 0, 1])]
+    if side_walls:
+        for side in (-1.0, 1.0):
+            g = grid(xs, zs, lambda x, z: (x, np.full_like(x, side * 0.5 * width), z))
+            parts.append(sh.sheet_facing(g, [0, -side, 0]))
+    if back_wall:
+        parts.append(sh.sheet_facing(grid(ys, zs, lambda y, z: (0 * y, y, z)), [1, 0, 0]))
+    return sh.weld(TriMesh.concatenate(parts))      # incline_deg: applied by place()
+
+
+# ------------------------------------------------------------------------------ file
+@_register("file", "import an STL/OBJ/PLY (anything trimesh reads); scale and units "
+                   "multiply; the winding is kept (normals: STL convention, out of the solid)", {
+    "file": ("path", "path, relative to the scene file's folder"),
+    "scale": ("factor", "multiplies the coordinates (after units)"),
+    "units": ("choice", "unit of the file's coordinates", ("m", "cm", "mm", "in", "ft", "um")),
+    "repair": ("bool", "merge duplicate vertices and drop degenerate/duplicate triangles "
+                       "instead of failing"),
+    "flip_normals": ("bool", "reverse every triangle (e.g. a container exported as a solid)"),
+    "two_sided": ("bool", "mark the faces as two-sided plates (default: true for an open "
+                          "surface, false for a watertight solid)"),
+})
+def file(*, file, scale=1.0, units="m", repair=False, flip_normals=False, two_sided=None,
+         base_dir=None) -> TriMesh:
+    from .io import read_mesh
+    return read_mesh(file, scale=scale, units=units, repair=repair, flip_normals=flip_normals,
+                     two_sided=two_sided, base_dir=base_dir)

@@ -1,0 +1,604 @@
+"""Rigid triangle-mesh bodies: prescribed motion, triangle binning, particle-triangle contact
+lists with history, and the loads (force, torque about the axis point) summed from contacts.
+
+Host side (plain numpy): :class:`BodyKinematics` knows each body's rotation angle and offset at
+any time from its speed schedule, and bounds how far any vertex has moved since the triangles
+were last binned. Device side (:class:`MeshContacts`): reference triangles (their vertices at
+t = 0) and one frame (rotation, offset) per body, computed on the device from the schedules
+each step, so the triangles themselves never need rewriting; triangles binned into the cell
+grid (re-binned when a body has moved half the skin); per particle a list of candidate
+triangles within r + skin (rebuilt with the particle neighbour list), carrying the tangential
+history by triangle id.
+
+De-duplication (PHYSICS.md: one contact per flat or convex surface): a particle's overlapping
+triangles of one body are taken deepest first; a further one is dropped when its normal is
+within 30 degrees of an accepted one or its closest point does not lie in front of the
+accepted contact's plane (a neighbouring triangle of the same flat or convex surface,
+touched at its edge or vertex). A concave corner (a flight meeting the shell) keeps both
+faces. When a contact moves on to a neighbouring triangle, it takes the tangential history
+of the contact it replaces.
+"""
+
+import math
+
+import numpy as np
+
+MAX_SCHEDULE = 64      # speed schedule points per body on the device
+SAME_SURFACE_COS = math.cos(math.radians(30.0))
+
+
+def rotation_matrix(axis, angle: float) -> np.ndarray:
+    """Rodrigues rotation by ``angle`` rad about the unit ``axis``."""
+    x, y, z = axis
+    c, s = math.cos(angle), math.sin(angle)
+    k = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]], float)
+    return np.eye(3) + s * k + (1 - c) * (k @ k)
+
+
+class BodyKinematics:
+    """Angles and offsets of every body over time (host side, float64)."""
+
+    def __init__(self, bodies):
+        self.bodies = bodies
+        self.names = [b.name for b in bodies]
+        # schedule rows: (start time s, speed rad/s, angle at start rad)
+        self.schedules: list[list[tuple[float, float, float]]] = []
+        self.reach = np.zeros(len(bodies))
+        for k, b in enumerate(bodies):
+            rows = []
+            angle = 0.0
+            points = b.motion.speed.points if b.motion.speed else ((0.0, 0.0),)
+            for n, (t, w) in enumerate(points):
+                if n:
+                    t_prev, w_prev, a_prev = rows[-1]
+                    angle = a_prev + w_prev * (t - t_prev)
+                rows.append((float(t), float(w), angle))
+            self.schedules.append(rows)
+            axis_point = np.asarray(b.motion.axis_point, float)
+            axis = np.asarray(b.motion.axis_direction, float)
+            rel = b.vertices - axis_point
+            radial = rel - np.outer(rel @ axis, axis)
+            self.reach[k] = float(np.max(np.linalg.norm(radial, axis=1))) if len(rel) else 0.0
+
+    def speed(self, k: int, time: float) -> float:
+        """Angular speed of body k at ``time``, rad/s."""
+        w = self.schedules[k][0][1]
+        for t, speed, _ in self.schedules[k]:
+            if time >= t:
+                w = speed
+        return w
+
+    def angle(self, k: int, time: float) -> float:
+        """Rotation angle of body k at ``time``, rad."""
+        row = self.schedules[k][0]
+        for r in self.schedules[k]:
+            if time >= r[0]:
+                row = r
+        return row[2] + row[1] * (time - row[0])
+
+    def set_speed(self, k: int, time: float, speed: float):
+        """From ``time`` on, body k turns at ``speed`` rad/s (later scheduled points dropped)."""
+        rows = [r for r in self.schedules[k] if r[0] < time]
+        rows.append((time, float(speed), self.angle(k, time)))
+        if len(rows) > MAX_SCHEDULE:
+            rows = rows[-MAX_SCHEDULE:]
+        self.schedules[k] = rows
+
+    def surface_speed(self, k: int, time: float) -> float:
+        """Largest speed of any point of body k at ``time``, m/s."""
+        v = np.linalg.norm(self.bodies[k].motion.velocity)
+        return abs(self.speed(k, time)) * self.reach[k] + float(v)
+
+    def max_surface_speed(self) -> float:
+        """Largest surface speed of any body over its whole schedule, m/s."""
+        best = 0.0
+        for k, rows in enumerate(self.schedules):
+            w = max(abs(r[1]) for r in rows)
+            best = max(best, w * self.reach[k] + float(np.linalg.norm(self.bodies[k].motion.velocity)))
+        return best
+
+    def displacement(self, k: int, t0: float, t1: float) -> float:
+        """Upper bound of how far any vertex of body k moved between t0 and t1, m."""
+        turned = abs(self.angle(k, t1) - self.angle(k, t0))
+        chord = 2.0 * self.reach[k] * math.sin(min(turned, math.pi) / 2.0)
+        return chord + float(np.linalg.norm(self.bodies[k].motion.velocity)) * abs(t1 - t0)
+
+    def schedule_arrays(self):  # noqa: D102
+        """(time, speed, angle, count) arrays of shape (B, MAX_SCHEDULE) for the device."""
+        b = max(len(self.bodies), 1)
+        times = np.zeros((b, MAX_SCHEDULE))
+        speeds = np.zeros((b, MAX_SCHEDULE))
+        angles = np.zeros((b, MAX_SCHEDULE))
+        counts = np.zeros(b, np.int32)
+        for k, rows in enumerate(self.schedules):
+            counts[k] = len(rows)
+            for n, (t, w, a) in enumerate(rows):
+                times[k, n], speeds[k, n], angles[k, n] = t, w, a
+        return times, speeds, angles, counts
+
+
+def triangle_arrays(bodies):
+    """Reference triangles of all bodies: (T, 3, 3) vertices at t = 0 and (T,) body index."""
+    tris, owner = [], []
+    for k, b in enumerate(bodies):
+        tris.append(b.vertices[b.faces])
+        owner.append(np.full(len(b.faces), k, np.int32))
+    if not tris:
+        return np.zeros((0, 3, 3)), np.zeros(0, np.int32)
+    return np.concatenate(tris), np.concatenate(owner)
+
+
+# ---------------------------------------------------------------------------- device side
+import taichi as ti  # noqa: E402  (the host part above does not need Taichi)
+
+from .effects.hertz_mindlin import contact_force  # noqa: E402
+from .effects.mesh_contact import REGION_FACE, closest_point_on_triangle  # noqa: E402
+from .state import FieldTree  # noqa: E402
+
+
+@ti.data_oriented
+class MeshContacts:
+    """Device state and kernels of the particle-triangle contacts of one simulation."""
+
+    def __init__(self, engine, kinematics: BodyKinematics):
+        self.e = engine
+        self.kin = kinematics
+        bodies = kinematics.bodies
+        real = engine.real
+        s = engine.state
+        tris, owner = triangle_arrays(bodies)
+        self.n_triangles = len(tris)
+        self.n_bodies = len(bodies)
+        t = self.tree = engine.new_tree()
+        nt, nb, ncell = max(self.n_triangles, 1), max(self.n_bodies, 1), engine.grid.n_cells
+        self.tri_a = t.add("tri_a", real, nt, vector=True)
+        self.tri_b = t.add("tri_b", real, nt, vector=True)
+        self.tri_c = t.add("tri_c", real, nt, vector=True)
+        self.tri_body = t.add("tri_body", ti.i32, nt)
+        self.sched_time = t.add("sched_time", real, (nb, MAX_SCHEDULE))
+        self.sched_speed = t.add("sched_speed", real, (nb, MAX_SCHEDULE))
+        self.sched_angle = t.add("sched_angle", real, (nb, MAX_SCHEDULE))
+        self.sched_count = t.add("sched_count", ti.i32, nb)
+        self.axis_point = t.add("axis_point", real, nb, vector=True)
+        self.axis_direction = t.add("axis_direction", real, nb, vector=True)
+        self.body_velocity = t.add("body_velocity", real, nb, vector=True)
+        self.body_material = t.add("body_material", ti.i32, nb)
+        # the frame of each body now: x_world = R (x_ref - axis_point) + axis_point + offset
+        self.rotation = ti.Matrix.field(3, 3, real)
+        t._builder.dense(ti.i, nb).place(self.rotation)
+        self.offset = t.add("offset", real, nb, vector=True)
+        self.angular_velocity = t.add("angular_velocity", real, nb, vector=True)
+        # loads summed from the contacts over the current output interval
+        self.force_sum = t.add("force_sum", real, nb, vector=True)
+        self.torque_sum = t.add("torque_sum", real, nb, vector=True)
+        self.tri_cell_count = t.add("tri_cell_count", ti.i32, ncell)
+        self.tri_cell_start = t.add("tri_cell_start", ti.i32, ncell + 1)
+        self.tri_cell_fill = t.add("tri_cell_fill", ti.i32, ncell)
+        self.mesh_start = t.add("mesh_start", ti.i32, s.capacity + 1)
+        self.mesh_count = t.add("mesh_count", ti.i32, s.capacity)
+        self.old_start_by_id = t.add("old_mesh_start_by_id", ti.i32, s.capacity)
+        self.old_count_by_id = t.add("old_mesh_count_by_id", ti.i32, s.capacity)
+        t.finalize()
+        if self.n_triangles:
+            self.tri_a.from_numpy(tris[:, 0].astype(self._np_real()))
+            self.tri_b.from_numpy(tris[:, 1].astype(self._np_real()))
+            self.tri_c.from_numpy(tris[:, 2].astype(self._np_real()))
+            self.tri_body.from_numpy(owner)
+        ap = np.zeros((nb, 3)); ad = np.zeros((nb, 3)); bv = np.zeros((nb, 3))
+        mat = np.zeros(nb, np.int32)
+        for k, b in enumerate(bodies):
+            ap[k], ad[k], bv[k] = b.motion.axis_point, b.motion.axis_direction, b.motion.velocity
+            mat[k] = engine.tables.index(b.material)
+        self.axis_point.from_numpy(ap.astype(self._np_real()))
+        self.axis_direction.from_numpy(ad.astype(self._np_real()))
+        self.body_velocity.from_numpy(bv.astype(self._np_real()))
+        self.body_material.from_numpy(mat)
+        self.upload_schedules()
+        self.items_tree = None
+        self.entries_tree = None
+        self.scratch_tree = None
+        self._alloc_items(max(4 * self.n_triangles, 1024))
+        self._alloc_scratch(16)
+        self._alloc_entries(max(2 * s.capacity // 8, 1024))
+        self.expand = engine.max_radius + engine.skin
+        self.binned_time = 0.0
+        self.interval_steps = 0
+        self._compile_static_kernels()
+
+    def _np_real(self):
+        return np.float64 if self.e.real == ti.f64 else np.float32
+
+    def upload_schedules(self):
+        times, speeds, angles, counts = self.kin.schedule_arrays()
+        self.sched_time.from_numpy(times.astype(self._np_real()))
+        self.sched_speed.from_numpy(speeds.astype(self._np_real()))
+        self.sched_angle.from_numpy(angles.astype(self._np_real()))
+        self.sched_count.from_numpy(counts)
+
+    # --------------------------------------------------------------- allocation
+    def _alloc_items(self, capacity):
+        if self.items_tree is not None:
+            self.items_tree.destroy()
+        self.items_capacity = capacity
+        t = self.items_tree = self.e.new_tree()
+        self.tri_cell_items = t.add("tri_cell_items", ti.i32, capacity)
+        t.finalize()
+
+    def _alloc_scratch(self, width):
+        if self.scratch_tree is not None:
+            self.scratch_tree.destroy()
+        self.scratch_width = width
+        t = self.scratch_tree = self.e.new_tree()
+        self.scratch = t.add("mesh_scratch", ti.i32, (self.e.state.capacity, width))
+        t.finalize()
+
+    def _alloc_entries(self, capacity, keep_old=None):
+        old = None
+        if self.entries_tree is not None:
+            old = (self.old_tri.to_numpy(), self.old_history.to_numpy(), self.old_contact.to_numpy(),
+                   self.old_rolling_history.to_numpy() if self.old_rolling_history is not None else None)
+            self.entries_tree.destroy()
+        self.entries_capacity = capacity
+        real = self.e.real
+        t = self.entries_tree = self.e.new_tree()
+        self.mesh_tri = t.add("mesh_tri", ti.i32, capacity)
+        self.mesh_history = t.add("mesh_history", real, capacity, vector=True)
+        self.mesh_contact = t.add("mesh_contact", ti.u8, capacity)
+        self.mesh_status = t.add("mesh_status", ti.u8, capacity)
+        self.mesh_overlap = t.add("mesh_overlap", real, capacity)
+        self.mesh_normal = t.add("mesh_normal", real, capacity, vector=True)
+        self.mesh_point = t.add("mesh_point", real, capacity, vector=True)
+        self.old_tri = t.add("old_mesh_tri", ti.i32, capacity)
+        self.old_history = t.add("old_mesh_history", real, capacity, vector=True)
+        self.old_contact = t.add("old_mesh_contact", ti.u8, capacity)
+        self.rolling_history = self.old_rolling_history = None
+        if self.e.rolling_epsd:
+            self.rolling_history = t.add("mesh_rolling_history", real, capacity, vector=True)
+            self.old_rolling_history = t.add("old_mesh_rolling_history", real, capacity, vector=True)
+        t.finalize()
+        if old is not None:
+            from .stepper import _pad
+            self.old_tri.from_numpy(_pad(old[0], capacity))
+            self.old_history.from_numpy(_pad(old[1], capacity))
+            self.old_contact.from_numpy(_pad(old[2], capacity))
+            if old[3] is not None:
+                self.old_rolling_history.from_numpy(_pad(old[3], capacity))
+
+    # --------------------------------------------------------------- kernels
+    def _compile_static_kernels(self):
+        m = self
+        nb = self.n_bodies
+
+        @ti.func
+        def frame_of(b, time):
+            """Rotation matrix, offset and angular velocity of body b at ``time``."""
+            count = m.sched_count[b]
+            row = 0
+            for k in range(count):
+                if time >= m.sched_time[b, k]:
+                    row = k
+            speed = m.sched_speed[b, row]
+            angle = m.sched_angle[b, row] + speed * (time - m.sched_time[b, row])
+            axis = m.axis_direction[b]
+            c, s_ = ti.cos(angle), ti.sin(angle)
+            k_ = ti.Matrix([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
+                            [-axis[1], axis[0], 0.0]])
+            rot = ti.Matrix.identity(float, 3) + s_ * k_ + (1.0 - c) * (k_ @ k_)
+            return rot, m.body_velocity[b] * time, speed * axis
+
+        @ti.kernel
+        def update_frames(time: self.e.real):
+            ti.loop_config(serialize=True)
+            for b in range(nb):
+                rot, off, omega = frame_of(b, time)
+                m.rotation[b] = rot
+                m.offset[b] = off
+                m.angular_velocity[b] = omega
+
+        self._update_frames = update_frames
+        self._compile_binning()
+        self._compile_rows()
+
+    @ti.func
+    def world_triangle(self, t):
+        b = self.tri_body[t]
+        rot = self.rotation[b]
+        p = self.axis_point[b]
+        shift = p + self.offset[b]
+        return (rot @ (self.tri_a[t] - p) + shift, rot @ (self.tri_b[t] - p) + shift,
+                rot @ (self.tri_c[t] - p) + shift)
+
+    def _compile_binning(self):
+        m = self
+        g = self.e.grid
+        lo = ti.Vector(list(g.lo))
+        inv_cell = ti.Vector([1.0 / c for c in g.cell_size])
+        cell = ti.Vector(list(g.cell_size))
+        dims = ti.Vector(list(g.dims))
+        n_cells = g.n_cells
+        nt = self.n_triangles
+        expand = self.e.max_radius + self.e.skin
+        half_diagonal = 0.5 * float(np.linalg.norm(g.cell_size))
+        items = self.tri_cell_items
+
+        @ti.func
+        def visit_cells(t, fill: ti.template()):
+            a, b, c = m.world_triangle(t)
+            normal = (b - a).cross(c - a).normalized()
+            lo_c = ti.cast(ti.floor((ti.min(a, b, c) - expand - lo) * inv_cell), ti.i32)
+            hi_c = ti.cast(ti.floor((ti.max(a, b, c) + expand - lo) * inv_cell), ti.i32)
+            lo_c = ti.max(ti.min(lo_c, dims - 1), 0)
+            hi_c = ti.max(ti.min(hi_c, dims - 1), 0)
+            for cx in range(lo_c[0], hi_c[0] + 1):
+                for cy in range(lo_c[1], hi_c[1] + 1):
+                    for cz in range(lo_c[2], hi_c[2] + 1):
+                        centre = lo + (ti.Vector([cx, cy, cz]) + 0.5) * cell
+                        # a cell far from the triangle's plane cannot hold a particle near it
+                        if ti.abs((centre - a).dot(normal)) <= half_diagonal + expand:
+                            cid = (cx * dims[1] + cy) * dims[2] + cz
+                            if ti.static(fill):
+                                slot = m.tri_cell_start[cid] + ti.atomic_add(m.tri_cell_fill[cid], 1)
+                                items[slot] = t
+                            else:
+                                ti.atomic_add(m.tri_cell_count[cid], 1)
+
+        @ti.kernel
+        def count_bins() -> ti.i32:
+            for c in range(n_cells):
+                m.tri_cell_count[c] = 0
+                m.tri_cell_fill[c] = 0
+            for t in range(nt):
+                visit_cells(t, False)
+            ti.loop_config(serialize=True)
+            for c in range(n_cells + 1):
+                if c == 0:
+                    m.tri_cell_start[0] = 0
+                else:
+                    m.tri_cell_start[c] = m.tri_cell_start[c - 1] + m.tri_cell_count[c - 1]
+            return m.tri_cell_start[n_cells]
+
+        @ti.kernel
+        def fill_bins():
+            for t in range(nt):
+                visit_cells(t, True)
+
+        self._count_bins, self._fill_bins = count_bins, fill_bins
+
+    def _compile_rows(self):
+        m = self
+        s = self.e.state
+        epsd = self.rolling_history is not None
+        skin = self.e.skin
+        width = self.scratch_width
+        scratch = self.scratch
+
+        @ti.kernel
+        def save_rows(n: ti.i32):
+            for i in range(n):
+                pid = s.particle_id[i]
+                m.old_start_by_id[pid] = m.mesh_start[i]
+                m.old_count_by_id[pid] = m.mesh_count[i]
+                for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
+                    m.old_tri[k] = m.mesh_tri[k]
+                    m.old_history[k] = m.mesh_history[k]
+                    m.old_contact[k] = m.mesh_contact[k]
+                    if ti.static(epsd):
+                        m.old_rolling_history[k] = m.rolling_history[k]
+
+        @ti.kernel
+        def find_candidates(n: ti.i32) -> ti.i32:
+            for i in range(n):
+                c = s.cell[i]
+                xi = s.position[i]
+                reach = s.radius[i] + skin
+                count = 0
+                for slot in range(m.tri_cell_start[c], m.tri_cell_start[c + 1]):
+                    t = m.tri_cell_items[slot]
+                    a, b, cc = m.world_triangle(t)
+                    q, region = closest_point_on_triangle(xi, a, b, cc)
+                    d = xi - q
+                    if d.dot(d) < reach * reach:
+                        if count < width:
+                            scratch[i, count] = t
+                        count += 1
+                m.mesh_count[i] = count
+            longest = 0
+            for i in range(n):
+                ti.atomic_max(longest, m.mesh_count[i])
+            ti.loop_config(serialize=True)
+            for i in range(n + 1):
+                if i == 0:
+                    m.mesh_start[0] = 0
+                else:
+                    m.mesh_start[i] = m.mesh_start[i - 1] + m.mesh_count[i - 1]
+            return longest
+
+        self._save_rows, self._find_candidates = save_rows, find_candidates
+        self._compile_compact()
+
+    def _compile_compact(self):
+        m = self
+        s = self.e.state
+        epsd = self.rolling_history is not None
+        scratch = self.scratch
+
+        @ti.kernel
+        def compact_and_carry(n: ti.i32):
+            for i in range(n):
+                pid = s.particle_id[i]
+                old_start = m.old_start_by_id[pid]
+                old_count = m.old_count_by_id[pid]
+                for c in range(m.mesh_count[i]):
+                    k = m.mesh_start[i] + c
+                    t = scratch[i, c]
+                    m.mesh_tri[k] = t
+                    history = ti.Vector([0.0, 0.0, 0.0])
+                    rolling_history = ti.Vector([0.0, 0.0, 0.0])
+                    touching = ti.u8(0)
+                    for o in range(old_start, old_start + old_count):
+                        if m.old_tri[o] == t:
+                            history = m.old_history[o]
+                            touching = m.old_contact[o]
+                            if ti.static(epsd):
+                                rolling_history = m.old_rolling_history[o]
+                            break
+                    m.mesh_history[k] = history
+                    m.mesh_contact[k] = touching
+                    if ti.static(epsd):
+                        m.rolling_history[k] = rolling_history
+
+        self._compact_and_carry = compact_and_carry
+
+    # --------------------------------------------------------------- contact law
+    def make_particle_contacts(self, rolling_torque):
+        """ti.func (i, position, velocity, angular velocity, radius, mass, material, dt,
+        record) -> (force N, torque N m) of all mesh contacts of particle i; adds the
+        reactions to the bodies' load sums."""
+        m = self
+        e = self.e
+        E, G, Z, MU = e.youngs_eff, e.shear_eff, e.damping, e.friction
+        MUR, RM, RD = e.rolling_friction, e.rolling_model, e.rolling_damping
+        cdt, epsd = e.rolling_cdt, e.rolling_epsd
+        same_surface_cos = SAME_SURFACE_COS
+        from .effects import rolling
+
+        @ti.func
+        def particle_contacts(i, xi, vi, wi, ri, mass_i, inverse_inertia_i, ai, mi, dt):
+            force = ti.Vector([0.0, 0.0, 0.0])
+            torque = ti.Vector([0.0, 0.0, 0.0])
+            start = m.mesh_start[i]
+            end = start + m.mesh_count[i]
+            # geometry of every candidate triangle
+            for k in range(start, end):
+                a, b, c = m.world_triangle(m.mesh_tri[k])
+                q, region = closest_point_on_triangle(xi, a, b, c)
+                d = xi - q
+                dist_sq = d.dot(d)
+                m.mesh_status[k] = ti.u8(2)
+                if dist_sq < ri * ri and dist_sq > 0.0:
+                    dist = ti.sqrt(dist_sq)
+                    m.mesh_overlap[k] = ri - dist
+                    m.mesh_normal[k] = d / dist
+                    m.mesh_point[k] = q
+                    m.mesh_status[k] = ti.u8(0)
+            # deepest first; drop neighbours of the same flat or convex surface
+            for _ in range(end - start):
+                best = -1
+                best_overlap = 0.0
+                for k in range(start, end):
+                    if m.mesh_status[k] == 0 and m.mesh_overlap[k] > best_overlap:
+                        best = k
+                        best_overlap = m.mesh_overlap[k]
+                if best < 0:
+                    break
+                m.mesh_status[best] = ti.u8(1)
+                body = m.tri_body[m.mesh_tri[best]]
+                n_best = m.mesh_normal[best]
+                for k in range(start, end):
+                    if m.mesh_status[k] == 0 and m.tri_body[m.mesh_tri[k]] == body:
+                        in_front = (m.mesh_point[k] - m.mesh_point[best]).dot(n_best)
+                        if m.mesh_normal[k].dot(n_best) > same_surface_cos or in_front <= 1e-3 * ri:
+                            m.mesh_status[k] = ti.u8(2)
+            # forces of the accepted contacts
+            for k in range(start, end):
+                if m.mesh_status[k] == 1:
+                    body = m.tri_body[m.mesh_tri[k]]
+                    history = m.mesh_history[k]
+                    if m.mesh_contact[k] == 0:
+                        # a contact moving on to a neighbouring triangle keeps its history
+                        for o in range(start, end):
+                            if (o != k and m.mesh_contact[o] != 0 and m.mesh_status[o] != 1
+                                    and m.tri_body[m.mesh_tri[o]] == body):
+                                history = m.mesh_history[o]
+                                m.mesh_contact[o] = ti.u8(0)
+                                m.mesh_history[o] = ti.Vector([0.0, 0.0, 0.0])
+                                break
+                    normal = m.mesh_normal[k]
+                    overlap = m.mesh_overlap[k]
+                    arm = ri - 0.5 * overlap
+                    contact_point = xi - arm * normal
+                    lever_body = contact_point - (m.axis_point[body] + m.offset[body])
+                    wall_velocity = m.body_velocity[body] + m.angular_velocity[body].cross(lever_body)
+                    v_rel = vi - wall_velocity - arm * wi.cross(normal)
+                    mb = m.body_material[body]
+                    fn, ft, history, sn = contact_force(
+                        normal, overlap, ri, mass_i, v_rel, ai.dot(normal), history,
+                        E[mi, mb], G[mi, mb], Z[mi, mb], MU[mi, mb], dt)
+                    contact = fn * normal + ft
+                    contact_torque = -arm * normal.cross(ft)
+                    body_torque = -lever_body.cross(contact)
+                    if ti.static(cdt or epsd):
+                        if MUR[mi, mb] > 0.0:
+                            prev = ti.Vector([0.0, 0.0, 0.0])
+                            if ti.static(epsd):
+                                prev = m.rolling_history[k]
+                            tr, rolling_history = rolling_torque(
+                                RM[mi, mb], wi - m.angular_velocity[body], normal, fn, sn, ri,
+                                MUR[mi, mb], RD[mi, mb], 1.0 / inverse_inertia_i,
+                                1.0 / rolling.rolling_inverse_inertia(1.0 / mass_i, inverse_inertia_i, ri),
+                                prev, dt)
+                            contact_torque += tr
+                            body_torque -= tr
+                            if ti.static(epsd):
+                                m.rolling_history[k] = rolling_history
+                    force += contact
+                    torque += contact_torque
+                    m.force_sum[body] -= contact
+                    m.torque_sum[body] += body_torque
+                    m.mesh_history[k] = history
+                    m.mesh_contact[k] = ti.u8(1)
+                elif m.mesh_contact[k] != 0:
+                    m.mesh_contact[k] = ti.u8(0)
+                    m.mesh_history[k] = ti.Vector([0.0, 0.0, 0.0])
+                    if ti.static(epsd):
+                        m.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
+            return force, torque
+
+        return particle_contacts
+
+    # --------------------------------------------------------------- driver
+    def update_frames(self, time: float):
+        self._update_frames(time)
+
+    def save_rows(self, n: int):
+        self._save_rows(n)
+
+    def rebuild_rows(self, n: int, time: float):
+        """Re-bin the triangles at ``time`` and find each particle's candidate triangles."""
+        self._update_frames(time)
+        items = int(self._count_bins())
+        if items > self.items_capacity:
+            self._alloc_items(int(items * 1.5) + 16)
+            self._compile_binning()
+        self._fill_bins()
+        longest = int(self._find_candidates(n))
+        if longest > self.scratch_width:
+            self._alloc_scratch(int(longest * 1.5) + 1)
+            self._compile_rows()
+            self._find_candidates(n)
+        entries = int(self.mesh_start[n])
+        grown = False
+        if entries > self.entries_capacity:
+            self._alloc_entries(int(entries * 1.5) + 16)
+            self._compile_rows()
+            grown = True
+        self._compact_and_carry(n)
+        self.binned_time = time
+        return grown
+
+    def needs_rebinning(self, time: float) -> bool:
+        """True when some body has moved half the skin since its triangles were binned."""
+        half = 0.5 * self.e.skin
+        return any(self.kin.displacement(k, self.binned_time, time) > half
+                   for k in range(self.n_bodies))
+
+    def take_loads(self):
+        """Mean force (N) and torque about the axis point (N m) per body over the steps since
+        the last call; resets the sums."""
+        steps = max(self.interval_steps, 1)
+        f = self.force_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps
+        t = self.torque_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps
+        self.force_sum.fill(0.0)
+        self.torque_sum.fill(0.0)
+        self.interval_steps = 0
+        return f, t
