@@ -86,16 +86,15 @@ def describe_scene(scene) -> str:
     from .effects import enabled_effects
     from .model import build_pair_tables
     from .placement import place_fills
-    from .timestep import choose_time_step
+    from .timestep import choose_step_and_skin
 
     placed = place_fills(scene, np.random.default_rng(scene.simulation.seed))
     tables = build_pair_tables(scene)
     n = len(placed.radius)
     if n == 0:
         raise SceneError(scene.source, "particles", "the scene has no particles")
-    skin = scene.simulation.skin or 0.2 * float(np.mean(placed.radius))
-    ts = choose_time_step(scene, placed.radius, placed.material, tables.names,
-                          np.linalg.norm(placed.velocity, axis=1), skin)
+    ts, skin = choose_step_and_skin(scene, placed.radius, placed.material, tables.names,
+                                    np.linalg.norm(placed.velocity, axis=1))
     real_bytes = 8 if scene.simulation.precision == "f64" else 4
     # per particle: 6 vec3 + 4 reals + 3 ints of state, shadows and rows (~12 ints)
     per_particle = (6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes

@@ -23,7 +23,7 @@ from .loader import load_scene, parse_scene
 from .model import build_pair_tables
 from .placement import place_fills
 from .scene import Scene, SceneError
-from .timestep import choose_time_step
+from .timestep import choose_step_and_skin
 
 
 class DivergenceError(RuntimeError):
@@ -59,11 +59,9 @@ class Simulation:
         # placement numbers materials in sorted order too; make sure of it
         assert list(placed.materials) == self.tables.names or not placed.materials
         radii = placed.radius
-        mean_diameter = 2.0 * float(np.mean(radii))
-        self.skin = scene.simulation.skin if scene.simulation.skin else 0.1 * mean_diameter
         speeds = np.linalg.norm(placed.velocity, axis=1)
-        self.timestep = choose_time_step(scene, radii, placed.material, self.tables.names,
-                                         speeds, self.skin)
+        self.timestep, self.skin = choose_step_and_skin(scene, radii, placed.material,
+                                                        self.tables.names, speeds)
         self.dt = self.timestep.dt
 
         self.engine = Engine(scene, self.tables, self.n_initial, self.real, self.skin,
