@@ -300,6 +300,19 @@ class MeshContacts:
         self._compile_rows()
 
     @ti.func
+    def image_near(self, x, a):
+        """The periodic image of point x nearest to point a (x itself without periodic axes)."""
+        d = x - a
+        for k in ti.static(range(3)):
+            if ti.static(self.e.grid.periodic[k]):
+                span = ti.static(self.e.grid.span[k])
+                if d[k] > 0.5 * span:
+                    d[k] -= span
+                elif d[k] < -0.5 * span:
+                    d[k] += span
+        return a + d
+
+    @ti.func
     def world_triangle(self, t):
         b = self.tri_body[t]
         rot = self.rotation[b]
@@ -327,15 +340,26 @@ class MeshContacts:
             normal = (b - a).cross(c - a).normalized()
             lo_c = ti.cast(ti.floor((ti.min(a, b, c) - expand - lo) * inv_cell), ti.i32)
             hi_c = ti.cast(ti.floor((ti.max(a, b, c) + expand - lo) * inv_cell), ti.i32)
-            lo_c = ti.max(ti.min(lo_c, dims - 1), 0)
-            hi_c = ti.max(ti.min(hi_c, dims - 1), 0)
+            for k in ti.static(range(3)):
+                if ti.static(g.periodic[k]):
+                    # across a periodic face the cells wrap; never visit one twice
+                    if hi_c[k] - lo_c[k] + 1 > dims[k]:
+                        lo_c[k] = 0
+                        hi_c[k] = dims[k] - 1
+                else:
+                    lo_c[k] = ti.max(ti.min(lo_c[k], dims[k] - 1), 0)
+                    hi_c[k] = ti.max(ti.min(hi_c[k], dims[k] - 1), 0)
             for cx in range(lo_c[0], hi_c[0] + 1):
                 for cy in range(lo_c[1], hi_c[1] + 1):
                     for cz in range(lo_c[2], hi_c[2] + 1):
                         centre = lo + (ti.Vector([cx, cy, cz]) + 0.5) * cell
                         # a cell far from the triangle's plane cannot hold a particle near it
                         if ti.abs((centre - a).dot(normal)) <= half_diagonal + expand:
-                            cid = (cx * dims[1] + cy) * dims[2] + cz
+                            w = ti.Vector([cx, cy, cz])
+                            for k in ti.static(range(3)):
+                                if ti.static(g.periodic[k]):
+                                    w[k] = (w[k] % dims[k] + dims[k]) % dims[k]
+                            cid = (w[0] * dims[1] + w[1]) * dims[2] + w[2]
                             if ti.static(fill):
                                 slot = m.tri_cell_start[cid] + ti.atomic_add(m.tri_cell_fill[cid], 1)
                                 items[slot] = t
@@ -395,8 +419,9 @@ class MeshContacts:
                 for slot in range(m.tri_cell_start[c], m.tri_cell_start[c + 1]):
                     t = m.tri_cell_items[slot]
                     a, b, cc = m.world_triangle(t)
-                    q, region = closest_point_on_triangle(xi, a, b, cc)
-                    d = xi - q
+                    x_image = m.image_near(xi, a)
+                    q, region = closest_point_on_triangle(x_image, a, b, cc)
+                    d = x_image - q
                     if d.dot(d) < reach * reach:
                         if count < width:
                             scratch[i, count] = t
@@ -471,8 +496,9 @@ class MeshContacts:
             # geometry of every candidate triangle
             for k in range(start, end):
                 a, b, c = m.world_triangle(m.mesh_tri[k])
-                q, region = closest_point_on_triangle(xi, a, b, c)
-                d = xi - q
+                x_image = m.image_near(xi, a)
+                q, region = closest_point_on_triangle(x_image, a, b, c)
+                d = x_image - q
                 dist_sq = d.dot(d)
                 m.mesh_status[k] = ti.u8(2)
                 if dist_sq < ri * ri and dist_sq > 0.0:
@@ -516,7 +542,8 @@ class MeshContacts:
                     normal = m.mesh_normal[k]
                     overlap = m.mesh_overlap[k]
                     arm = ri - 0.5 * overlap
-                    contact_point = xi - arm * normal
+                    # the overlap centre, in the triangle's frame (periodic image of the particle)
+                    contact_point = m.mesh_point[k] - 0.5 * overlap * normal
                     lever_body = contact_point - (m.axis_point[body] + m.offset[body])
                     wall_velocity = m.body_velocity[body] + m.angular_velocity[body].cross(lever_body)
                     v_rel = vi - wall_velocity - arm * wi.cross(normal)
