@@ -116,6 +116,15 @@ def describe_scene(scene) -> str:
         f"Verlet skin: {skin:.4g} m",
         f"precision: {scene.simulation.precision}; estimated device memory: {memory / 2**20:.1f} MiB",
     ]
+    if scene.bodies:
+        from .timestep import body_surface_speed
+        for b in scene.bodies:
+            w = max((abs(p[1]) for p in b.motion.speed.points), default=0.0) if b.motion.speed else 0.0
+            lines.append(f"body {b.name}: {len(b.faces)} triangles, material {b.material}, "
+                         f"up to {w * 60 / (2 * math.pi):.3g} rpm")
+        lines.append(f"fastest body surface: {body_surface_speed(scene):.3g} m/s "
+                     f"({body_surface_speed(scene) * ts.dt / float(np.min(placed.radius)):.3f} "
+                     f"of the smallest radius per step)")
     lines += [f"note: {note}" for note in ts.notes]
     return "\n".join(lines)
 
