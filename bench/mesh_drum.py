@@ -64,7 +64,7 @@ motion = {{ rotate = {{ axis_point = [0, 0, 0], axis_direction = [1, 0, 0], spee
 material = "gravel"
 radius = 0.005
 count = {particles}
-region = {{ box = {{ min = [0.01, -0.2, -0.28], max = [0.49, 0.2, -0.04] }} }}
+region = {{ cylinder = {{ axis_point = [0.01, 0, 0], axis_direction = [1, 0, 0], radius = 0.27, length = 0.48 }} }}
 
 [output]
 interval = 0.05

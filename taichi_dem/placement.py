@@ -3,13 +3,16 @@
 File fills are taken as given. A ``count``/``region`` fill is placed on a face-centred-cubic
 lattice whose nearest-neighbour spacing is at least ``2 r_max (1 + 5 %)``, clipped to the
 region: every site must hold a sphere of the largest radius wholly inside the region and the
-domain, on the positive side of every wall plane, and clear of every particle placed before
+domain, on the positive side of every wall plane, clear of every triangle of every body's mesh
+(at its t = 0 position, with its periodic images) and clear of every particle placed before
 (file fills first, then earlier count fills, with minimum-image distances across periodic
 faces). ``count`` sites are drawn at random, radii are sampled, and each sphere is jittered
 inside the ball of radius ``spacing / 2`` around its site (so new spheres can never overlap
 each other); a jittered sphere that would break a constraint stays at its site.
 
-Pure numpy (a sorted-key hash grid for neighbour queries); deterministic for a given rng seed.
+Pure numpy (a sorted-key hash grid for neighbour queries; triangles are matched to the grid
+cells their bounding boxes, grown by the sphere radius, overlap and that lie near their planes,
+then tested exactly); deterministic for a given rng seed.
 """
 from __future__ import annotations
 
@@ -195,6 +198,182 @@ def _conflicts(grid: _Grid, radii_pts: np.ndarray, q: np.ndarray, rq: np.ndarray
     return bad
 
 
+# --- body triangles ------------------------------------------------------------------------------
+
+def _closest_sq_dist(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Squared distance from points ``p`` to triangles ``abc`` (all (m, 3)), row by row:
+    Ericson's closest-point Voronoi regions, with degenerate triangles as their three edges."""
+    def dot(u, v):
+        return np.einsum("ij,ij->i", u, v)
+
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = dot(ab, ap), dot(ac, ap)
+    bp = p - b
+    d3, d4 = dot(ab, bp), dot(ac, bp)
+    cp = p - c
+    d5, d6 = dot(ab, cp), dot(ac, cp)
+    va = d3 * d6 - d5 * d4
+    vb = d5 * d2 - d1 * d6
+    vc = d1 * d4 - d3 * d2
+    tiny = 1e-300
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # face interior (the fallback); then overwrite with edge and vertex regions
+        denom = va + vb + vc
+        v = vb / denom
+        w = vc / denom
+        q = a + ab * v[:, None] + ac * w[:, None]
+        # edge ab
+        m = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+        t = d1 / np.where(m, d1 - d3, 1.0)
+        q = np.where(m[:, None], a + ab * t[:, None], q)
+        # edge ac
+        m = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+        t = d2 / np.where(m, d2 - d6, 1.0)
+        q = np.where(m[:, None], a + ac * t[:, None], q)
+        # edge bc
+        m = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
+        t = (d4 - d3) / np.where(m, (d4 - d3) + (d5 - d6), 1.0)
+        q = np.where(m[:, None], b + (c - b) * t[:, None], q)
+        # vertices
+        q = np.where(((d1 <= 0) & (d2 <= 0))[:, None], a, q)
+        q = np.where(((d3 >= 0) & (d4 <= d3))[:, None], b, q)
+        q = np.where(((d6 >= 0) & (d5 <= d6))[:, None], c, q)
+    e = p - q
+    out = dot(e, e)
+    n = np.cross(ab, ac)
+    bad = ~np.isfinite(out) | (dot(n, n) <= 1e-24 * dot(ab, ab) * dot(ac, ac))
+    if bad.any():                          # degenerate (zero-area) triangles: nearest edge
+        i = np.nonzero(bad)[0]
+        out[i] = np.minimum.reduce([_segment_sq_dist(p[i], u[i], v_[i])
+                                    for u, v_ in ((a, b), (b, c), (c, a))])
+    return out
+
+
+def _segment_sq_dist(p, a, b):
+    d = b - a
+    dd = np.einsum("ij,ij->i", d, d)
+    t = np.einsum("ij,ij->i", p - a, d) / np.maximum(dd, 1e-300)
+    t = np.clip(np.where(dd > 0, t, 0.0), 0.0, 1.0)
+    e = p - (a + d * t[:, None])
+    return np.einsum("ij,ij->i", e, e)
+
+
+class _Triangles:
+    """The scene's body triangles at t = 0 (with the periodic images that come within ``pad``
+    of the domain), for sphere-overlap queries."""
+
+    _CHUNK = 1 << 20                       # candidate cells / pairs handled at once
+
+    def __init__(self, scene: Scene, pad: float):
+        tris = [np.asarray(b.vertices, float)[np.asarray(b.faces, np.int64).reshape(-1, 3)]
+                for b in scene.bodies if len(b.faces)]
+        tri = np.concatenate(tris) if tris else np.empty((0, 3, 3))
+        dlo, dhi = np.asarray(scene.domain.min, float), np.asarray(scene.domain.max, float)
+        for a, ax in enumerate("xyz"):
+            if ax not in scene.domain.periodic or len(tri) == 0:
+                continue
+            L = dhi[a] - dlo[a]
+            lo, hi = tri[:, :, a].min(axis=1), tri[:, :, a].max(axis=1)
+            kmin = np.ceil((dlo[a] - pad - hi) / L).astype(np.int64)
+            kmax = np.floor((dhi[a] + pad - lo) / L).astype(np.int64)
+            n = np.maximum(kmax - kmin + 1, 0)
+            idx = np.repeat(np.arange(len(tri)), n)
+            k = np.repeat(kmin, n) + (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n))
+            tri = tri[idx].copy()
+            tri[:, :, a] += (k * L)[:, None]
+        self.tri = tri
+        self.lo = tri.min(axis=1) if len(tri) else np.empty((0, 3))
+        self.hi = tri.max(axis=1) if len(tri) else np.empty((0, 3))
+        nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]) if len(tri) else \
+            np.empty((0, 3))
+        ln = np.linalg.norm(nrm, axis=1, keepdims=True)
+        self.normal = np.where(ln > 0, nrm / np.where(ln > 0, ln, 1.0), 0.0)
+        self.degenerate = ln[:, 0] <= 0 if len(tri) else np.empty(0, bool)
+
+    def __len__(self) -> int:
+        return len(self.tri)
+
+    def hits(self, p: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Mask of spheres (centres ``p``, radii ``r``) that come closer than their radius
+        (with the wall clearance) to any triangle."""
+        bad = np.zeros(len(p), bool)
+        if len(self.tri) == 0 or len(p) == 0:
+            return bad
+        reach = float(r.max()) * (1.0 + _CLEAR)
+        plo, phi = p.min(axis=0), p.max(axis=0)
+        near = np.all((self.hi + reach >= plo) & (self.lo - reach <= phi), axis=1)
+        tid = np.nonzero(near)[0]
+        if len(tid) == 0:
+            return bad
+        # point grid: about 8 points per occupied cell, never finer than the sphere diameter
+        span = np.maximum(phi - plo, 0.0)
+        fine = 2.0 * reach
+        vol = float(np.prod(np.maximum(span, fine)))
+        h = max(fine, 2.0 * (vol / len(p)) ** (1.0 / 3.0))
+        dims = np.floor(span / h).astype(np.int64) + 1
+        while float(np.prod(dims.astype(float))) > 2.0 ** 60:
+            h *= 2.0
+            dims = np.floor(span / h).astype(np.int64) + 1
+        cell = np.minimum(np.floor((p - plo) / h).astype(np.int64), dims - 1)
+        keys = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
+        order = np.argsort(keys, kind="stable")
+        skeys = keys[order]
+        # cells overlapped by each triangle's bounding box grown by the reach
+        c0 = np.clip(np.floor((self.lo[tid] - reach - plo) / h).astype(np.int64), 0, dims - 1)
+        c1 = np.clip(np.floor((self.hi[tid] + reach - plo) / h).astype(np.int64), 0, dims - 1)
+        ext = c1 - c0 + 1
+        ncell = ext.prod(axis=1)
+        slack = reach + 0.5 * h * np.sqrt(3.0)
+        csum = np.cumsum(ncell)
+        start_t = 0
+        while start_t < len(tid):
+            # a chunk of triangles with at most _CHUNK cells between them (at least one)
+            base = csum[start_t - 1] if start_t else 0
+            stop_t = max(int(np.searchsorted(csum, base + self._CHUNK, "right")), start_t + 1)
+            sel = np.arange(start_t, stop_t)
+            start_t = stop_t
+            cnt = ncell[sel]
+            rep = np.repeat(sel, cnt)
+            j = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+            e = ext[rep]
+            cz = j % e[:, 2]
+            cy = (j // e[:, 2]) % e[:, 1]
+            cx = j // (e[:, 2] * e[:, 1])
+            cc = c0[rep] + np.stack([cx, cy, cz], axis=1)
+            # keep cells whose centre lies within reach + half a cell diagonal of the plane
+            t = tid[rep]
+            centre = plo + (cc + 0.5) * h
+            dist = np.abs(np.einsum("ij,ij->i", centre - self.tri[t, 0], self.normal[t]))
+            keep = (dist <= slack) | self.degenerate[t]
+            t, cc = t[keep], cc[keep]
+            ck = (cc[:, 0] * dims[1] + cc[:, 1]) * dims[2] + cc[:, 2]
+            s0 = np.searchsorted(skeys, ck, "left")
+            n = np.searchsorted(skeys, ck, "right") - s0
+            has = n > 0
+            t, s0, n = t[has], s0[has], n[has]
+            # expand to (point, triangle) pairs, in pieces of bounded size
+            ncum = np.cumsum(n)
+            a = 0
+            while a < len(n):
+                pbase = ncum[a - 1] if a else 0
+                b = max(int(np.searchsorted(ncum, pbase + self._CHUNK, "right")), a + 1)
+                nn = n[a:b]
+                tt = np.repeat(t[a:b], nn)
+                k = np.repeat(s0[a:b], nn) + (np.arange(int(nn.sum())) -
+                                              np.repeat(np.cumsum(nn) - nn, nn))
+                pi = order[k]
+                live = ~bad[pi]
+                pi, tt = pi[live], tt[live]
+                a = b
+                if len(pi) == 0:
+                    continue
+                tri = self.tri[tt]
+                d2 = _closest_sq_dist(p[pi], tri[:, 0], tri[:, 1], tri[:, 2])
+                lim = r[pi] * (1.0 + _CLEAR)
+                bad[pi[d2 < lim * lim]] = True
+        return bad
+
+
 # --- regions and constraints ---------------------------------------------------------------------
 
 def _frame(region: Region):
@@ -235,15 +414,18 @@ def _region_volume(region: Region) -> float:
     return float(np.pi * region.radius ** 2 * region.length)
 
 
-def _valid(scene: Scene, region: Region, world, r, grid, grid_r):
-    """Mask: sphere (world centre, radius r) inside region and domain, clear of walls and of
-    earlier particles."""
+def _valid(scene: Scene, region: Region, world, r, grid, grid_r, tris=None):
+    """Mask: sphere (world centre, radius r) inside region and domain, clear of walls, of body
+    triangles and of earlier particles."""
     dlo, dhi = np.asarray(scene.domain.min), np.asarray(scene.domain.max)
     origin, axes = _frame(region)
     ok = _inside_region(region, (world - origin) @ axes.T, r)
     ok &= np.all((world - r[:, None] >= dlo) & (world + r[:, None] <= dhi), axis=1)
     for w in scene.walls:
         ok &= (world - np.asarray(w.point)) @ np.asarray(w.normal) >= r
+    if tris is not None and len(tris) and ok.any():
+        idx = np.nonzero(ok)[0]
+        ok[idx[tris.hits(world[idx], r[idx])]] = False
     if grid is not None and ok.any():
         idx = np.nonzero(ok)[0]
         ok[idx[_conflicts(grid, grid_r, world[idx], r[idx])]] = False
@@ -279,7 +461,8 @@ def _lattice(region: Region, spacing: float, margin: float, kind: str):
     return pts, parity
 
 
-def _sites(scene: Scene, region: Region, spacing: float, r_max: float, grid, grid_r):
+def _sites(scene: Scene, region: Region, spacing: float, r_max: float, grid, grid_r,
+           tris=None):
     """Valid lattice sites (world coordinates) for spheres of radius <= r_max: the best of the
     two FCC sublattices and (for thin regions) a simple cubic lattice."""
     origin, axes = _frame(region)
@@ -294,7 +477,7 @@ def _sites(scene: Scene, region: Region, spacing: float, r_max: float, grid, gri
         if len(local) == 0:
             continue
         world = origin + local @ axes
-        ok = _valid(scene, region, world, np.full(len(local), r_max), grid, grid_r)
+        ok = _valid(scene, region, world, np.full(len(local), r_max), grid, grid_r, tris)
         for par in ((0, 1) if kind == "fcc" else (0,)):
             sel = world[ok & (parity == par)]
             sel = _drop_periodic_conflicts(scene, sel, spacing)
@@ -340,7 +523,7 @@ def _drop_periodic_conflicts(scene: Scene, sites: np.ndarray, spacing: float) ->
 
 
 def _place_region_fill(scene: Scene, fill: ParticleFill, rng: np.random.Generator,
-                       prev_pos: np.ndarray, prev_r: np.ndarray):
+                       prev_pos: np.ndarray, prev_r: np.ndarray, tris=None):
     count = fill.count
     if count == 0:
         return np.empty((0, 3)), np.empty(0)
@@ -360,16 +543,18 @@ def _place_region_fill(scene: Scene, fill: ParticleFill, rng: np.random.Generato
     factor = max(1.0, (n_est / target) ** (1.0 / 3.0))
     while True:
         spacing = base * factor
-        sites = _sites(scene, region, spacing, r_max, grid, prev_r)
+        sites = _sites(scene, region, spacing, r_max, grid, prev_r, tris)
         if len(sites) >= count or factor == 1.0:
             break
         factor = max(1.0, factor / 2.0)
     if len(sites) < count:
+        clear = ("walls, bodies and earlier particles" if tris is not None and len(tris)
+                 else "walls and earlier particles")
         raise SceneError(
             scene.source, f"{fill.key}.count",
             f"cannot place {count} spheres: the region holds at most {len(sites)} spheres of "
-            f"radius {r_max:g} m (on a lattice of spacing {base:g} m, clear of walls and earlier "
-            f"particles); enlarge the region or reduce count")
+            f"radius {r_max:g} m (on a lattice of spacing {base:g} m, clear of {clear}); "
+            f"enlarge the region or reduce count")
     chosen = sites[rng.choice(len(sites), size=count, replace=False)]
 
     # jitter within the ball of radius spacing/2 around each site
@@ -383,13 +568,13 @@ def _place_region_fill(scene: Scene, fill: ParticleFill, rng: np.random.Generato
     norm = np.linalg.norm(disp, axis=1)
     scale = np.where(norm > room, room / np.maximum(norm, 1e-300), 1.0)
     moved = chosen + disp * scale[:, None]
-    ok = _valid(scene, region, moved, radii, grid, prev_r)
+    ok = _valid(scene, region, moved, radii, grid, prev_r, tris)
     for _ in range(3):                      # halve the jitter of the few still invalid
         bad = np.nonzero(~ok)[0]
         if len(bad) == 0:
             break
         moved[bad] = 0.5 * (moved[bad] + chosen[bad])
-        ok[bad] = _valid(scene, region, moved[bad], radii[bad], grid, prev_r)
+        ok[bad] = _valid(scene, region, moved[bad], radii[bad], grid, prev_r, tris)
     pos = np.where(ok[:, None], moved, chosen)
     return pos, radii
 
@@ -426,7 +611,8 @@ def _fold_back(scene: Scene, region: Region, p: np.ndarray, r: np.ndarray) -> np
 
 
 def place_fills(scene: Scene, rng: np.random.Generator) -> PlacedParticles:
-    """Place every fill of ``scene``: file fills as given, count/region fills without overlap.
+    """Place every fill of ``scene``: file fills as given, count/region fills without overlap
+    (with each other, walls, body meshes at t = 0 and periodic images).
 
     Raises :class:`SceneError` (key ``particles[i].count``) when a region cannot hold its count.
     """
@@ -441,12 +627,16 @@ def place_fills(scene: Scene, rng: np.random.Generator) -> PlacedParticles:
             rad[i] = np.asarray(f.radii, float).reshape(-1)
     prev_pos = [p for p in pos if p is not None]
     prev_r = [r for r in rad if r is not None]
+    tris = None
+    pad = max((f.radius.largest for f in fills if f.positions is None and f.count), default=0.0)
+    if scene.bodies and pad > 0.0:
+        tris = _Triangles(scene, 2.0 * pad)
     for i, f in enumerate(fills):
         if f.positions is not None:
             continue
         pp = np.concatenate(prev_pos) if prev_pos else np.empty((0, 3))
         pr = np.concatenate(prev_r) if prev_r else np.empty(0)
-        pos[i], rad[i] = _place_region_fill(scene, f, rng, pp, pr)
+        pos[i], rad[i] = _place_region_fill(scene, f, rng, pp, pr, tris)
         prev_pos.append(pos[i])
         prev_r.append(rad[i])
 
