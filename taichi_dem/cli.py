@@ -160,7 +160,8 @@ def cmd_run(args, scene_path: str, summary=None) -> int:
 
     scene = load_scene(scene_path)
     h5 = _output_path(args.h5, scene.output.h5, args.out, scene_path, ".h5")
-    rrd = _output_path(args.rrd, scene.output.rrd, args.out, scene_path, ".rrd")
+    rrd = args.rrd or (_output_path(None, scene.output.rrd, args.out, scene_path, ".rrd")
+                       if scene.output.rrd else None)
     if rrd or args.spawn:
         print("taichi-dem: note: rerun recording (--rrd/--spawn) is not supported yet by this "
               "version; continuing without it", file=sys.stderr)
@@ -186,6 +187,12 @@ def cmd_run(args, scene_path: str, summary=None) -> int:
     for w in scene.walls:
         f = s[f"walls/{w.name}/force"][-1]
         print(f"wall {w.name}: force [{f[0]:.4g}, {f[1]:.4g}, {f[2]:.4g}] N")
+    for b in scene.bodies:
+        half = max(len(s["time"]) // 2, 1)
+        tq = s[f"bodies/{b.name}/axial_torque"][half:]
+        pw = s[f"bodies/{b.name}/power"][half:]
+        print(f"body {b.name}: axial torque {np.mean(tq):.4g} N m, drive power {np.mean(pw):.4g} W "
+              f"(means over the second half of the run)")
     if summary:
         summary(sim)
     if h5:
