@@ -132,8 +132,8 @@ def triangle_arrays(bodies):
 import taichi as ti  # noqa: E402  (the host part above does not need Taichi)
 
 from .effects.hertz_mindlin import contact_force  # noqa: E402
-from .effects.mesh_contact import REGION_FACE, closest_point_on_triangle  # noqa: E402
-from .state import FieldTree  # noqa: E402
+from .effects.mesh_contact import closest_point_on_triangle  # noqa: E402
+from .broadphase import exclusive_scan  # noqa: E402
 
 
 @ti.data_oriented
@@ -201,6 +201,7 @@ class MeshContacts:
         self._alloc_scratch(16)
         self._alloc_entries(max(2 * s.capacity // 8, 1024))
         self.expand = engine.max_radius + engine.skin
+        self.minimum_image = engine.grid.make_minimum_image()
         self.binned_time = 0.0
         self.interval_steps = 0
         self._compile_static_kernels()
@@ -302,15 +303,7 @@ class MeshContacts:
     @ti.func
     def image_near(self, x, a):
         """The periodic image of point x nearest to point a (x itself without periodic axes)."""
-        d = x - a
-        for k in ti.static(range(3)):
-            if ti.static(self.e.grid.periodic[k]):
-                span = ti.static(self.e.grid.span[k])
-                if d[k] > 0.5 * span:
-                    d[k] -= span
-                elif d[k] < -0.5 * span:
-                    d[k] += span
-        return a + d
+        return a + self.minimum_image(x - a)
 
     @ti.func
     def world_triangle(self, t):
@@ -373,12 +366,7 @@ class MeshContacts:
                 m.tri_cell_fill[c] = 0
             for t in range(nt):
                 visit_cells(t, False)
-            ti.loop_config(serialize=True)
-            for c in range(n_cells + 1):
-                if c == 0:
-                    m.tri_cell_start[0] = 0
-                else:
-                    m.tri_cell_start[c] = m.tri_cell_start[c - 1] + m.tri_cell_count[c - 1]
+            exclusive_scan(m.tri_cell_count, m.tri_cell_start, n_cells)
             return m.tri_cell_start[n_cells]
 
         @ti.kernel
@@ -430,12 +418,7 @@ class MeshContacts:
             longest = 0
             for i in range(n):
                 ti.atomic_max(longest, m.mesh_count[i])
-            ti.loop_config(serialize=True)
-            for i in range(n + 1):
-                if i == 0:
-                    m.mesh_start[0] = 0
-                else:
-                    m.mesh_start[i] = m.mesh_start[i - 1] + m.mesh_count[i - 1]
+            exclusive_scan(m.mesh_count, m.mesh_start, n)
             return longest
 
         self._save_rows, self._find_candidates = save_rows, find_candidates

@@ -10,7 +10,6 @@ as long as they use the same arch and precision; ``close()`` frees a simulation'
 from __future__ import annotations
 
 import math
-import os
 import sys
 import time as _time
 from typing import Optional
@@ -39,7 +38,6 @@ class Simulation:
 
     def __init__(self, scene: Scene, *, arch: str = "cpu", precision: Optional[str] = None,
                  threads: Optional[int] = None, h5: Optional[str] = None):
-        import taichi as ti
         from .stepper import Engine
 
         self.scene = scene

@@ -86,13 +86,11 @@ class Engine:
         old = self.pairs
         new = PairState(capacity, self.real, self.rolling_epsd)
         if old is not None:
-            keep = old.capacity
             new.old_partner_id.from_numpy(_pad(old.old_partner_id.to_numpy(), capacity))
             new.old_tangential_history.from_numpy(_pad(old.old_tangential_history.to_numpy(), capacity))
             if old.old_rolling_history is not None:
                 new.old_rolling_history.from_numpy(_pad(old.old_rolling_history.to_numpy(), capacity))
             old.destroy()
-            del keep
         self.pairs = new
         self.broadphase.compile_pair_kernels(new)
         self._compile_pair_kernels(new)
@@ -116,17 +114,7 @@ class Engine:
         flags = self.flags
         red = self.reduction
 
-        @ti.func
-        def minimum_image(d):
-            for k in ti.static(range(3)):
-                if ti.static(g.periodic[k]):
-                    # positions are wrapped into the box, so one period at most separates images
-                    if d[k] > 0.5 * span[k]:
-                        d[k] -= span[k]
-                    elif d[k] < -0.5 * span[k]:
-                        d[k] += span[k]
-            return d
-        self.minimum_image = minimum_image
+        minimum_image = self.minimum_image = g.make_minimum_image()
 
         @ti.func
         def drift_particle(i, dt):

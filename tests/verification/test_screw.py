@@ -15,8 +15,6 @@ issue note). The measured eta is printed.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 import taichi_dem
