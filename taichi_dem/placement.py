@@ -305,11 +305,11 @@ class _Triangles:
         tid = np.nonzero(near)[0]
         if len(tid) == 0:
             return bad
-        # point grid: about 8 points per occupied cell, never finer than the sphere diameter
+        # point grid: about one point per cell, never finer than the sphere diameter
         span = np.maximum(phi - plo, 0.0)
         fine = 2.0 * reach
         vol = float(np.prod(np.maximum(span, fine)))
-        h = max(fine, 2.0 * (vol / len(p)) ** (1.0 / 3.0))
+        h = max(fine, (vol / len(p)) ** (1.0 / 3.0))
         dims = np.floor(span / h).astype(np.int64) + 1
         while float(np.prod(dims.astype(float))) > 2.0 ** 60:
             h *= 2.0
@@ -367,9 +367,19 @@ class _Triangles:
                 a = b
                 if len(pi) == 0:
                     continue
-                tri = self.tri[tt]
-                d2 = _closest_sq_dist(p[pi], tri[:, 0], tri[:, 1], tri[:, 2])
+                # cheap filters first: the grown bounding box, then the plane distance
+                q = p[pi]
                 lim = r[pi] * (1.0 + _CLEAR)
+                m = np.all((q >= self.lo[tt] - lim[:, None]) &
+                           (q <= self.hi[tt] + lim[:, None]), axis=1)
+                pi, tt, q, lim = pi[m], tt[m], q[m], lim[m]
+                v0 = self.tri[tt, 0]
+                m = (np.abs(np.einsum("ij,ij->i", q - v0, self.normal[tt])) < lim) | \
+                    self.degenerate[tt]
+                pi, tt, q, lim, v0 = pi[m], tt[m], q[m], lim[m], v0[m]
+                if len(pi) == 0:
+                    continue
+                d2 = _closest_sq_dist(q, v0, self.tri[tt, 1], self.tri[tt, 2])
                 bad[pi[d2 < lim * lim]] = True
         return bad
 

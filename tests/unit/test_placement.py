@@ -1,3 +1,4 @@
+import dataclasses
 import math
 import time
 
@@ -6,7 +7,7 @@ import pytest
 
 from taichi_dem.loader import parse_scene
 from taichi_dem.placement import PlacedParticles, place_fills, sample_radii
-from taichi_dem.scene import RadiusDistribution, SceneError
+from taichi_dem.scene import Body, RadiusDistribution, SceneError
 
 HEADER = """
 [simulation]
@@ -341,3 +342,203 @@ def test_128k_spheres_in_a_few_seconds():
         dist = np.sqrt((d * d).sum(-1))
         dist[np.arange(len(chunk)), chunk] = np.inf
         assert (dist - (p.radius[chunk, None] + p.radius[None, :])).min() >= -1e-12
+
+
+# --- body meshes ---------------------------------------------------------------------------------
+
+SHAFT = """
+[[bodies]]
+name = "shaft"
+material = "steel"
+mesh = {{ builder = "paddle_shaft", length = 1.0, shaft_radius = 0.03, rows = {rows}, \
+paddles_per_row = 4, paddle_length = 0.2, paddle_width = 0.06, paddle_thickness = 0.01, \
+paddle_pitch_deg = 30 }}
+"""
+AROUND_SHAFT = ('cylinder = { axis_point = [0, 0, 0], axis_direction = [1, 0, 0], '
+                'radius = 0.3, length = 1.0 }')
+SHAFT_DOMAIN = dict(dmin=(-0.1, -0.4, -0.4), dmax=(1.1, 0.4, 0.4))
+
+
+def _seg_dist(p, a, b):
+    d = b - a
+    t = np.clip(((p - a) * d).sum(-1) / np.maximum((d * d).sum(-1), 1e-300), 0.0, 1.0)
+    e = p - (a + d * t[..., None])
+    return np.sqrt((e * e).sum(-1))
+
+
+def point_triangle_distance(p, tri):
+    """Brute force, (n, 3) points x (m, 3, 3) triangles -> (n, m): the distance to the plane
+    where the projection falls inside the triangle (barycentric coordinates), else the nearest
+    edge."""
+    p = p[:, None, :]
+    a, b, c = tri[None, :, 0], tri[None, :, 1], tri[None, :, 2]
+    n = np.cross(b - a, c - a)
+    area2 = (n * n).sum(-1)
+    n_unit = n / np.sqrt(np.maximum(area2, 1e-300))[..., None]
+    h = ((p - a) * n_unit).sum(-1)
+    x = p - h[..., None] * n_unit
+    # barycentric coordinates of the projection from sub-triangle areas
+    u = (np.cross(c - b, x - b) * n).sum(-1) / np.maximum(area2, 1e-300)
+    v = (np.cross(a - c, x - c) * n).sum(-1) / np.maximum(area2, 1e-300)
+    w = 1.0 - u - v
+    inside = (u >= 0) & (v >= 0) & (w >= 0) & (area2 > 0)
+    edges = np.minimum(np.minimum(_seg_dist(p, a, b), _seg_dist(p, b, c)), _seg_dist(p, c, a))
+    return np.where(inside, np.abs(h), edges)
+
+
+def body_gap(p: PlacedParticles, scene_, idx, shifts=((0.0, 0.0, 0.0),)):
+    """Smallest (distance to any body triangle, over the given image shifts) minus radius."""
+    tri = np.concatenate([b.vertices[b.faces] for b in scene_.bodies])
+    gap = np.inf
+    for chunk in np.array_split(idx, max(1, len(idx) // 20)):
+        for s in shifts:
+            d = point_triangle_distance(p.position[chunk] + np.asarray(s), tri)
+            gap = min(gap, (d.min(axis=1) - p.radius[chunk]).min())
+    return gap
+
+
+def nearest_to_body(p: PlacedParticles, scene_, k):
+    """Indices of the k spheres whose surfaces come nearest to a body vertex, plus k random."""
+    v = np.concatenate([b.vertices for b in scene_.bodies])
+    near = np.full(p.n, np.inf)
+    for chunk in np.array_split(np.arange(p.n), max(1, p.n // 200)):
+        d = np.linalg.norm(p.position[chunk, None, :] - v[None], axis=-1).min(axis=1)
+        near[chunk] = d - p.radius[chunk]
+    rng = np.random.default_rng(0)
+    return np.unique(np.concatenate([np.argsort(near)[:k], rng.choice(p.n, k, replace=False)]))
+
+
+def test_checks_agree_with_brute_force_distance():
+    from taichi_dem.placement import _closest_sq_dist, _segment_sq_dist
+    rng = np.random.default_rng(0)
+    tri = rng.normal(size=(400, 3, 3))
+    tri[:20, 2] = tri[:20, 0] + 0.3 * (tri[:20, 1] - tri[:20, 0])   # degenerate: collinear
+    tri[20:30, 1] = tri[20:30, 0]                                    # two vertices equal
+    pts = rng.normal(size=(400, 3)) * 1.5
+    got = np.sqrt(_closest_sq_dist(pts, tri[:, 0], tri[:, 1], tri[:, 2]))
+    want = np.diag(point_triangle_distance(pts, tri))
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12)
+    seg = np.sqrt(_segment_sq_dist(pts[:20], tri[:20, 0], tri[:20, 1]))
+    np.testing.assert_allclose(got[:20], seg, rtol=1e-9, atol=1e-12)
+
+
+def test_fill_around_paddle_shaft_is_clear_of_the_body():
+    s = scene(fill(count=4000, radius="{ mean = 0.01, std = 0.002, min = 0.006, max = 0.012 }",
+                   region=AROUND_SHAFT) + SHAFT.format(rows=4), **SHAFT_DOMAIN)
+    assert len(s.bodies) == 1 and len(s.bodies[0].faces) > 500
+    p = place_fills(s, np.random.default_rng(4))
+    assert p.n == 4000
+    assert_no_overlap(p, s)
+    idx = nearest_to_body(p, s, 200)
+    gap = body_gap(p, s, idx)
+    assert gap >= -1e-12, f"a sphere overlaps the shaft by {-gap:g} m"
+    assert gap < 0.02          # and the check is not vacuous: spheres do come near the paddles
+
+
+def test_body_check_is_needed_for_that_fill():
+    """Without the bodies the same fill overlaps the paddles (so the test above means something)."""
+    s = scene(fill(count=4000, radius="{ mean = 0.01, std = 0.002, min = 0.006, max = 0.012 }",
+                   region=AROUND_SHAFT) + SHAFT.format(rows=4), **SHAFT_DOMAIN)
+    p = place_fills(dataclasses.replace(s, bodies=()), np.random.default_rng(4))
+    assert body_gap(p, s, nearest_to_body(p, s, 200)) < 0.0
+
+
+def test_body_check_with_a_built_mesh_and_file_fill(tmp_path):
+    import geometry
+    m = geometry.build_mesh({"builder": "paddle_shaft", "length": 1.0, "shaft_radius": 0.05,
+                             "rows": 3, "paddles_per_row": 2, "paddle_length": 0.15,
+                             "paddle_width": 0.1})
+    (tmp_path / "p.csv").write_text("x,y,z,radius\n0.5,0.25,0.25,0.02\n")
+    s = scene(fill(count=600, radius="0.015", region=AROUND_SHAFT) +
+              '\n[[particles]]\nmaterial = "ash"\nfile = "p.csv"\n', base_dir=tmp_path,
+              **SHAFT_DOMAIN)
+    s = dataclasses.replace(s, bodies=(Body(key="bodies[0]", name="shaft", material="steel",
+                                            vertices=np.asarray(m.vertices, float),
+                                            faces=np.asarray(m.faces, np.int64)),))
+    p = place_fills(s, np.random.default_rng(2))
+    assert p.n == 601
+    assert_no_overlap(p, s)
+    new = np.nonzero(p.fill == 0)[0]
+    assert body_gap(p, s, new) >= -1e-12
+
+
+def test_clear_of_body_images_across_periodic_faces():
+    # a plate at x = 0.99 .. 1.03 in a domain periodic in x over [0, 1]: its part beyond x = 1
+    # reappears at x = 0 .. 0.03, where the fill must leave room
+    body = """
+[[bodies]]
+name = "plate"
+material = "steel"
+mesh = { builder = "box", min = [0.99, 0.1, 0.1], max = [1.03, 0.9, 0.9] }
+"""
+    s = scene(fill(count=3000, radius="0.015") + body, periodic=("x",))
+    p = place_fills(s, np.random.default_rng(3))
+    assert p.n == 3000
+    assert_no_overlap(p, s)
+    inner = (np.abs(p.position[:, 1:] - 0.5) < 0.38).all(axis=1)
+    assert not np.any(inner & (p.position[:, 0] < 0.03 + p.radius)), "a sphere is in the image"
+    idx = np.nonzero(p.position[:, 0] < 0.1)[0]
+    assert len(idx) > 10
+    assert body_gap(p, s, idx, shifts=((0, 0, 0), (1, 0, 0), (-1, 0, 0))) >= -1e-12
+
+
+SLAB = """
+[[bodies]]
+name = "slab"
+material = "steel"
+mesh = { builder = "box", min = [0.0, 0.0, 0.09], max = [0.3, 0.3, 0.11] }
+"""
+
+
+def test_fill_beside_a_body_places_count_when_room_exists():
+    s = scene(fill(count=700, radius="0.01",
+                   region='box = { min = [0, 0, 0], max = [0.2, 0.2, 0.2] }') + SLAB)
+    p = place_fills(s, np.random.default_rng(1))
+    assert p.n == 700
+    assert_no_overlap(p, s)
+    assert body_gap(p, s, np.arange(p.n)) >= -1e-12
+
+
+def test_body_taking_the_room_is_a_scene_error():
+    # 1000 spheres fit in this cube on their own, not beside a slab through its middle
+    s = scene(fill(count=1000, radius="0.01",
+                   region='box = { min = [0, 0, 0], max = [0.2, 0.2, 0.2] }') + SLAB)
+    assert place_fills(dataclasses.replace(s, bodies=()), np.random.default_rng(1)).n == 1000
+    with pytest.raises(SceneError) as e:
+        place_fills(s, np.random.default_rng(1))
+    assert e.value.key == "particles[0].count"
+    assert "clear of walls, bodies and earlier particles" in e.value.reason
+    assert "enlarge the region or reduce count" in e.value.reason
+
+
+def test_body_check_is_fast():
+    # ~20k candidate lattice sites against a few thousand triangles
+    s = scene(fill(count=5000, radius="0.006", region=AROUND_SHAFT) + SHAFT.format(rows=10),
+              **SHAFT_DOMAIN)
+    n_tri = len(s.bodies[0].faces)
+    assert n_tri > 2000
+    t = time.perf_counter()
+    p = place_fills(s, np.random.default_rng(0))
+    elapsed = time.perf_counter() - t
+    assert p.n == 5000
+    assert elapsed < 3.0, f"placement beside {n_tri} triangles took {elapsed:.2f} s"
+
+
+def test_body_query_many_sites_many_triangles_is_fast():
+    from taichi_dem.placement import _Triangles
+    s = scene(fill(count=10, radius="0.005", region=AROUND_SHAFT) + SHAFT.format(rows=10),
+              **SHAFT_DOMAIN)
+    tris = _Triangles(s, 0.01)
+    rng = np.random.default_rng(0)
+    pts = rng.uniform((0.0, -0.3, -0.3), (1.0, 0.3, 0.3), (100_000, 3))
+    r = np.full(len(pts), 0.005)
+    t = time.perf_counter()
+    hit = tris.hits(pts, r)
+    elapsed = time.perf_counter() - t
+    assert elapsed < 3.0, f"100k sites vs {len(tris)} triangles took {elapsed:.2f} s"
+    # agrees with brute force on the hits and on a sample of misses nearest the body
+    tri = s.bodies[0].vertices[s.bodies[0].faces]
+    sample = np.concatenate([np.nonzero(hit)[0][:150], np.nonzero(~hit)[0][:150]])
+    d = np.concatenate([point_triangle_distance(pts[c], tri).min(axis=1)
+                        for c in np.array_split(sample, 10)])
+    np.testing.assert_array_equal(d < r[sample] * (1 + 1e-9), hit[sample])
