@@ -155,6 +155,7 @@ class MeshContacts:
         self.tri_b = t.add("tri_b", real, nt, vector=True)
         self.tri_c = t.add("tri_c", real, nt, vector=True)
         self.tri_body = t.add("tri_body", ti.i32, nt)
+        self.tri_normal = t.add("tri_normal", real, nt, vector=True)     # unit, reference frame
         self.sched_time = t.add("sched_time", real, (nb, MAX_SCHEDULE))
         self.sched_speed = t.add("sched_speed", real, (nb, MAX_SCHEDULE))
         self.sched_angle = t.add("sched_angle", real, (nb, MAX_SCHEDULE))
@@ -174,6 +175,11 @@ class MeshContacts:
         self.tri_cell_count = t.add("tri_cell_count", ti.i32, ncell)
         self.tri_cell_start = t.add("tri_cell_start", ti.i32, ncell + 1)
         self.tri_cell_fill = t.add("tri_cell_fill", ti.i32, ncell)
+        # each particle's share of the body loads, summed over steps without atomics (two
+        # threads adding into one body's total fight over a cache line: that cost 60 % of the
+        # mesh contact time) and flushed into the totals before particles are reordered
+        self.particle_load_force = t.add("particle_load_force", real, (s.capacity, nb), vector=True)
+        self.particle_load_torque = t.add("particle_load_torque", real, (s.capacity, nb), vector=True)
         self.mesh_start = t.add("mesh_start", ti.i32, s.capacity + 1)
         self.mesh_count = t.add("mesh_count", ti.i32, s.capacity)
         self.old_start_by_id = t.add("old_mesh_start_by_id", ti.i32, s.capacity)
@@ -184,6 +190,9 @@ class MeshContacts:
             self.tri_b.from_numpy(tris[:, 1].astype(self._np_real()))
             self.tri_c.from_numpy(tris[:, 2].astype(self._np_real()))
             self.tri_body.from_numpy(owner)
+            normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+            normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+            self.tri_normal.from_numpy(normal.astype(self._np_real()))
         ap = np.zeros((nb, 3)); ad = np.zeros((nb, 3)); bv = np.zeros((nb, 3))
         mat = np.zeros(nb, np.int32)
         for k, b in enumerate(bodies):
@@ -296,7 +305,17 @@ class MeshContacts:
                 m.offset[b] = off
                 m.angular_velocity[b] = omega
 
+        @ti.kernel
+        def flush_loads(n: ti.i32):
+            for i in range(n):
+                for b in ti.static(range(nb)):
+                    m.force_sum[b] += m.particle_load_force[i, b]
+                    m.torque_sum[b] += m.particle_load_torque[i, b]
+                    m.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                    m.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
+
         self._update_frames = update_frames
+        self._flush_loads = flush_loads
         self._compile_binning()
         self._compile_rows()
 
@@ -467,6 +486,7 @@ class MeshContacts:
         E, G, Z, MU = e.youngs_eff, e.shear_eff, e.damping, e.friction
         MUR, RM, RD = e.rolling_friction, e.rolling_model, e.rolling_damping
         cdt, epsd = e.rolling_cdt, e.rolling_epsd
+        periodic = any(e.grid.periodic)
         same_surface_cos = SAME_SURFACE_COS
         from .effects import rolling
 
@@ -476,20 +496,29 @@ class MeshContacts:
             torque = ti.Vector([0.0, 0.0, 0.0])
             start = m.mesh_start[i]
             end = start + m.mesh_count[i]
-            # geometry of every candidate triangle
+            # geometry of every candidate triangle, in its body's reference frame: the particle
+            # is moved into that frame (one rotation) instead of the triangle out of it (three)
             for k in range(start, end):
-                a, b, c = m.world_triangle(m.mesh_tri[k])
-                x_image = m.image_near(xi, a)
-                q, region = closest_point_on_triangle(x_image, a, b, c)
-                d = x_image - q
-                dist_sq = d.dot(d)
+                t = m.mesh_tri[k]
+                body = m.tri_body[t]
+                rot = m.rotation[body]
+                pivot = m.axis_point[body]
+                x_world = xi
+                if ti.static(periodic):
+                    x_world = m.image_near(xi, rot @ (m.tri_a[t] - pivot) + pivot + m.offset[body])
+                x_ref = rot.transpose() @ (x_world - pivot - m.offset[body]) + pivot
                 m.mesh_status[k] = ti.u8(2)
-                if dist_sq < ri * ri and dist_sq > 0.0:
-                    dist = ti.sqrt(dist_sq)
-                    m.mesh_overlap[k] = ri - dist
-                    m.mesh_normal[k] = d / dist
-                    m.mesh_point[k] = q
-                    m.mesh_status[k] = ti.u8(0)
+                # a triangle whose plane is farther than r cannot touch (most candidates)
+                if ti.abs((x_ref - m.tri_a[t]).dot(m.tri_normal[t])) < ri:
+                    q, region = closest_point_on_triangle(x_ref, m.tri_a[t], m.tri_b[t], m.tri_c[t])
+                    d = x_ref - q
+                    dist_sq = d.dot(d)
+                    if dist_sq < ri * ri and dist_sq > 0.0:
+                        dist = ti.sqrt(dist_sq)
+                        m.mesh_overlap[k] = ri - dist
+                        m.mesh_normal[k] = rot @ (d / dist)
+                        m.mesh_point[k] = rot @ (q - pivot) + pivot + m.offset[body]
+                        m.mesh_status[k] = ti.u8(0)
             # deepest first; drop neighbours of the same flat or convex surface
             for _ in range(end - start):
                 best = -1
@@ -553,8 +582,8 @@ class MeshContacts:
                                 m.rolling_history[k] = rolling_history
                     force += contact
                     torque += contact_torque
-                    m.force_sum[body] -= contact
-                    m.torque_sum[body] += body_torque
+                    m.particle_load_force[i, body] = m.particle_load_force[i, body] - contact
+                    m.particle_load_torque[i, body] = m.particle_load_torque[i, body] + body_torque
                     m.mesh_history[k] = history
                     m.mesh_contact[k] = ti.u8(1)
                 elif m.mesh_contact[k] != 0:
@@ -571,6 +600,8 @@ class MeshContacts:
         self._update_frames(time)
 
     def save_rows(self, n: int):
+        """Before particles are reordered: remember the rows, flush the particles' loads."""
+        self._flush_loads(n)
         self._save_rows(n)
 
     def rebuild_rows(self, n: int, time: float):
@@ -602,9 +633,10 @@ class MeshContacts:
         return any(self.kin.displacement(k, self.binned_time, time) > half
                    for k in range(self.n_bodies))
 
-    def take_loads(self):
+    def take_loads(self, n: int):
         """Mean force (N) and torque about the axis point (N m) per body over the steps since
-        the last call; resets the sums."""
+        the last call; resets the sums. ``n``: particles alive."""
+        self._flush_loads(n)
         steps = max(self.interval_steps, 1)
         f = self.force_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps
         t = self.torque_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps

@@ -190,7 +190,7 @@ class Simulation:
                   "particles/lost": self.engine.lost}
         mesh = self.engine.mesh
         if mesh is not None:
-            forces, torques = mesh.take_loads()
+            forces, torques = mesh.take_loads(self.engine.count)
             for k, body in enumerate(self.scene.bodies):
                 axis = np.asarray(body.motion.axis_direction, float)
                 speed = self.engine.kinematics.speed(k, self.time)
