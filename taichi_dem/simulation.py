@@ -84,6 +84,9 @@ class Simulation:
             self.recorder = HDF5Recorder(h5, scene_text=scene.text, dt=self.dt, arch=arch,
                                          precision=self.precision)
         self.wall_seconds = 0.0
+        # recorders and sensors that observe every sample: callables (sim, values) -> None,
+        # where values maps /series names to this sample's values; they never change the state
+        self.observers: list = []
         self._sample()
 
     # ---------------------------------------------------------------- construction
@@ -208,6 +211,8 @@ class Simulation:
                 values[f"walls/{w.name}/force"] = wf[k].astype(np.float64)
         for name, v in values.items():
             self._series.setdefault(name, []).append(np.asarray(v, dtype=np.float64))
+        for observe in self.observers:
+            observe(self, values)
         if self.recorder is not None:
             self.recorder.append_series(values)
             arrays = self.particles()
@@ -285,8 +290,19 @@ class Simulation:
     def effects(self):
         return enabled_effects(self.scene)
 
+    def add_observer(self, observe, *, now: bool = True):
+        """Call ``observe(sim, values)`` at every output sample (and at once if ``now``) with
+        the sample's /series values. Observers read the state; they must not change it."""
+        self.observers.append(observe)
+        if now:
+            observe(self, {k: v[-1] for k, v in self._series.items()})
+
     def close(self):
         """Free device memory and close the recorder."""
+        for observe in self.observers:
+            if hasattr(observe, "close"):
+                observe.close()
+        self.observers = []
         if self.recorder is not None:
             self.recorder.close()
             self.recorder = None
