@@ -164,6 +164,9 @@ class MeshContacts:
         self.axis_direction = t.add("axis_direction", real, nb, vector=True)
         self.body_velocity = t.add("body_velocity", real, nb, vector=True)
         self.body_material = t.add("body_material", ti.i32, nb)
+        # K of an isothermal body (water-cooled shell); negative = adiabatic or no conduction
+        self.body_temperature = t.add("body_temperature", real, nb)
+        self.heat_sum = t.add("heat_sum", real, nb)
         # the frame of each body now: x_world = R (x_ref - axis_point) + axis_point + offset
         self.rotation = ti.Matrix.field(3, 3, real)
         t._builder.dense(ti.i, nb).place(self.rotation)
@@ -180,6 +183,8 @@ class MeshContacts:
         # mesh contact time) and flushed into the totals before particles are reordered
         self.particle_load_force = t.add("particle_load_force", real, (s.capacity, nb), vector=True)
         self.particle_load_torque = t.add("particle_load_torque", real, (s.capacity, nb), vector=True)
+        self.particle_load_heat = (t.add("particle_load_heat", real, (s.capacity, nb))
+                                   if engine.wall_conduction else None)
         self.mesh_start = t.add("mesh_start", ti.i32, s.capacity + 1)
         self.mesh_count = t.add("mesh_count", ti.i32, s.capacity)
         self.old_start_by_id = t.add("old_mesh_start_by_id", ti.i32, s.capacity)
@@ -202,6 +207,11 @@ class MeshContacts:
         self.axis_direction.from_numpy(ad.astype(self._np_real()))
         self.body_velocity.from_numpy(bv.astype(self._np_real()))
         self.body_material.from_numpy(mat)
+        temps = np.full(nb, -1.0)
+        for k, b in enumerate(bodies):
+            if engine.wall_conduction and b.temperature is not None:
+                temps[k] = b.temperature
+        self.body_temperature.from_numpy(temps.astype(self._np_real()))
         self.upload_schedules()
         self.items_tree = None
         self.entries_tree = None
@@ -305,6 +315,8 @@ class MeshContacts:
                 m.offset[b] = off
                 m.angular_velocity[b] = omega
 
+        heat_loads = self.particle_load_heat is not None
+
         @ti.kernel
         def flush_loads(n: ti.i32):
             for i in range(n):
@@ -313,6 +325,9 @@ class MeshContacts:
                     m.torque_sum[b] += m.particle_load_torque[i, b]
                     m.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
                     m.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                    if ti.static(heat_loads):
+                        m.heat_sum[b] += m.particle_load_heat[i, b]
+                        m.particle_load_heat[i, b] = 0.0
 
         self._update_frames = update_frames
         self._flush_loads = flush_loads
@@ -487,6 +502,10 @@ class MeshContacts:
         MUR, RM, RD = e.rolling_friction, e.rolling_model, e.rolling_damping
         cdt, epsd = e.rolling_cdt, e.rolling_epsd
         periodic = any(e.grid.periodic)
+        wall_conduction = e.wall_conduction
+        KC = e.conductance_factor if e.thermal else None
+        RC = e.radius_correction if e.thermal else None
+        s = e.state
         same_surface_cos = SAME_SURFACE_COS
         from .effects import rolling
 
@@ -494,6 +513,8 @@ class MeshContacts:
         def particle_contacts(i, xi, vi, wi, ri, mass_i, inverse_inertia_i, ai, mi, dt):
             force = ti.Vector([0.0, 0.0, 0.0])
             torque = ti.Vector([0.0, 0.0, 0.0])
+            heat = 0.0
+            conductance = 0.0
             start = m.mesh_start[i]
             end = start + m.mesh_count[i]
             # geometry of every candidate triangle, in its body's reference frame: the particle
@@ -580,6 +601,13 @@ class MeshContacts:
                             body_torque -= tr
                             if ti.static(epsd):
                                 m.rolling_history[k] = rolling_history
+                    if ti.static(wall_conduction):
+                        if m.body_temperature[body] >= 0.0:
+                            h_b = KC[mi, mb] * RC[mi, mb] * ti.sqrt(ri * overlap)
+                            q_b = h_b * (m.body_temperature[body] - s.temperature[i])
+                            heat += q_b
+                            conductance += h_b
+                            m.particle_load_heat[i, body] = m.particle_load_heat[i, body] - q_b
                     force += contact
                     torque += contact_torque
                     m.particle_load_force[i, body] = m.particle_load_force[i, body] - contact
@@ -591,7 +619,7 @@ class MeshContacts:
                     m.mesh_history[k] = ti.Vector([0.0, 0.0, 0.0])
                     if ti.static(epsd):
                         m.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
-            return force, torque
+            return force, torque, heat, conductance
 
         return particle_contacts
 
@@ -640,7 +668,9 @@ class MeshContacts:
         steps = max(self.interval_steps, 1)
         f = self.force_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps
         t = self.torque_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps
+        q = self.heat_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps
         self.force_sum.fill(0.0)
         self.torque_sum.fill(0.0)
+        self.heat_sum.fill(0.0)
         self.interval_steps = 0
-        return f, t
+        return f, t, q

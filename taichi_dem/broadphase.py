@@ -187,6 +187,7 @@ class Broadphase:
         skin = self.e.skin
         cell_start = self.cell_start
         total = self.total
+        fixed_pairs = self.e.conduction
 
         minimum_image = g.make_minimum_image()
 
@@ -210,8 +211,9 @@ class Broadphase:
                     if inside:
                         nc = (nb[0] * dims[1] + nb[1]) * dims[2] + nb[2]
                         for j in range(cell_start[nc], cell_start[nc + 1]):
-                            # two fixed particles never interact (LAMMPS: neigh_modify exclude)
-                            if j != i and (movable_i or s.inverse_mass[j] > 0.0):
+                            # two fixed particles exert no forces (LAMMPS: neigh_modify
+                            # exclude); they are listed only when they conduct heat
+                            if j != i and (movable_i or s.inverse_mass[j] > 0.0 or ti.static(fixed_pairs)):
                                 d = minimum_image(xi - s.position[j])
                                 cutoff = ri + s.radius[j] + skin
                                 if d.dot(d) < cutoff * cutoff:

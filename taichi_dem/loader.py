@@ -19,12 +19,16 @@ import numpy as np
 
 from .scene import (Body, Domain, Interaction, Material, Motion, Output, ParticleFill,
                     PlaneWall, RadiusDistribution, Region, Scene, SceneError,
-                    SimulationSettings, SpeedSchedule)
+                    SimulationSettings, SpeedSchedule, GasSettings, ThermalSettings)
 from .units import parse_quantity, parse_vec3
 
 SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "bodies",
+            "thermal",
             "output")
-PLANNED_SECTIONS = ("factories", "outlets", "sensors", "thermal", "mobility")
+PLANNED_SECTIONS = ("factories", "outlets", "sensors", "mobility")
+THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction")
+GAS_KEYS = ("model", "temperature", "velocity", "correlation", "porosity", "density",
+            "viscosity", "conductivity", "heat_capacity")
 
 SIMULATION_KEYS = ("end_time", "dt", "rayleigh_fraction", "gravity", "precision", "seed", "skin")
 DOMAIN_KEYS = ("min", "max", "periodic")
@@ -218,9 +222,10 @@ class _Parser:
                       for i, f in enumerate(self.array_of_tables(doc, "particles")))
         output = self.parse_output(doc.get("output", {}))
         self.check_coverage(interactions, fills, walls, bodies)
+        thermal = self.parse_thermal(doc["thermal"], fills, walls, bodies) if "thermal" in doc else None
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
-                     walls=walls, bodies=bodies, output=output)
+                     walls=walls, bodies=bodies, output=output, thermal=thermal)
 
     def simulation(self, value: Any) -> SimulationSettings:
         key = "simulation"
@@ -701,6 +706,72 @@ class _Parser:
             kw["checkpoint_interval"] = self.positive(t["checkpoint_interval"], "time",
                                                       f"{key}.checkpoint_interval")
         return Output(**kw)
+
+    def parse_thermal(self, value: Any, fills, walls, bodies) -> ThermalSettings:
+        """[thermal] and [thermal.gas]; every particle material needs thermal_conductivity and
+        heat_capacity, every fill a temperature, and walls/bodies with a temperature a
+        thermal_conductivity for their material."""
+        key = "thermal"
+        t = self.table(value, key)
+        self.check_keys(t, key, THERMAL_KEYS)
+        kw: dict[str, Any] = {}
+        for k in ("conduction", "wall_conduction", "radiation"):
+            if k in t:
+                kw[k] = self.boolean(t[k], f"{key}.{k}")
+        if kw.get("radiation"):
+            raise self.err(f"{key}.radiation", "radiation is not supported yet by this version "
+                                               "of taichi_dem (planned); set it to false")
+        if "contact_radius_correction" in t:
+            c = self.string(t["contact_radius_correction"], f"{key}.contact_radius_correction")
+            if c not in ("static", "collision", "none"):
+                raise self.err(f"{key}.contact_radius_correction",
+                               f"must be \"static\", \"collision\" or \"none\", got \"{c}\"")
+            kw["contact_radius_correction"] = c
+        if "gas" in t:
+            g = self.table(t["gas"], f"{key}.gas")
+            self.check_keys(g, f"{key}.gas", GAS_KEYS)
+            gk: dict[str, Any] = {}
+            model = self.string(g.get("model", "fixed"), f"{key}.gas.model")
+            if model == "axial_plug_flow":
+                raise self.err(f"{key}.gas.model", "\"axial_plug_flow\" is not supported yet by "
+                                                   "this version of taichi_dem (planned); use \"fixed\"")
+            if model != "fixed":
+                raise self.err(f"{key}.gas.model", f"must be \"fixed\" or \"axial_plug_flow\", got \"{model}\"")
+            gk["model"] = model
+            corr = self.string(g.get("correlation", "ranz_marshall"), f"{key}.gas.correlation")
+            if corr not in ("ranz_marshall", "gunn"):
+                raise self.err(f"{key}.gas.correlation", f"must be \"ranz_marshall\" or \"gunn\", got \"{corr}\"")
+            gk["correlation"] = corr
+            if "temperature" in g:
+                gk["temperature"] = self.positive(g["temperature"], "temperature", f"{key}.gas.temperature")
+            if "velocity" in g:
+                gk["velocity"] = self.vec3(g["velocity"], "speed", f"{key}.gas.velocity")
+            if "porosity" in g:
+                eps = self.q(g["porosity"], "dimensionless", f"{key}.gas.porosity")
+                if not 0.0 < eps < 1.0:
+                    raise self.err(f"{key}.gas.porosity", f"must be in (0, 1), got {eps:g}")
+                gk["porosity"] = eps
+            for k, dim in (("density", "density"), ("viscosity", "viscosity"),
+                           ("conductivity", "thermal_conductivity"), ("heat_capacity", "specific_heat")):
+                if k in g:
+                    gk[k] = self.positive(g[k], dim, f"{key}.gas.{k}")
+            kw["gas"] = GasSettings(**gk)
+        settings = ThermalSettings(**kw)
+        for f in fills:
+            mat = self.materials[f.material]
+            for k in ("thermal_conductivity", "heat_capacity"):
+                if getattr(mat, k) is None:
+                    raise self.err(f"materials.{f.material}.{k}",
+                                   f"required when [thermal] is present (particles of '{f.material}')")
+            if f.temperature is None:
+                raise self.err(f"{f.key}.temperature", "required when [thermal] is present")
+        if settings.wall_conduction:
+            for w in list(walls) + list(bodies):
+                if w.temperature is not None and self.materials[w.material].thermal_conductivity is None:
+                    raise self.err(f"materials.{w.material}.thermal_conductivity",
+                                   f"required: '{w.name}' has a temperature and [thermal] "
+                                   f"wall_conduction is on")
+        return settings
 
     def check_coverage(self, interactions: dict, fills, walls, bodies=()) -> None:
         """Every pair of materials that can meet needs an [[interactions]] entry."""

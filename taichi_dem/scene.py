@@ -147,6 +147,32 @@ class PlaneWall:
 
 
 @dataclass(frozen=True)
+class GasSettings:
+    """The gas particles exchange heat with by convection (air at 300 K by default)."""
+    model: str = "fixed"                 # "fixed" (| "axial_plug_flow", planned)
+    temperature: float = 300.0           # K
+    velocity: Vec3 = (0.0, 0.0, 0.0)     # m/s
+    correlation: str = "ranz_marshall"   # Nusselt correlation: "ranz_marshall" | "gunn"
+    porosity: float = 0.4                # bed voidage for "gunn"
+    density: float = 1.177               # kg/m^3
+    viscosity: float = 1.846e-5          # Pa s
+    conductivity: float = 0.02624        # W/(m K)
+    heat_capacity: float = 1007.0        # J/(kg K)
+
+
+@dataclass(frozen=True)
+class ThermalSettings:
+    """[thermal]: present = heat transfer compiled and run; each part switchable."""
+    conduction: bool = True              # particle-particle, through the contact area
+    wall_conduction: bool = True         # to walls and bodies that have a temperature
+    radiation: bool = False              # (planned)
+    gas: Optional[GasSettings] = None    # None = no convection
+    # correction of the contact radius for softened stiffness: "static" a ~ E*^(-1/3)
+    # (enduring contacts, the default), "collision" a ~ E*^(-1/5) (Morris et al. 2016), "none"
+    contact_radius_correction: str = "static"
+
+
+@dataclass(frozen=True)
 class Output:
     interval: float = 0.05               # s
     rrd: Optional[str] = None
@@ -166,6 +192,7 @@ class Scene:
     walls: tuple[PlaneWall, ...] = ()
     bodies: tuple["Body", ...] = ()
     output: Output = field(default_factory=Output)
+    thermal: Optional[ThermalSettings] = None
 
     def interaction(self, a: str, b: str) -> Interaction:
         return self.interactions[frozenset((a, b))]

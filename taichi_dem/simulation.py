@@ -59,7 +59,7 @@ class Simulation:
         radii = placed.radius
         speeds = np.linalg.norm(placed.velocity, axis=1)
         self.timestep, self.skin = choose_step_and_skin(scene, radii, placed.material,
-                                                        self.tables.names, speeds)
+                                                        self.tables.names, speeds, placed.fixed)
         self.dt = self.timestep.dt
 
         self.engine = Engine(scene, self.tables, self.n_initial, self.real, self.skin,
@@ -130,6 +130,11 @@ class Simulation:
         s.material.from_numpy(scal(placed.material, np.int32))
         s.particle_id.from_numpy(scal(np.arange(n), np.int32))
         s.alive.from_numpy(scal(np.ones(n), np.int32))
+        if self.scene.thermal is not None:
+            heat_capacity = np.array([self.scene.materials[name].heat_capacity or 0.0
+                                      for name in self.tables.names])[placed.material]
+            s.temperature.from_numpy(scal(placed.temperature))
+            s.inverse_thermal_mass.from_numpy(scal(1.0 / (mass * heat_capacity)))
 
     def _mark_stale(self, why: str):
         self._stale = why
@@ -188,12 +193,17 @@ class Simulation:
                 f"Likely cause: a time step too large for the stiffest contact; reduce "
                 f"simulation.dt or rayleigh_fraction")
         self._check_contact_resolution(m["max_speed"])
+        if self.engine.thermal:
+            values_thermal = {"particles/mean_temperature": m["mean_temperature"]}
+            self._check_thermal_step(m["thermal_step_ratio"])
+        else:
+            values_thermal = {}
         values = {"time": self.time, "particles/count": self.engine.count,
                   "particles/kinetic_energy": m["kinetic_energy"],
-                  "particles/lost": self.engine.lost}
+                  "particles/lost": self.engine.lost, **values_thermal}
         mesh = self.engine.mesh
         if mesh is not None:
-            forces, torques = mesh.take_loads(self.engine.count)
+            forces, torques, heats = mesh.take_loads(self.engine.count)
             for k, body in enumerate(self.scene.bodies):
                 axis = np.asarray(body.motion.axis_direction, float)
                 speed = self.engine.kinematics.speed(k, self.time)
@@ -205,10 +215,15 @@ class Simulation:
                 values[prefix + "angular_speed"] = speed
                 # the particles' torque resists the turning; the drive supplies -T w
                 values[prefix + "power"] = -axial * speed
+                if self.engine.wall_conduction and body.temperature is not None:
+                    values[prefix + "heat_flow"] = heats[k]
         if self.scene.walls:
             wf = self.engine.wall_force.to_numpy()
+            wq = self.engine.wall_heat.to_numpy() if self.engine.thermal else None
             for k, w in enumerate(self.scene.walls):
                 values[f"walls/{w.name}/force"] = wf[k].astype(np.float64)
+                if wq is not None and self.engine.wall_conduction and w.temperature is not None:
+                    values[f"walls/{w.name}/heat_flow"] = float(wq[k])
         for name, v in values.items():
             self._series.setdefault(name, []).append(np.asarray(v, dtype=np.float64))
         for observe in self.observers:
@@ -217,8 +232,26 @@ class Simulation:
             self.recorder.append_series(values)
             arrays = self.particles()
             self.recorder.append_frame(self.time, {k: arrays[k] for k in (
-                "id", "position", "velocity", "angular_velocity", "radius")})
+                "id", "position", "velocity", "angular_velocity", "radius", "temperature")
+                if k in arrays})
             self.recorder.flush()
+
+    def _check_thermal_step(self, ratio: float):
+        """Explicit temperature update: T += dt sum(Q)/(m c) is stable while dt sum(h)/(m c)
+        < 1 for every particle (h the conductances of its contacts and convection)."""
+        if ratio >= 1.0:
+            raise DivergenceError(
+                f"the temperature update is unstable at t = {self.time:.6g} s: dt sum(h)/(m c) = "
+                f"{ratio:.3g} >= 1 for some particle. Reduce simulation.dt (by {ratio:.2g}x at "
+                f"least), or raise heat_capacity/lower thermal_conductivity if they are scaled")
+        if ratio >= 0.5 and not getattr(self, "_warned_thermal", False):
+            self._warned_thermal = True
+            print(f"taichi-dem: warning: at t = {self.time:.4g} s dt sum(h)/(m c) = {ratio:.3g}: "
+                  f"the temperature update is near its stability limit (1)", file=sys.stderr)
+
+    def thermal_energy(self) -> float:
+        """sum m c T over the particles, J (thermal scenes)."""
+        return self.engine.measure()["thermal_energy"]
 
     def _check_contact_resolution(self, max_speed: float):
         """The Hertz contact time shrinks as v^(-1/5): warn once if the fastest particle now
@@ -275,6 +308,8 @@ class Simulation:
         for name in ("radius", "mass"):
             out[name] = getattr(s, name).to_numpy()[:n][order].astype(np.float64)
         out["fixed"] = s.inverse_mass.to_numpy()[:n][order] == 0.0
+        if self.engine.thermal:
+            out["temperature"] = s.temperature.to_numpy()[:n][order].astype(np.float64)
         return out
 
     def kinetic_energy(self) -> float:

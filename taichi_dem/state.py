@@ -57,13 +57,18 @@ class ParticleState:
         "material": (False, "int"), "particle_id": (False, "int"), "alive": (False, "int"),
     }
 
-    def __init__(self, capacity: int, real, n_walls: int, rolling_history: bool):
+    # allocated only when [thermal] is present: temperature K, 1/(m c) 1/(J/K)
+    THERMAL = {"temperature": (False, "real"), "inverse_thermal_mass": (False, "real")}
+
+    def __init__(self, capacity: int, real, n_walls: int, rolling_history: bool,
+                 thermal: bool = False):
         self.capacity = capacity
+        self.spec = dict(self.CORE, **(self.THERMAL if thermal else {}))
         self.real = real
         self.n_walls = n_walls
         self.tree = FieldTree()
         self.names: list[str] = []
-        for name, (vec, kind) in self.CORE.items():
+        for name, (vec, kind) in self.spec.items():
             self._add(name, vec, kind)
         if n_walls:
             # tangential displacement of each particle's contact with each plane wall
@@ -78,6 +83,10 @@ class ParticleState:
         # force (N) and torque (N m) of the pairs this particle owns, summed by the pair kernel
         self.owned_force = t.add("owned_force", real, capacity, vector=True)
         self.owned_torque = t.add("owned_torque", real, capacity, vector=True)
+        if thermal:
+            # heat flow (W) of the owned pairs; sum of the conductances (W/K) of the last step
+            self.owned_heat = t.add("owned_heat", real, capacity)
+            self.conductance = t.add("conductance", real, capacity)
         self.cell = t.add("cell", ti.i32, capacity)
         self.order = t.add("order", ti.i32, capacity)
         self.inverse_order = t.add("inverse_order", ti.i32, capacity)
@@ -103,9 +112,9 @@ class ParticleState:
     def reorder_groups(self):
         """(vector fields, real scalar fields, int fields, per-wall vector fields) to permute
         together when particles are put back into cell order."""
-        vec = [getattr(self, n) for n, (v, k) in self.CORE.items() if v]
-        real = [getattr(self, n) for n, (v, k) in self.CORE.items() if not v and k == "real"]
-        ints = [getattr(self, n) for n, (v, k) in self.CORE.items() if not v and k == "int"]
+        vec = [getattr(self, n) for n, (v, k) in self.spec.items() if v]
+        real = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "real"]
+        ints = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "int"]
         walls = [getattr(self, n) for n in ("wall_tangential_history", "wall_rolling_history")
                  if hasattr(self, n)]
         return vec, real, ints, walls
@@ -125,9 +134,12 @@ class PairState:
     owner's entry.
     """
 
-    def __init__(self, capacity: int, real, rolling_history: bool):
+    def __init__(self, capacity: int, real, rolling_history: bool, conduction: bool = False):
         self.capacity = capacity
         t = self.tree = FieldTree()
+        # the partner's share of the heat flow (W), valid while touching (conduction only)
+        self.partner_heat = t.add("partner_heat", real, capacity) if conduction else None
+        self.pair_conductance = t.add("pair_conductance", real, capacity) if conduction else None
         self.neighbour = t.add("neighbour", ti.i32, capacity)
         self.mirror = t.add("mirror", ti.i32, capacity)
         # 1 while the pair touches; the partner's force and torque are valid only then, and the

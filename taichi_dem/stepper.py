@@ -37,9 +37,14 @@ class Engine:
         self.effects = effect_names(scene)
         self.rolling_cdt = "rolling_constant_torque" in self.effects
         self.rolling_epsd = "rolling_epsd" in self.effects
+        self.thermal = scene.thermal is not None
+        self.conduction = "conduction" in self.effects
+        self.wall_conduction = "wall_conduction" in self.effects
+        self.convection = "convection" in self.effects
         self.trees: list[FieldTree] = []
         self.walls = scene.walls
-        self.state = ParticleState(capacity, real, len(scene.walls), self.rolling_epsd)
+        self.state = ParticleState(capacity, real, len(scene.walls), self.rolling_epsd,
+                                   thermal=self.thermal)
         self.trees.append(self.state.tree)
         self.grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
                              2.0 * max_radius + skin, capacity)
@@ -54,8 +59,18 @@ class Engine:
         self.rolling_damping = t.add("rolling_damping", real, (m, m))
         self.flags = t.add("flags", ti.i32, 2)                 # [rebuild needed, lost count]
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
-        self.reduction = t.add("reduction", real, 4)
+        self.reduction = t.add("reduction", real, 8)
+        if self.thermal:
+            self.conductance_factor = t.add("conductance_factor", real, (m, m))
+            self.radius_correction = t.add("radius_correction", real, (m, m))
+            self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
         t.finalize()
+        if self.thermal:
+            from .model import conduction_tables
+            factor, correction = conduction_tables(scene, tables.names)
+            npf = np.float64 if real == ti.f64 else np.float32
+            self.conductance_factor.from_numpy(factor.astype(npf))
+            self.radius_correction.from_numpy(correction.astype(npf))
         for name in ("youngs_eff", "shear_eff", "damping", "friction", "rolling_friction",
                      "rolling_damping"):
             getattr(self, name).from_numpy(getattr(tables, name).astype(np.float64 if real == ti.f64 else np.float32))
@@ -84,7 +99,7 @@ class Engine:
         """(Re)allocate the pair arrays with room for ``capacity`` entries, keeping the saved
         previous list (old_* arrays) so the history can still be carried."""
         old = self.pairs
-        new = PairState(capacity, self.real, self.rolling_epsd)
+        new = PairState(capacity, self.real, self.rolling_epsd, self.conduction)
         if old is not None:
             new.old_partner_id.from_numpy(_pad(old.old_partner_id.to_numpy(), capacity))
             new.old_tangential_history.from_numpy(_pad(old.old_tangential_history.to_numpy(), capacity))
@@ -149,10 +164,14 @@ class Engine:
             for i in range(n):
                 drift_particle(i, dt)
 
+        thermal = self.thermal
+        dt_step = self.dt
+
         @ti.kernel
         def measure(n: ti.i32):
-            # kinetic energy (translational + rotational, J), largest speed, alive count
-            for k in ti.static(range(4)):
+            # kinetic energy (translational + rotational, J), largest speed, non-finite flag,
+            # alive count; thermal: sum m c T (J), sum m c (J/K), largest dt sum(h)/(m c)
+            for k in ti.static(range(8)):
                 red[k] = 0.0
             for i in range(n):
                 if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
@@ -164,6 +183,15 @@ class Engine:
                     if not (v2 >= 0.0 and v2 < 1e300):
                         red[2] = 1.0      # NaN or overflow
                     red[3] += 1.0
+            if ti.static(thermal):
+                for i in range(n):
+                    if s.alive[i] != 0:
+                        thermal_mass = 1.0 / s.inverse_thermal_mass[i]
+                        red[4] += thermal_mass * s.temperature[i]
+                        red[5] += thermal_mass
+                        ti.atomic_max(red[6], dt_step * s.conductance[i] * s.inverse_thermal_mass[i])
+                        if not (s.temperature[i] > 0.0 and s.temperature[i] < 1e30):
+                            red[2] = 1.0
 
         self._drift, self._measure = drift, measure
 
@@ -180,6 +208,17 @@ class Engine:
         real = self.real
         drift_particle = self.drift_particle
         has_mesh = self.mesh is not None
+        conduction, wall_conduction, convection = self.conduction, self.wall_conduction, self.convection
+        thermal = self.thermal
+        KC = self.conductance_factor if thermal else None
+        RC = self.radius_correction if thermal else None
+        wall_temperature = [w.temperature if (w.temperature is not None and wall_conduction) else -1.0
+                            for w in self.walls]
+        wall_heat = self.wall_heat if thermal else None
+        gas = self.scene.thermal.gas if (thermal and convection) else None
+        has_gas = gas is not None
+        gas_velocity = ti.Vector(list(gas.velocity)) if has_gas else None
+        prandtl = gas.heat_capacity * gas.viscosity / gas.conductivity if gas is not None else 0.0
 
         @ti.func
         def rolling_torque(pair_model, w_rel, normal, fn, sn, r_eff, mu_r, eta_r, inertia_eff,
@@ -201,6 +240,8 @@ class Engine:
                 ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
                 owned_force = ti.Vector([0.0, 0.0, 0.0])
                 owned_torque = ti.Vector([0.0, 0.0, 0.0])
+                owned_heat = 0.0
+                owned_conductance = 0.0
                 for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                     j = p.neighbour[k]
                     d = minimum_image(xi - s.position[j])
@@ -211,12 +252,28 @@ class Engine:
                         normal_overlap = ri + rj - dist
                         normal = d / dist                                   # from j to i
                         r_eff = ri * rj / (ri + rj)
+                        mj = s.material[j]
+                        if ti.static(conduction):
+                            # Q = h_c (T_j - T_i), h_c = 4 k_i k_j/(k_i + k_j) a, with the Hertz
+                            # contact radius a = (3 F_n R*/(4 E*))^(1/3) = sqrt(R* d_n),
+                            # corrected for a softened modulus (model.conduction_tables)
+                            h_c = KC[mi, mj] * RC[mi, mj] * ti.sqrt(r_eff * normal_overlap)
+                            heat = h_c * (s.temperature[j] - s.temperature[i])
+                            owned_heat += heat
+                            owned_conductance += h_c
+                            p.partner_heat[k] = -heat
+                            p.pair_conductance[k] = h_c
+                            if inv_mi + s.inverse_mass[j] <= 0.0:
+                                # two fixed particles (listed only for heat): no forces
+                                p.partner_force[k] = ti.Vector([0.0, 0.0, 0.0])
+                                p.partner_torque[k] = ti.Vector([0.0, 0.0, 0.0])
+                                p.contact[k] = ti.u8(1)
+                                continue
                         m_eff = 1.0 / (inv_mi + s.inverse_mass[j])
                         arm_i = ri - 0.5 * normal_overlap     # centre to contact point
                         arm_j = rj - 0.5 * normal_overlap
                         wj = s.angular_velocity[j]
                         v_rel = vi - s.velocity[j] - (arm_i * wi + arm_j * wj).cross(normal)
-                        mj = s.material[j]
                         normal_acceleration = (s.acceleration[i] - s.acceleration[j]).dot(normal)
                         fn, ft, history, sn = contact_force(
                             normal, normal_overlap, r_eff, m_eff, v_rel, normal_acceleration,
@@ -256,6 +313,9 @@ class Engine:
                             p.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
                 s.owned_force[i] = owned_force
                 s.owned_torque[i] = owned_torque
+                if ti.static(thermal):
+                    s.owned_heat[i] = owned_heat
+                    s.conductance[i] = owned_conductance
 
         mesh_contacts = self.mesh.make_particle_contacts(rolling_torque) if has_mesh else None
 
@@ -270,6 +330,18 @@ class Engine:
                         if p.contact[m] != 0:
                             force += p.partner_force[m]
                             torque += p.partner_torque[m]
+                heat = 0.0           # W into the particle
+                conductance = 0.0    # W/K, for the stability check
+                if ti.static(thermal):
+                    heat = s.owned_heat[i]
+                    conductance = s.conductance[i]
+                if ti.static(conduction):
+                    for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
+                        m = p.mirror[k]
+                        if m >= 0:
+                            if p.contact[m] != 0:
+                                heat += p.partner_heat[m]
+                                conductance += p.pair_conductance[m]
                 inv_m = s.inverse_mass[i]
                 if ti.static(n_walls > 0):
                     xi, vi, wi, ri, mi = s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i], s.material[i]
@@ -280,6 +352,15 @@ class Engine:
                         normal_overlap = ri - (xi - wall_point).dot(wall_normal)
                         history = ti.Vector([0.0, 0.0, 0.0])
                         rolling_history = ti.Vector([0.0, 0.0, 0.0])
+                        if ti.static(wall_temperature[w] >= 0.0):
+                            if normal_overlap > 0.0:
+                                # conduction to an isothermal (e.g. water-cooled) wall
+                                h_w = KC[mi, mw] * RC[mi, mw] * ti.sqrt(ri * normal_overlap)
+                                q_w = h_w * (ti.static(wall_temperature[w]) - s.temperature[i])
+                                heat += q_w
+                                conductance += h_w
+                                if record != 0:
+                                    wall_heat[w] -= q_w
                         if normal_overlap > 0.0 and inv_m > 0.0:
                             arm = ri - 0.5 * normal_overlap
                             v_rel = vi - arm * wi.cross(wall_normal)       # the wall is at rest
@@ -311,11 +392,32 @@ class Engine:
                             s.wall_rolling_history[i, w] = rolling_history
                 if ti.static(has_mesh):
                     if inv_m > 0.0:
-                        mesh_force, mesh_torque = mesh_contacts(
+                        mesh_force, mesh_torque, mesh_heat, mesh_conductance = mesh_contacts(
                             i, s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i],
                             s.mass[i], s.inverse_inertia[i], s.acceleration[i], s.material[i], dt)
                         force += mesh_force
                         torque += mesh_torque
+                        heat += mesh_heat
+                        conductance += mesh_conductance
+                if ti.static(has_gas):
+                    # convection, Q = h A (T_g - T_p), h = k_g Nu / d (PHYSICS.md)
+                    diameter = 2.0 * s.radius[i]
+                    reynolds = ti.static(gas.density / gas.viscosity) * diameter * (gas_velocity - s.velocity[i]).norm()
+                    nusselt = 0.0
+                    if ti.static(gas.correlation == "gunn"):
+                        eps = ti.static(gas.porosity)
+                        nusselt = ((7.0 - 10.0 * eps + 5.0 * eps ** 2) * (1.0 + 0.7 * reynolds ** 0.2 * prandtl ** (1 / 3))
+                                   + (1.33 - 2.4 * eps + 1.2 * eps ** 2) * reynolds ** 0.7 * prandtl ** (1 / 3))
+                    else:
+                        nusselt = 2.0 + 0.6 * ti.sqrt(reynolds) * prandtl ** (1 / 3)
+                    h_gas = ti.static(gas.conductivity) * nusselt / diameter * (3.141592653589793 * diameter * diameter)
+                    heat += h_gas * (ti.static(gas.temperature) - s.temperature[i])
+                    conductance += h_gas
+                if ti.static(thermal):
+                    if s.alive[i] != 0:
+                        # explicit update; stable while dt sum(h) / (m c) < 1 (checked per sample)
+                        s.temperature[i] += dt * heat * s.inverse_thermal_mass[i]
+                        s.conductance[i] = conductance
                 if inv_m > 0.0 and s.alive[i] != 0:
                     a = force * inv_m + gravity
                     alpha = torque * s.inverse_inertia[i]
@@ -359,6 +461,8 @@ class Engine:
             record = 1 if (record_last and last) else 0
             if record:
                 self.wall_force.fill(0.0)
+                if self.thermal:
+                    self.wall_heat.fill(0.0)
             self._pair_forces(self.count, dt)
             # the state is left at a whole step (no pending drift) when advance returns
             self._gather(self.count, dt, record, 0 if last else 1)
@@ -366,7 +470,11 @@ class Engine:
     def measure(self) -> dict:
         self._measure(self.count)
         r = self.reduction.to_numpy()
-        return {"kinetic_energy": float(r[0]), "max_speed": float(r[1]), "non_finite": bool(r[2] > 0)}
+        out = {"kinetic_energy": float(r[0]), "max_speed": float(r[1]), "non_finite": bool(r[2] > 0)}
+        if self.thermal:
+            out.update(thermal_energy=float(r[4]), mean_temperature=float(r[4] / r[5]) if r[5] else 0.0,
+                       thermal_step_ratio=float(r[6]))
+        return out
 
     @property
     def lost(self) -> int:

@@ -69,8 +69,10 @@ def expected_max_speed(scene: Scene, initial_speeds: np.ndarray) -> float:
 
 def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
                      material_names: list[str], initial_speeds: np.ndarray,
-                     skin: float) -> TimeStepReport:
-    """Automatic or checked explicit dt (s). Raises SceneError for an unstable explicit dt."""
+                     skin: float, fixed: np.ndarray | None = None) -> TimeStepReport:
+    """Automatic or checked explicit dt (s). Raises SceneError for an unstable explicit dt.
+    Fixed particles never move, so when every particle is fixed (a heat-conduction test, a
+    frozen bed) the mechanical bounds do not restrict an explicit dt."""
     notes: list[str] = []
     t_rayleigh = math.inf
     t_contact = math.inf
@@ -111,13 +113,14 @@ def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
     else:
         dt = sim.dt
         limited_by = "explicit"
-        if dt > MAX_RAYLEIGH_FRACTION * t_rayleigh:
+        all_fixed = fixed is not None and len(fixed) and bool(np.all(fixed))
+        if dt > MAX_RAYLEIGH_FRACTION * t_rayleigh and not all_fixed:
             raise SceneError(scene.source, "simulation.dt",
                              f"dt = {dt:g} s exceeds {MAX_RAYLEIGH_FRACTION:g} x the Rayleigh time "
                              f"{t_rayleigh:.3g} s of the smallest particle; the explicit "
                              f"integration is unstable. Use dt <= {0.2 * t_rayleigh:.3g} s "
                              f"(20 %) or dt = \"auto\"")
-        if dt > t_contact / ERROR_STEPS_PER_CONTACT:
+        if dt > t_contact / ERROR_STEPS_PER_CONTACT and not all_fixed:
             raise SceneError(scene.source, "simulation.dt",
                              f"dt = {dt:g} s resolves a contact at the expected {v:.3g} m/s "
                              f"(Hertz duration {t_contact:.3g} s) in fewer than "
@@ -141,14 +144,16 @@ SKIN_MAX_DIAMETERS = 0.5         # 0.5 mean diameters (more makes every list lon
 
 
 def choose_step_and_skin(scene: Scene, radii: np.ndarray, materials: np.ndarray,
-                         material_names: list[str], initial_speeds: np.ndarray):
+                         material_names: list[str], initial_speeds: np.ndarray,
+                         fixed: np.ndarray | None = None):
     """Time step report and Verlet skin (m). The skin is the scene's, or sized so a particle
     at the expected speed moves half of it in SKIN_REBUILD_STEPS steps: a bed cascading at
     metres per second (a drum) gets a larger skin than a slow dense flow. Measured on
     bench/mesh_drum.py: skin 0.1 d 5.3, 0.25 d 6.1, 0.5 d 7.2, 0.75 d 6.9 M particle-steps/s."""
     mean_diameter = 2.0 * float(np.mean(radii)) if len(radii) else 0.0
     provisional = scene.simulation.skin or SKIN_MIN_DIAMETERS * mean_diameter
-    report = choose_time_step(scene, radii, materials, material_names, initial_speeds, provisional)
+    report = choose_time_step(scene, radii, materials, material_names, initial_speeds, provisional,
+                              fixed)
     if scene.simulation.skin:
         return report, scene.simulation.skin
     wanted = 2.0 * SKIN_REBUILD_STEPS * report.expected_speed * report.dt

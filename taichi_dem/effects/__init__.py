@@ -39,6 +39,22 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
         effects.append(Effect("mesh_contact", "particle",
                               f"{len(scene.bodies)} triangle-mesh bodies ({n_tri} triangles): "
                               "Hertz-Mindlin with history, loads on each body"))
+    if scene.thermal is not None:
+        th = scene.thermal
+        effects.append(Effect("temperature", "integrate",
+                              "explicit temperature update, m c dT/dt = sum Q"))
+        if th.conduction:
+            effects.append(Effect("conduction", "pair",
+                                  f"particle-particle conduction (contact radius correction: "
+                                  f"{th.contact_radius_correction})"))
+        hot = [w.name for w in list(scene.walls) + list(scene.bodies) if w.temperature is not None]
+        if th.wall_conduction and hot:
+            effects.append(Effect("wall_conduction", "particle",
+                                  "conduction to isothermal " + ", ".join(hot)))
+        if th.gas is not None:
+            effects.append(Effect("convection", "particle",
+                                  f"convection to a {th.gas.model} gas at {th.gas.temperature:g} K "
+                                  f"({th.gas.correlation})"))
     if scene.domain.periodic:
         effects.append(Effect("periodic", "integrate",
                               "periodic faces: " + ", ".join(scene.domain.periodic)))

@@ -260,7 +260,7 @@ def test_unknown_radius_table_key():
     error(d, "particles[0].radius.sigma", "unknown key 'sigma'")
 
 
-@pytest.mark.parametrize("section", ["factories", "outlets", "sensors", "thermal", "mobility"])
+@pytest.mark.parametrize("section", ["factories", "outlets", "sensors", "mobility"])
 def test_planned_sections_are_clear_errors(section):
     d = base()
     d[section] = [{"name": "x"}] if section in ("factories", "outlets", "sensors") \
