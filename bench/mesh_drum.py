@@ -15,7 +15,31 @@ import sys
 import time
 
 
-def scene_text(particles: int, precision: str = "f32") -> str:
+THERMAL = """
+[thermal]
+conduction = true
+wall_conduction = true
+[thermal.gas]
+model = "fixed"
+temperature = 400.0
+"""
+
+
+def scene_text(particles: int, precision: str = "f32", thermal: bool = False) -> str:
+    text = _scene_text(particles, precision)
+    if not thermal:
+        return text
+    # heat: hot gravel, a water-cooled shell, particle-particle conduction, convection to air
+    text = text.replace("poisson_ratio = 0.25\n", "poisson_ratio = 0.25\nthermal_conductivity = 1.5\n"
+                        "heat_capacity = 800.0\nreal_youngs_modulus = 5.0e10\n", 1)
+    text = text.replace("poisson_ratio = 0.3\n", "poisson_ratio = 0.3\nthermal_conductivity = 45.0\n"
+                        "heat_capacity = 480.0\n", 1)
+    text = text.replace('name = "drum"\nmaterial = "steel"\n', 'name = "drum"\nmaterial = "steel"\ntemperature = 300.0\n')
+    text = text.replace("count = ", "temperature = 450.0\ncount = ")
+    return text + THERMAL
+
+
+def _scene_text(particles: int, precision: str = "f32") -> str:
     return f"""
 [simulation]
 end_time = 10.0
@@ -108,13 +132,15 @@ def main(argv=None) -> int:
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--profile", action="store_true", help="kernel profiler breakdown")
     p.add_argument("--precision", default="f32")
+    p.add_argument("--thermal", action="store_true", help="with heat transfer (conduction, "
+                   "a water-cooled shell, convection)")
     a = p.parse_args(argv)
     import taichi as ti
     if a.profile:
         orig = ti.init
         ti.init = lambda **kw: orig(**{**kw, "kernel_profiler": True})
     import taichi_dem as td
-    sim = td.Simulation.from_text(scene_text(a.particles, a.precision), h5="")
+    sim = td.Simulation.from_text(scene_text(a.particles, a.precision, a.thermal), h5="")
     print(f"{sim.particle_count} particles, {sum(len(b.faces) for b in sim.scene.bodies)} triangles, "
           f"dt = {sim.dt:.3g} s; settling {a.settle} s", flush=True)
     sim.run(a.settle)

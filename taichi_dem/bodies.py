@@ -133,6 +133,8 @@ import taichi as ti  # noqa: E402  (the host part above does not need Taichi)
 
 from .effects.hertz_mindlin import contact_force  # noqa: E402
 from .effects.mesh_contact import closest_point_on_triangle  # noqa: E402
+from thermal.conduction import contact_conductance  # noqa: E402
+
 from .broadphase import exclusive_scan  # noqa: E402
 
 
@@ -603,7 +605,7 @@ class MeshContacts:
                                 m.rolling_history[k] = rolling_history
                     if ti.static(wall_conduction):
                         if m.body_temperature[body] >= 0.0:
-                            h_b = KC[mi, mb] * RC[mi, mb] * ti.sqrt(ri * overlap)
+                            h_b = contact_conductance(KC[mi, mb], RC[mi, mb], ri, overlap)
                             q_b = h_b * (m.body_temperature[body] - s.temperature[i])
                             heat += q_b
                             conductance += h_b

@@ -72,6 +72,7 @@ class Simulation:
                              f"neighbour cells ({3 * (2 * float(np.max(radii)) + self.skin):.4g} m); "
                              f"enlarge the domain along that axis")
         self._upload(placed)
+        self._warn_biot()
         self.engine.start(self.n_initial)
         self.step_count = 0
         self.time = 0.0
@@ -235,6 +236,29 @@ class Simulation:
                 "id", "position", "velocity", "angular_velocity", "radius", "temperature")
                 if k in arrays})
             self.recorder.flush()
+
+    def _warn_biot(self):
+        """A particle is one temperature (lumped) only while its Biot number h (r/3) / k_p is
+        small; warn above 0.1 (at the gas velocity, particles at rest)."""
+        th = self.scene.thermal
+        if th is None or th.gas is None:
+            return
+        gas = th.gas
+        worst = 0.0
+        for k, name in enumerate(self.tables.names):
+            sel = self.placed.material == k
+            if not np.any(sel):
+                continue
+            r = float(np.max(self.placed.radius[sel]))
+            re = gas.density * 2 * r * float(np.linalg.norm(gas.velocity)) / gas.viscosity
+            pr = gas.heat_capacity * gas.viscosity / gas.conductivity
+            nu = 2 + 0.6 * math.sqrt(re) * pr ** (1 / 3)
+            biot = gas.conductivity * nu / (2 * r) * (r / 3) / self.scene.materials[name].thermal_conductivity
+            worst = max(worst, biot)
+        if worst > 0.1:
+            print(f"taichi-dem: warning: Biot number {worst:.2g} > 0.1: the particles' insides are "
+                  f"not at one temperature, and the lumped model overestimates their heating rate",
+                  file=sys.stderr)
 
     def _check_thermal_step(self, ratio: float):
         """Explicit temperature update: T += dt sum(Q)/(m c) is stable while dt sum(h)/(m c)

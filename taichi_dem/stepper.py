@@ -20,6 +20,8 @@ from .broadphase import Broadphase, GridSpec
 from .effects import effect_names
 from .effects.hertz_mindlin import contact_force
 from .effects import rolling
+from thermal import convection as gas_convection
+from thermal.conduction import contact_conductance
 from .model import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
 from .state import FieldTree, PairState, ParticleState
 
@@ -219,6 +221,7 @@ class Engine:
         has_gas = gas is not None
         gas_velocity = ti.Vector(list(gas.velocity)) if has_gas else None
         prandtl = gas.heat_capacity * gas.viscosity / gas.conductivity if gas is not None else 0.0
+        prandtl_cube_root = prandtl ** (1.0 / 3.0)
 
         @ti.func
         def rolling_torque(pair_model, w_rel, normal, fn, sn, r_eff, mu_r, eta_r, inertia_eff,
@@ -257,7 +260,7 @@ class Engine:
                             # Q = h_c (T_j - T_i), h_c = 4 k_i k_j/(k_i + k_j) a, with the Hertz
                             # contact radius a = (3 F_n R*/(4 E*))^(1/3) = sqrt(R* d_n),
                             # corrected for a softened modulus (model.conduction_tables)
-                            h_c = KC[mi, mj] * RC[mi, mj] * ti.sqrt(r_eff * normal_overlap)
+                            h_c = contact_conductance(KC[mi, mj], RC[mi, mj], r_eff, normal_overlap)
                             heat = h_c * (s.temperature[j] - s.temperature[i])
                             owned_heat += heat
                             owned_conductance += h_c
@@ -355,7 +358,7 @@ class Engine:
                         if ti.static(wall_temperature[w] >= 0.0):
                             if normal_overlap > 0.0:
                                 # conduction to an isothermal (e.g. water-cooled) wall
-                                h_w = KC[mi, mw] * RC[mi, mw] * ti.sqrt(ri * normal_overlap)
+                                h_w = contact_conductance(KC[mi, mw], RC[mi, mw], ri, normal_overlap)
                                 q_w = h_w * (ti.static(wall_temperature[w]) - s.temperature[i])
                                 heat += q_w
                                 conductance += h_w
@@ -405,12 +408,10 @@ class Engine:
                     reynolds = ti.static(gas.density / gas.viscosity) * diameter * (gas_velocity - s.velocity[i]).norm()
                     nusselt = 0.0
                     if ti.static(gas.correlation == "gunn"):
-                        eps = ti.static(gas.porosity)
-                        nusselt = ((7.0 - 10.0 * eps + 5.0 * eps ** 2) * (1.0 + 0.7 * reynolds ** 0.2 * prandtl ** (1 / 3))
-                                   + (1.33 - 2.4 * eps + 1.2 * eps ** 2) * reynolds ** 0.7 * prandtl ** (1 / 3))
+                        nusselt = gas_convection.nusselt_gunn(reynolds, prandtl_cube_root, ti.static(gas.porosity))
                     else:
-                        nusselt = 2.0 + 0.6 * ti.sqrt(reynolds) * prandtl ** (1 / 3)
-                    h_gas = ti.static(gas.conductivity) * nusselt / diameter * (3.141592653589793 * diameter * diameter)
+                        nusselt = gas_convection.nusselt_ranz_marshall(reynolds, prandtl_cube_root)
+                    h_gas = gas_convection.convective_conductance(ti.static(gas.conductivity), nusselt, diameter)
                     heat += h_gas * (ti.static(gas.temperature) - s.temperature[i])
                     conductance += h_gas
                 if ti.static(thermal):
