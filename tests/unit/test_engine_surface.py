@@ -12,7 +12,7 @@ import taichi_dem as td
 from taichi_dem.effects import effect_names
 from taichi_dem.loader import parse_scene
 
-from conftest import ROOT
+from conftest import PLATE_SCENE, ROOT
 
 
 def test_effects_follow_the_scene(small_scene_text):
@@ -123,52 +123,6 @@ def test_run_writes_results(tmp_path, small_scene_text):
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "out" / "ok.h5").exists()
 
-
-PLATE_SCENE = """
-[simulation]
-end_time = 1.0
-gravity = [0.0, 0.0, -9.81]
-precision = "f64"
-
-[domain]
-min = [-0.1, -0.1, -0.1]
-max = [0.1, 0.1, 0.1]
-
-[materials.glass]
-density = 2500.0
-youngs_modulus = 1e7
-poisson_ratio = 0.25
-
-[materials.steel]
-density = 7800.0
-youngs_modulus = 2e11
-poisson_ratio = 0.3
-
-[[interactions]]
-pair = ["glass", "glass"]
-restitution = 0.5
-friction = 0.5
-
-[[interactions]]
-pair = ["glass", "steel"]
-restitution = 0.5
-friction = 0.5
-
-[[bodies]]
-name = "paddle"
-material = "steel"
-mesh = { builder = "box", min = [-0.02, -0.01, -0.005], max = [0.02, 0.06, 0.0], normals = "outward" }
-motion = { rotate = { axis_point = [0, 0, 0], axis_direction = [1, 0, 0], speed = [[0.0, "0 rpm"], [0.05, "6 rpm"]] } }
-
-[[particles]]
-material = "glass"
-radius = 0.004
-count = 1
-region = { box = { min = [-0.01, 0.03, 0.001], max = [0.01, 0.05, 0.02] } }
-
-[output]
-interval = 0.01
-"""
 
 
 def test_speed_schedule_and_set_speed(tmp_path):
