@@ -135,7 +135,7 @@ from .effects.hertz_mindlin import contact_force  # noqa: E402
 from .effects.mesh_contact import closest_point_on_triangle  # noqa: E402
 from thermal.conduction import contact_conductance  # noqa: E402
 
-from .broadphase import exclusive_scan  # noqa: E402
+from .broadphase import exclusive_scan, previous_contact  # noqa: E402
 
 
 @ti.data_oriented
@@ -466,6 +466,8 @@ class MeshContacts:
         epsd = self.rolling_history is not None
         scratch = self.scratch
 
+        old_rolling = m.old_rolling_history if epsd else m.old_history  # (unused without EPSD)
+
         @ti.kernel
         def compact_and_carry(n: ti.i32):
             for i in range(n):
@@ -476,16 +478,9 @@ class MeshContacts:
                     k = m.mesh_start[i] + c
                     t = scratch[i, c]
                     m.mesh_tri[k] = t
-                    history = ti.Vector([0.0, 0.0, 0.0])
-                    rolling_history = ti.Vector([0.0, 0.0, 0.0])
-                    touching = ti.u8(0)
-                    for o in range(old_start, old_start + old_count):
-                        if m.old_tri[o] == t:
-                            history = m.old_history[o]
-                            touching = m.old_contact[o]
-                            if ti.static(epsd):
-                                rolling_history = m.old_rolling_history[o]
-                            break
+                    touching, history, rolling_history = previous_contact(
+                        m.old_tri, m.old_contact, m.old_history, old_rolling, epsd,
+                        old_start, old_count, t)
                     m.mesh_history[k] = history
                     m.mesh_contact[k] = touching
                     if ti.static(epsd):

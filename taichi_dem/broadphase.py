@@ -35,6 +35,26 @@ def exclusive_scan(counts: ti.template(), starts: ti.template(), n):
             starts[k] = starts[k - 1] + counts[k - 1]
 
 
+@ti.func
+def previous_contact(old_key: ti.template(), old_contact: ti.template(),
+                     old_history: ti.template(), old_rolling: ti.template(),
+                     with_rolling: ti.template(), start, count, key):
+    """What a list entry held before the rebuild: the old row of its particle (``start``,
+    ``count``) is searched for the partner ``key`` (a particle id or a triangle id). Returns
+    (touching flag, tangential history, rolling history); zeros for a new entry."""
+    touching = ti.u8(0)
+    history = ti.Vector([0.0, 0.0, 0.0])
+    rolling = ti.Vector([0.0, 0.0, 0.0])
+    for m in range(start, start + count):
+        if old_key[m] == key:
+            touching = old_contact[m]
+            history = old_history[m]
+            if ti.static(with_rolling):
+                rolling = old_rolling[m]
+            break
+    return touching, history, rolling
+
+
 class GridSpec:
     """Cell layout over the domain: cell size >= the largest pair cutoff (2 R_max + skin);
     periodic axes are tiled exactly by a whole number of cells."""
@@ -272,6 +292,8 @@ class Broadphase:
                     if ti.static(rolling_history):
                         p.old_rolling_history[k] = p.rolling_history[k]
 
+        old_rolling = p.old_rolling_history if rolling_history else p.old_tangential_history  # (unused without EPSD)
+
         @ti.kernel
         def link_and_carry(n: ti.i32):
             for i in range(n):
@@ -281,18 +303,11 @@ class Broadphase:
                 owned_end = s.row_start[i] + s.row_owned[i]
                 for k in range(s.row_start[i], owned_end):
                     # owned: carry the history of this pair if it existed before the rebuild
-                    partner = s.particle_id[p.neighbour[k]]
                     p.mirror[k] = -1
-                    history = ti.Vector([0.0, 0.0, 0.0])
-                    rolling = ti.Vector([0.0, 0.0, 0.0])
-                    touching = ti.u8(0)
-                    for m in range(old_start, old_start + old_count):
-                        if p.old_partner_id[m] == partner:
-                            touching = p.old_contact[m]
-                            history = p.old_tangential_history[m]
-                            if ti.static(rolling_history):
-                                rolling = p.old_rolling_history[m]
-                            break
+                    touching, history, rolling = previous_contact(
+                        p.old_partner_id, p.old_contact, p.old_tangential_history,
+                        old_rolling, rolling_history, old_start, old_count,
+                        s.particle_id[p.neighbour[k]])
                     p.contact[k] = touching
                     p.tangential_history[k] = history
                     if ti.static(rolling_history):

@@ -10,8 +10,8 @@ about lambda^2 dt t / 2 - with lambda dt <= 1e-3 and t <= 2/lambda, below 2e-3 (
    and sum m c T stays constant to round-off (the flows are antisymmetric by construction).
 2. A sphere on an isothermal plate decays with tau = m c / h_c (wall: R* = R), and the wall's
    recorded heat flow is h_c (T - T_w).
-3. Lumped convection: a sphere in a gas stream (Ranz-Marshall, Nu = 2 + 0.6 Re^1/2 Pr^1/3)
-   decays with tau = m c / (h A), h = k_g Nu / d.
+3. Lumped convection: a sphere in a gas stream decays with tau = m c / (h A), h = k_g Nu / d,
+   with Ranz-Marshall (Nu = 2 + 0.6 Re^1/2 Pr^1/3) and with Gunn (1978) at voidage 0.4.
 4. A chain of 10 spheres between walls at two temperatures reaches a linear profile (equal
    contact conductances in series): second differences below 1e-6 of the span.
 5. An adiabatic box of moving, colliding particles at two temperatures conserves sum m c T
@@ -113,25 +113,31 @@ def test_sphere_on_isothermal_plate(tmp_path):
     assert q == pytest.approx(h_c * (T - t_wall) * (1 + sim.dt / tau), rel=1e-6)
 
 
-def test_lumped_convection_ranz_marshall(tmp_path):
-    u, t_gas = 2.0, 500.0
+@pytest.mark.parametrize("correlation", ["ranz_marshall", "gunn"])
+def test_lumped_convection(tmp_path, correlation):
+    u, t_gas, eps = 2.0, 500.0, 0.4
     gas = dict(density=1.177, viscosity=1.846e-5, conductivity=0.02624, heat_capacity=1007.0)
     d = 2 * R
     re = gas["density"] * d * u / gas["viscosity"]
     pr = gas["heat_capacity"] * gas["viscosity"] / gas["conductivity"]
-    nu = 2 + 0.6 * math.sqrt(re) * pr ** (1 / 3)
+    if correlation == "gunn":
+        nu = ((7 - 10 * eps + 5 * eps ** 2) * (1 + 0.7 * re ** 0.2 * pr ** (1 / 3))
+              + (1.33 - 2.4 * eps + 1.2 * eps ** 2) * re ** 0.7 * pr ** (1 / 3))
+    else:
+        nu = 2 + 0.6 * math.sqrt(re) * pr ** (1 / 3)
     hA = gas["conductivity"] * nu / d * math.pi * d * d
     tau = _mass() * C / hA
-    text = (h.header(dt=1e-4, lo=(-0.05,) * 3, hi=(0.05,) * 3, output_interval=0.1)
+    text = (h.header(dt=2e-5, lo=(-0.05,) * 3, hi=(0.05,) * 3, output_interval=0.01)
             + _glass() + h.interaction("glass", "glass", 0.5, 0.5)
             + _fixed_fill(tmp_path, "g.csv", [[0.0, 0.0, 0.0]], 300.0)
             + f"[thermal]\n[thermal.gas]\nmodel = \"fixed\"\ntemperature = {t_gas}\n"
-              f"velocity = [{u}, 0.0, 0.0]\ncorrelation = \"ranz_marshall\"\n")
+              f"velocity = [{u}, 0.0, 0.0]\ncorrelation = \"{correlation}\"\nporosity = {eps}\n")
     with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
         sim.run(tau)
         T = sim.particles()["temperature"][0]
     expected = t_gas + (300.0 - t_gas) * math.exp(-sim.time / tau)
-    print(f"\n  convection: Re {re:.0f}, Nu {nu:.2f}, tau {tau:.0f} s; T = {T:.3f} K, analytic {expected:.3f} K")
+    assert hA * sim.dt / (_mass() * C) < 1e-3
+    print(f"\n  convection ({correlation}): Re {re:.0f}, Nu {nu:.2f}, tau {tau:.3f} s; T = {T:.3f} K, analytic {expected:.3f} K")
     assert T - t_gas == pytest.approx(expected - t_gas, rel=2e-3)
 
 
