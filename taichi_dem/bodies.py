@@ -658,6 +658,37 @@ class MeshContacts:
         return any(self.kin.displacement(k, self.binned_time, time) > half
                    for k in range(self.n_bodies))
 
+    def contact_counts(self, n: int) -> np.ndarray:
+        """Number of alive particles touching each body now (the heat-exchange surface's
+        contacts of the seed study), (B,) int."""
+        if getattr(self, "_count_for", None) is not self.mesh_contact:
+            # (re)compiled when the entry arrays were reallocated
+            self._count_for = self.mesh_contact
+            m = self
+            s = self.e.state
+            nb = self.n_bodies
+            if not hasattr(self, "touching"):
+                counts = self.e.new_tree()
+                self.touching = counts.add("touching", ti.i32, max(nb, 1))
+                counts.finalize()
+
+            @ti.kernel
+            def count_contacts(n: ti.i32):
+                for b in range(nb):
+                    m.touching[b] = 0
+                for i in range(n):
+                    if s.alive[i] != 0:
+                        for b in ti.static(range(nb)):
+                            touches = 0
+                            for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
+                                if m.mesh_contact[k] != 0 and m.tri_body[m.mesh_tri[k]] == b:
+                                    touches = 1
+                            if touches != 0:
+                                ti.atomic_add(m.touching[b], 1)
+            self._count_contacts = count_contacts
+        self._count_contacts(n)
+        return self.touching.to_numpy()[: self.n_bodies].astype(np.int64)
+
     def take_loads(self, n: int):
         """Mean force (N) and torque about the axis point (N m) per body over the steps since
         the last call; resets the sums. ``n``: particles alive."""

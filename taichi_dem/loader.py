@@ -17,20 +17,28 @@ from typing import Any, Optional
 
 import numpy as np
 
-from .scene import (Body, Domain, Interaction, Material, Motion, Output, ParticleFill,
-                    PlaneWall, RadiusDistribution, Region, Scene, SceneError,
-                    SimulationSettings, SpeedSchedule, GasSettings, ThermalSettings)
+from .scene import (Body, Domain, Factory, Interaction, Material, Motion, Outlet, Output,
+                    ParticleFill, PlaneWall, RadiusDistribution, RateSchedule, Region, Scene,
+                    SceneError, Sensor, SimulationSettings, SpeedSchedule, GasSettings,
+                    ThermalSettings)
 from .units import parse_quantity, parse_vec3
 
 SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "bodies",
-            "thermal",
-            "output")
-PLANNED_SECTIONS = ("factories", "outlets", "sensors", "mobility")
+            "factories", "outlets", "sensors", "thermal", "output")
+PLANNED_SECTIONS = ("mobility",)
+FACTORY_KEYS = ("name", "material", "radius", "sizes", "region", "velocity", "temperature",
+                "moisture", "mass_rate", "interval")
+OUTLET_KEYS = ("name", "region")
+SENSOR_KINDS = ("mass_flow", "residence_time", "contact_count")
+SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
+               "residence_time": ("kind", "name", "from", "to"),
+               "contact_count": ("kind", "name", "body")}
 THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction")
 GAS_KEYS = ("model", "temperature", "velocity", "correlation", "porosity", "density",
             "viscosity", "conductivity", "heat_capacity")
 
-SIMULATION_KEYS = ("end_time", "dt", "rayleigh_fraction", "gravity", "precision", "seed", "skin")
+SIMULATION_KEYS = ("end_time", "dt", "rayleigh_fraction", "gravity", "precision", "seed", "skin",
+                   "max_particles")
 DOMAIN_KEYS = ("min", "max", "periodic")
 MATERIAL_KEYS = ("density", "youngs_modulus", "poisson_ratio", "thermal_conductivity",
                  "heat_capacity", "emissivity", "real_youngs_modulus")
@@ -220,12 +228,162 @@ class _Parser:
         bodies = self.parse_bodies(self.array_of_tables(doc, "bodies"), walls)
         fills = tuple(self.parse_fill(f, f"particles[{i}]")
                       for i, f in enumerate(self.array_of_tables(doc, "particles")))
+        factories = tuple(self.parse_factory(f, f"factories[{i}]")
+                          for i, f in enumerate(self.array_of_tables(doc, "factories")))
+        self.unique_names(factories, "factories")
+        outlets = tuple(self.parse_outlet(o, f"outlets[{i}]")
+                        for i, o in enumerate(self.array_of_tables(doc, "outlets")))
+        self.unique_names(outlets, "outlets")
+        sensors = tuple(self.parse_sensor(x, f"sensors[{i}]", factories, outlets, bodies)
+                        for i, x in enumerate(self.array_of_tables(doc, "sensors")))
+        self.unique_names(sensors, "sensors")
         output = self.parse_output(doc.get("output", {}))
-        self.check_coverage(interactions, fills, walls, bodies)
-        thermal = self.parse_thermal(doc["thermal"], fills, walls, bodies) if "thermal" in doc else None
+        sources = tuple(fills) + factories
+        self.check_coverage(interactions, sources, walls, bodies)
+        thermal = self.parse_thermal(doc["thermal"], sources, walls, bodies) if "thermal" in doc else None
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
-                     walls=walls, bodies=bodies, output=output, thermal=thermal)
+                     walls=walls, bodies=bodies, output=output, thermal=thermal,
+                     factories=factories, outlets=outlets, sensors=sensors)
+
+    def unique_names(self, items, section: str) -> None:
+        seen: dict[str, int] = {}
+        for i, it in enumerate(items):
+            if it.name in seen:
+                raise self.err(f"{section}[{i}].name", f"'{it.name}' is already the name of "
+                                                       f"{section}[{seen[it.name]}]; names must be unique")
+            seen[it.name] = i
+
+    def name(self, t: dict, key: str) -> str:
+        if "name" not in t:
+            raise self.err(f"{key}.name", "required key is missing")
+        n = self.string(t["name"], f"{key}.name")
+        if not re.fullmatch(r"[A-Za-z0-9_.-]+", n):
+            raise self.err(f"{key}.name", f"'{n}' must be letters, digits, '_', '-' or '.' "
+                                          "(it names HDF5 groups)")
+        return n
+
+    # -- process tooling ---------------------------------------------------------------------------
+    def parse_rate(self, value: Any, key: str) -> RateSchedule:
+        """A mass rate ("6.5 t/h", kg/s) or a schedule [[0, "6.5 t/h"], [150, "13 t/h"]]."""
+        if not isinstance(value, list):
+            try:
+                return RateSchedule(points=((0.0, self.nonnegative(value, "mass_rate", key)),))
+            except SceneError as e:
+                raise self.err(key, f"{e.reason}; mass_rate is a rate (\"13 t/h\", kg/s) or a "
+                                    "schedule [[0.0, \"6.5 t/h\"], [150.0, \"13 t/h\"]]") from None
+        if not value:
+            raise self.err(key, "an empty schedule; give [[0.0, \"6.5 t/h\"], ...] (start time, rate)")
+        points: list[tuple[float, float]] = []
+        for j, item in enumerate(value):
+            k = f"{key}[{j}]"
+            if not isinstance(item, list) or len(item) != 2:
+                raise self.err(k, "expected [start time, mass rate], e.g. [150.0, \"13 t/h\"]")
+            start = self.nonnegative(item[0], "time", f"{k}[0]")
+            rate = self.nonnegative(item[1], "mass_rate", f"{k}[1]")
+            if j == 0 and start != 0.0:
+                raise self.err(f"{k}[0]", f"the schedule must start at time 0, got {start:g} s")
+            if points and not start > points[-1][0]:
+                raise self.err(f"{k}[0]", f"start times must increase: {start:g} s follows "
+                                          f"{points[-1][0]:g} s")
+            points.append((start, rate))
+        return RateSchedule(points=tuple(points))
+
+    def parse_factory(self, t: dict, key: str) -> Factory:
+        self.check_keys(t, key, FACTORY_KEYS, required=("name", "material", "region", "mass_rate"))
+        kw: dict[str, Any] = {}
+        if ("radius" in t) == ("sizes" in t):
+            raise self.err(f"{key}.radius", "give exactly one of radius (a length or { mean, std, "
+                                            "min, max }) or sizes = [[radius, mass fraction], ...]")
+        if "radius" in t:
+            kw["radius"] = self.parse_radius(t["radius"], f"{key}.radius")
+        else:
+            sizes = t["sizes"]
+            if not isinstance(sizes, list) or not sizes:
+                raise self.err(f"{key}.sizes", "expected [[radius, mass fraction], ...], e.g. "
+                                               "[[\"5 mm\", 0.3], [\"7.5 mm\", 0.7]]")
+            rows = []
+            for j, item in enumerate(sizes):
+                k = f"{key}.sizes[{j}]"
+                if not isinstance(item, list) or len(item) != 2:
+                    raise self.err(k, "expected [radius, mass fraction]")
+                rows.append((self.positive(item[0], "length", f"{k}[0]"),
+                             self.positive(item[1], "dimensionless", f"{k}[1]")))
+            total = sum(f for _, f in rows)
+            if abs(total - 1.0) > 1e-6:
+                raise self.err(f"{key}.sizes", f"the mass fractions must sum to 1, they sum to "
+                                               f"{total:.6g}")
+            kw["sizes"] = tuple(rows)
+        if "velocity" in t:
+            kw["velocity"] = self.vec3(t["velocity"], "speed", f"{key}.velocity")
+        if "temperature" in t:
+            kw["temperature"] = self.positive(t["temperature"], "temperature", f"{key}.temperature")
+        if "moisture" in t:
+            kw["moisture"] = self.nonnegative(t["moisture"], "dimensionless", f"{key}.moisture")
+        if "interval" in t:
+            kw["interval"] = self.positive(t["interval"], "time", f"{key}.interval")
+        region = self.parse_region(t["region"], f"{key}.region")
+        f = Factory(key=key, name=self.name(t, key),
+                    material=self.material_name(t["material"], f"{key}.material"),
+                    region=region, mass_rate=self.parse_rate(t["mass_rate"], f"{key}.mass_rate"),
+                    **kw)
+        lo, hi = region_bounds(region)
+        if np.any(hi - lo < 2.0 * f.largest_radius):
+            raise self.err(f"{key}.region", f"the region is narrower than one particle of radius "
+                                            f"{f.largest_radius:g} m")
+        return f
+
+    def parse_outlet(self, t: dict, key: str) -> Outlet:
+        self.check_keys(t, key, OUTLET_KEYS, required=OUTLET_KEYS)
+        return Outlet(key=key, name=self.name(t, key),
+                      region=self.parse_region(t["region"], f"{key}.region"))
+
+    def parse_sensor(self, t: dict, key: str, factories, outlets, bodies) -> Sensor:
+        if "kind" not in t:
+            raise self.err(f"{key}.kind", f"required: one of {', '.join(SENSOR_KINDS)}")
+        kind = self.string(t["kind"], f"{key}.kind")
+        if kind not in SENSOR_KINDS:
+            raise self.err(f"{key}.kind", f"unknown sensor kind '{kind}'; "
+                                          f"{_suggest(kind, SENSOR_KINDS)}allowed: {', '.join(SENSOR_KINDS)}")
+        allowed = SENSOR_KEYS[kind]
+        required = {"mass_flow": ("plane",), "residence_time": ("from", "to"),
+                    "contact_count": ("body",)}[kind]
+        self.check_keys(t, key, allowed, required=("name",) + required)
+        kw: dict[str, Any] = {"key": key, "name": self.name(t, key), "kind": kind}
+        if kind == "mass_flow":
+            kw["point"], kw["normal"] = self.parse_plane(t["plane"], f"{key}.plane")
+            if "radius" in t and "box" in t:
+                raise self.err(f"{key}.box", "give at most one of radius (a disk about the plane "
+                                             "point) or box = { min, max }")
+            if "radius" in t:
+                kw["radius"] = self.positive(t["radius"], "length", f"{key}.radius")
+            if "box" in t:
+                b = self.table(t["box"], f"{key}.box")
+                self.check_keys(b, f"{key}.box", BOX_KEYS, required=BOX_KEYS)
+                kw["box_min"] = self.vec3(b["min"], "length", f"{key}.box.min")
+                kw["box_max"] = self.vec3(b["max"], "length", f"{key}.box.max")
+                if not all(a < c for a, c in zip(kw["box_min"], kw["box_max"])):
+                    raise self.err(f"{key}.box.max", "max must exceed min on every axis")
+        elif kind == "residence_time":
+            src = self.string(t["from"], f"{key}.from")
+            names = [f.name for f in factories]
+            if src not in names:
+                raise self.err(f"{key}.from", f"no factory named '{src}'; factories: "
+                                              f"{', '.join(names) or 'none'}")
+            dst = self.string(t["to"], f"{key}.to")
+            names = [o.name for o in outlets]
+            if dst not in names:
+                raise self.err(f"{key}.to", f"no outlet named '{dst}'; outlets: "
+                                            f"{', '.join(names) or 'none'}")
+            kw["source"], kw["target"] = src, dst
+        else:
+            body = self.string(t["body"], f"{key}.body")
+            names = [b.name for b in bodies]
+            if body not in names:
+                raise self.err(f"{key}.body", f"no body named '{body}'; bodies: "
+                                              f"{', '.join(names) or 'none'}")
+            kw["body"] = body
+        return Sensor(**kw)
 
     def simulation(self, value: Any) -> SimulationSettings:
         key = "simulation"
@@ -261,6 +419,10 @@ class _Parser:
             kw["seed"] = self.integer(t["seed"], f"{key}.seed")
         if "skin" in t:
             kw["skin"] = self.positive(t["skin"], "length", f"{key}.skin")
+        if "max_particles" in t:
+            kw["max_particles"] = self.integer(t["max_particles"], f"{key}.max_particles")
+            if kw["max_particles"] < 1:
+                raise self.err(f"{key}.max_particles", f"must be >= 1, got {kw['max_particles']}")
         return SimulationSettings(**kw)
 
     def parse_domain(self, value: Any) -> Domain:

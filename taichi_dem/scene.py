@@ -6,6 +6,7 @@ compiles anything, so a Scene can be built, inspected and validated cheaply (``t
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Optional
 
@@ -34,6 +35,9 @@ class SimulationSettings:
     precision: str = "f32"               # "f32" | "f64"
     seed: int = 1
     skin: Optional[float] = None         # m, Verlet skin; None = 0.1 x mean diameter (LAMMPS-like)
+    # particle slots with factories; None = the initial particles plus what the factories'
+    # schedules insert until end_time (10 % margin), at most what the domain can hold
+    max_particles: Optional[int] = None
 
 
 @dataclass(frozen=True)
@@ -180,6 +184,95 @@ class Output:
     checkpoint_interval: Optional[float] = None
 
 
+@dataclass(frozen=True)
+class RateSchedule:
+    """Piecewise-constant mass rate: ``points`` = ((start time s, rate kg/s), ...), sorted by
+    time; the first starts at 0."""
+    points: tuple[tuple[float, float], ...]
+
+    def at(self, time: float) -> float:
+        """Mass rate at ``time``, kg/s."""
+        rate = self.points[0][1]
+        for start, value in self.points:
+            if time >= start:
+                rate = value
+        return rate
+
+    def mass_until(self, time: float) -> float:
+        """Mass scheduled from t = 0 to ``time``, kg (the integral of the rate)."""
+        total = 0.0
+        for k, (start, rate) in enumerate(self.points):
+            if time <= start:
+                break
+            end = self.points[k + 1][0] if k + 1 < len(self.points) else math.inf
+            total += rate * (min(time, end) - start)
+        return total
+
+
+@dataclass(frozen=True, eq=False)
+class Factory:
+    """Continuous insertion at a scheduled mass rate into ``region`` without overlap.
+
+    Radii: a truncated normal (``radius``) sampled by number, or ``sizes`` = ((radius m, mass
+    fraction), ...) sampled so each size gets its fraction of the inserted mass."""
+    key: str                             # "factories[0]"
+    name: str
+    material: str
+    region: Region
+    mass_rate: RateSchedule
+    radius: Optional[RadiusDistribution] = None
+    sizes: Optional[tuple[tuple[float, float], ...]] = None
+    velocity: Vec3 = (0.0, 0.0, 0.0)     # m/s
+    temperature: Optional[float] = None  # K
+    moisture: float = 0.0                # kg water per kg dry solid
+    interval: Optional[float] = None     # s between insertions; None = automatic
+
+    @property
+    def largest_radius(self) -> float:
+        return max(r for r, _ in self.sizes) if self.sizes else self.radius.largest
+
+    @property
+    def smallest_radius(self) -> float:
+        return min(r for r, _ in self.sizes) if self.sizes else self.radius.smallest
+
+    def mean_particle_volume(self) -> float:
+        """Expected volume of one inserted particle, m^3."""
+        if self.sizes:
+            # number fraction of size k ~ mass fraction / r^3
+            n = [f / r ** 3 for r, f in self.sizes]
+            return sum(nk * 4.0 / 3.0 * math.pi * r ** 3 for nk, (r, _) in zip(n, self.sizes)) / sum(n)
+        d = self.radius
+        if d.std == 0.0:
+            return 4.0 / 3.0 * math.pi * d.mean ** 3
+        return 4.0 / 3.0 * math.pi * (d.mean ** 3 + 3.0 * d.mean * d.std ** 2)
+
+
+@dataclass(frozen=True)
+class Outlet:
+    """Particles whose centre enters ``region`` are removed and accounted."""
+    key: str
+    name: str
+    region: Region
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """An observer: ``mass_flow`` through a plane (optionally within a disk ``radius`` about
+    ``point`` or a ``box``), ``residence_time`` from factory ``source`` to outlet ``target``,
+    or ``contact_count`` of particles touching ``body``."""
+    key: str
+    name: str
+    kind: str                            # "mass_flow" | "residence_time" | "contact_count"
+    point: Optional[Vec3] = None
+    normal: Optional[Vec3] = None        # unit
+    radius: Optional[float] = None       # m, disk bound of a mass_flow plane
+    box_min: Optional[Vec3] = None       # m, box bound of a mass_flow plane
+    box_max: Optional[Vec3] = None
+    source: Optional[str] = None         # factory name (residence_time "from")
+    target: Optional[str] = None         # outlet name (residence_time "to")
+    body: Optional[str] = None           # contact_count
+
+
 @dataclass(frozen=True, eq=False)
 class Scene:
     source: str                          # file path (or "<string>") for messages
@@ -193,6 +286,9 @@ class Scene:
     bodies: tuple["Body", ...] = ()
     output: Output = field(default_factory=Output)
     thermal: Optional[ThermalSettings] = None
+    factories: tuple[Factory, ...] = ()
+    outlets: tuple[Outlet, ...] = ()
+    sensors: tuple[Sensor, ...] = ()
 
     def interaction(self, a: str, b: str) -> Interaction:
         return self.interactions[frozenset((a, b))]

@@ -25,6 +25,41 @@ from .scene import Scene, SceneError
 from .timestep import choose_step_and_skin
 
 
+def _sizes_to_expect(scene: Scene, placed, names):
+    """Radii, material indices, speeds and fixed flags of the initial particles plus the
+    smallest and largest particle each factory inserts (for dt, skin and cell size)."""
+    radii = [placed.radius]
+    mats = [placed.material]
+    speeds = [np.linalg.norm(placed.velocity, axis=1)]
+    fixed = [placed.fixed]
+    for f in scene.factories:
+        r = np.array([f.smallest_radius, f.largest_radius])
+        radii.append(r)
+        mats.append(np.full(2, names.index(f.material), np.int32))
+        speeds.append(np.full(2, float(np.linalg.norm(f.velocity))))
+        fixed.append(np.zeros(2, bool))
+    return (np.concatenate(radii), np.concatenate(mats).astype(np.int32),
+            np.concatenate(speeds), np.concatenate(fixed))
+
+
+def _factory_capacity(scene: Scene) -> int:
+    """Slots for factory particles: what the schedules insert until end_time plus 10 %, but
+    no more than the domain could hold at random close packing (0.64); or max_particles."""
+    if not scene.factories:
+        return 0
+    if scene.simulation.max_particles is not None:
+        return max(scene.simulation.max_particles - scene.expected_particle_count, 0)
+    total = 0.0
+    smallest = math.inf
+    for f in scene.factories:
+        mass = f.mass_rate.mass_until(scene.simulation.end_time)
+        total += mass / (scene.materials[f.material].density * f.mean_particle_volume())
+        smallest = min(smallest, 4.0 / 3.0 * math.pi * f.smallest_radius ** 3)
+    span = np.asarray(scene.domain.max) - np.asarray(scene.domain.min)
+    packing = 0.64 * float(np.prod(span)) / smallest
+    return int(min(1.1 * total + 64, packing))
+
+
 class DivergenceError(RuntimeError):
     """The simulation blew up (non-finite state); the message says when and the likely fix."""
 
@@ -51,18 +86,20 @@ class Simulation:
         placed = place_fills(scene, rng)
         self.placed = placed
         self.n_initial = len(placed.radius)
-        if self.n_initial == 0:
-            raise SceneError(scene.source, "particles", "the scene has no particles")
+        if self.n_initial == 0 and not scene.factories:
+            raise SceneError(scene.source, "particles", "the scene has no particles (no fill "
+                                                        "and no factory)")
         self.tables = build_pair_tables(scene)
         # placement numbers materials in sorted order too; make sure of it
         assert list(placed.materials) == self.tables.names or not placed.materials
-        radii = placed.radius
-        speeds = np.linalg.norm(placed.velocity, axis=1)
-        self.timestep, self.skin = choose_step_and_skin(scene, radii, placed.material,
-                                                        self.tables.names, speeds, placed.fixed)
+        # the time step and cells must suit the particles factories will insert, too
+        radii, materials, speeds, fixed = _sizes_to_expect(scene, placed, self.tables.names)
+        self.timestep, self.skin = choose_step_and_skin(scene, radii, materials,
+                                                        self.tables.names, speeds, fixed)
         self.dt = self.timestep.dt
+        capacity = self.n_initial + _factory_capacity(scene)
 
-        self.engine = Engine(scene, self.tables, self.n_initial, self.real, self.skin,
+        self.engine = Engine(scene, self.tables, max(capacity, 1), self.real, self.skin,
                              float(np.max(radii)), self.dt)
         small = self.engine.grid.too_small_periodic_axes()
         if small:
@@ -76,7 +113,20 @@ class Simulation:
         self.engine.start(self.n_initial)
         self.step_count = 0
         self.time = 0.0
+        self._last_sample_time = 0.0
         self.output_every = max(1, int(round(scene.output.interval / self.dt)))
+        self.factories = None
+        self.accounts = None
+        if scene.factories:
+            from .factories import FactorySet
+            self.factories = FactorySet(self, first_serial=self.n_initial)
+        if scene.factories or scene.outlets or scene.sensors:
+            from .accounting import ProcessAccounts
+            self.accounts = ProcessAccounts(self)
+        # host-side parts whose state a checkpoint must keep: name -> object with
+        # state_dict() / load_state_dict(d)
+        self.checkpointables: dict = {k: v for k, v in (("factories", self.factories),
+                                                         ("accounts", self.accounts)) if v}
         self._series: dict[str, list] = {}
         self.recorder = None
         h5 = h5 if h5 is not None else scene.output.h5
@@ -131,6 +181,10 @@ class Simulation:
         s.material.from_numpy(scal(placed.material, np.int32))
         s.particle_id.from_numpy(scal(np.arange(n), np.int32))
         s.alive.from_numpy(scal(np.ones(n), np.int32))
+        if s.process:
+            s.serial.from_numpy(scal(np.arange(n), np.int32))
+            s.origin.from_numpy(scal(np.full(n, -1), np.int32))
+            s.birth_time.from_numpy(scal(np.zeros(n)))
         if self.scene.thermal is not None:
             heat_capacity = np.array([self.scene.materials[name].heat_capacity or 0.0
                                       for name in self.tables.names])[placed.material]
@@ -155,12 +209,16 @@ class Simulation:
         while remaining > 0:
             to_output = self.output_every - (self.step_count % self.output_every)
             chunk = min(remaining, to_output)
+            if self.factories is not None:
+                chunk = min(chunk, self.factories.steps_to_next(self.step_count))
             self.engine.advance(chunk, record_last=(chunk == to_output))
             self.step_count += chunk
             self.time = self.step_count * self.dt
             remaining -= chunk
             if self.step_count % self.output_every == 0:
                 self._sample()
+            if self.factories is not None:
+                self.factories.insert_due(self.step_count, self.time)
         self.wall_seconds += _time.perf_counter() - t0
 
     def run(self, until: Optional[float] = None, *, progress: bool = False):
@@ -199,9 +257,15 @@ class Simulation:
             self._check_thermal_step(m["thermal_step_ratio"])
         else:
             values_thermal = {}
-        values = {"time": self.time, "particles/count": self.engine.count,
+        values = {"time": self.time, "particles/count": self.engine.alive_count,
                   "particles/kinetic_energy": m["kinetic_energy"],
                   "particles/lost": self.engine.lost, **values_thermal}
+        if self.accounts is not None:
+            self.accounts.sample(values, self.time - self._last_sample_time)
+        if self.factories is not None:
+            self.factories.sample(self.time, values)
+            values["particles/mass"] = self.mass_inside()
+        self._last_sample_time = self.time
         mesh = self.engine.mesh
         if mesh is not None:
             forces, torques, heats = mesh.take_loads(self.engine.count)
@@ -229,8 +293,11 @@ class Simulation:
             self._series.setdefault(name, []).append(np.asarray(v, dtype=np.float64))
         for observe in self.observers:
             observe(self, values)
+        residence = self.accounts.pop_residence() if self.accounts is not None else {}
         if self.recorder is not None:
             self.recorder.append_series(values)
+            for name, rec in residence.items():
+                self.recorder.append_residence(name, rec)
             arrays = self.particles()
             self.recorder.append_frame(self.time, {k: arrays[k] for k in (
                 "id", "position", "velocity", "angular_velocity", "radius", "temperature")
@@ -324,9 +391,10 @@ class Simulation:
         self._check_alive()
         s = self.engine.state
         n = self.engine.count
-        ids = s.particle_id.to_numpy()[:n]
-        order = np.argsort(ids, kind="stable")
-        out = {"id": ids[order]}
+        alive = np.nonzero(s.alive.to_numpy()[:n] != 0)[0]
+        ids = (s.serial if s.process else s.particle_id).to_numpy()[alive]
+        order = alive[np.argsort(ids, kind="stable")]
+        out = {"id": np.sort(ids, kind="stable")}
         for name in ("position", "velocity", "angular_velocity"):
             out[name] = getattr(s, name).to_numpy()[:n][order].astype(np.float64)
         for name in ("radius", "mass"):
@@ -343,7 +411,34 @@ class Simulation:
 
     @property
     def particle_count(self) -> int:
-        return self.engine.count
+        """Particles in the simulation now."""
+        return self.engine.alive_count
+
+    def mass_inside(self) -> float:
+        """Mass of the particles in the simulation now, kg (float64 sum of the stored masses)."""
+        s = self.engine.state
+        n = self.engine.count
+        alive = s.alive.to_numpy()[:n] != 0
+        return float(np.sum(s.mass.to_numpy()[:n][alive].astype(np.float64)))
+
+    def mass_balance(self) -> dict:
+        """initial + fed = inside + removed + lost, kg; ``error`` is the difference."""
+        if self.accounts is not None:
+            self.accounts.collect()              # take what the removal log holds now
+        initial = float(np.sum((4.0 / 3.0 * math.pi * self.placed.radius ** 3
+                                * self.tables.density[self.placed.material]).astype(
+            np.float64 if self.precision == "f64" else np.float32).astype(np.float64)))
+        fed = float(np.sum(self.factories.inserted_mass)) if self.factories else 0.0
+        removed = float(np.sum(self.accounts.outlet_mass)) if self.accounts else 0.0
+        lost = self.accounts.lost_mass if self.accounts else math.nan
+        inside = self.mass_inside()
+        return {"initial": initial, "fed": fed, "inside": inside, "removed": removed,
+                "lost": lost, "error": initial + fed - inside - removed - lost}
+
+    def residence_times(self, sensor: str) -> np.ndarray:
+        """(id, t_in s, t_out s) rows of the particles that completed the path of residence
+        sensor ``sensor`` so far."""
+        return self.accounts.residence_times(sensor)
 
     @property
     def effects(self):

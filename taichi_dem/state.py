@@ -60,10 +60,18 @@ class ParticleState:
     # allocated only when [thermal] is present: temperature K, 1/(m c) 1/(J/K)
     THERMAL = {"temperature": (False, "real"), "inverse_thermal_mass": (False, "real")}
 
+    # allocated only when the scene has factories or outlets: ``serial`` is the id users see
+    # (unique over the whole run), while ``particle_id`` is a slot key < capacity that is
+    # re-used after its particle is gone; ``origin`` the factory index (-1: an initial fill),
+    # ``birth_time`` s when it was inserted
+    PROCESS = {"serial": (False, "int"), "origin": (False, "int"), "birth_time": (False, "real")}
+
     def __init__(self, capacity: int, real, n_walls: int, rolling_history: bool,
-                 thermal: bool = False):
+                 thermal: bool = False, process: bool = False):
         self.capacity = capacity
-        self.spec = dict(self.CORE, **(self.THERMAL if thermal else {}))
+        self.spec = dict(self.CORE, **(self.THERMAL if thermal else {}),
+                         **(self.PROCESS if process else {}))
+        self.process = process
         self.real = real
         self.n_walls = n_walls
         self.tree = FieldTree()

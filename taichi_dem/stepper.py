@@ -45,8 +45,10 @@ class Engine:
         self.convection = "convection" in self.effects
         self.trees: list[FieldTree] = []
         self.walls = scene.walls
+        has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
         self.state = ParticleState(capacity, real, len(scene.walls), self.rolling_epsd,
-                                   thermal=self.thermal)
+                                   thermal=self.thermal,
+                                   process=bool(scene.factories or scene.outlets))
         self.trees.append(self.state.tree)
         self.grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
                              2.0 * max_radius + skin, capacity)
@@ -59,14 +61,20 @@ class Engine:
         self.rolling_friction = t.add("rolling_friction", real, (m, m))
         self.rolling_model = t.add("rolling_model", ti.i32, (m, m))
         self.rolling_damping = t.add("rolling_damping", real, (m, m))
-        self.flags = t.add("flags", ti.i32, 2)                 # [rebuild needed, lost count]
+        # [rebuild needed, lost count, dead particles still holding a slot]
+        self.flags = t.add("flags", ti.i32, 3)
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
         self.reduction = t.add("reduction", real, 8)
         if self.thermal:
             self.conductance_factor = t.add("conductance_factor", real, (m, m))
             self.radius_correction = t.add("radius_correction", real, (m, m))
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
+        self.process = None
+        if scene.factories or scene.outlets or has_planes:
+            from .process import ProcessDevice
+            self.process = ProcessDevice(self, t)
         t.finalize()
+        self.removed_batches: list = []    # removal-log entries drained at rebuilds
         if self.thermal:
             from .model import conduction_tables
             factor, correction = conduction_tables(scene, tables.names)
@@ -87,6 +95,8 @@ class Engine:
             self.kinematics = BodyKinematics(scene.bodies)
             self.mesh = MeshContacts(self, self.kinematics)
         self._compile_particle_kernels()
+        if scene.factories:
+            self._compile_insert()
 
     def new_tree(self) -> FieldTree:
         t = FieldTree()
@@ -133,14 +143,23 @@ class Engine:
 
         minimum_image = self.minimum_image = g.make_minimum_image()
 
+        has_process = self.process is not None
+        after_drift = self.process.make_funcs(self) if has_process else None
+        from .process import PARKED
+
         @ti.func
-        def drift_particle(i, dt):
-            """First half of a velocity Verlet step for particle i: half kick, then drift."""
+        def drift_particle(i, dt, t_new):
+            """First half of a velocity Verlet step for particle i: half kick, then drift.
+            A particle that leaves the domain (or enters an outlet) is removed: marked dead
+            and parked far away until the next rebuild drops it. ``t_new``: time after the
+            step, s."""
             if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
                 v = s.velocity[i] + 0.5 * dt * s.acceleration[i]
                 s.velocity[i] = v
                 s.angular_velocity[i] += 0.5 * dt * s.angular_acceleration[i]
-                x = s.position[i] + dt * v
+                x_old = s.position[i]
+                x_new = x_old + dt * v
+                x = x_new
                 inside = True
                 for k in ti.static(range(3)):
                     if ti.static(g.periodic[k]):
@@ -152,19 +171,26 @@ class Engine:
                     elif x[k] < lo[k] or x[k] > hi[k]:
                         inside = False
                 s.position[i] = x
-                if not inside:
+                removed = False
+                if ti.static(has_process):
+                    removed = after_drift(i, x_old, x_new, x, inside, t_new)
+                elif not inside:
+                    removed = True
                     s.alive[i] = 0
-                    flags[0] = 1
+                    s.position[i] = ti.Vector([PARKED, PARKED, PARKED])
+                    s.velocity[i] = ti.Vector([0.0, 0.0, 0.0])
                     ti.atomic_add(flags[1], 1)
-                moved = minimum_image(x - s.reference_position[i])
-                if moved.dot(moved) > half_skin_sq:
-                    flags[0] = 1          # benign race: every writer writes 1
+                    ti.atomic_add(flags[2], 1)
+                if not removed:
+                    moved = minimum_image(x - s.reference_position[i])
+                    if moved.dot(moved) > half_skin_sq:
+                        flags[0] = 1          # benign race: every writer writes 1
         self.drift_particle = drift_particle
 
         @ti.kernel
-        def drift(n: ti.i32, dt: real):
+        def drift(n: ti.i32, dt: real, t_new: ti.f64):
             for i in range(n):
-                drift_particle(i, dt)
+                drift_particle(i, dt, t_new)
 
         thermal = self.thermal
         dt_step = self.dt
@@ -323,8 +349,10 @@ class Engine:
         mesh_contacts = self.mesh.make_particle_contacts(rolling_torque) if has_mesh else None
 
         @ti.kernel
-        def gather(n: ti.i32, dt: real, record: ti.i32, then_drift: ti.i32):
+        def gather(n: ti.i32, dt: real, record: ti.i32, then_drift: ti.i32, t_next: ti.f64):
             for i in range(n):
+                if s.alive[i] == 0:
+                    continue          # removed since the last rebuild: parked, inert
                 force = s.owned_force[i]
                 torque = s.owned_torque[i]
                 for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
@@ -428,7 +456,7 @@ class Engine:
                     s.angular_velocity[i] += 0.5 * dt * alpha
                 if then_drift != 0:
                     # the next step's first half, fused here to save a pass over the particles
-                    drift_particle(i, dt)
+                    drift_particle(i, dt, t_next)
 
         self._pair_forces, self._gather = pair_forces, gather
 
@@ -439,8 +467,18 @@ class Engine:
             self.mesh.update_frames(self.time)
         self.count = self.broadphase.rebuild(n)
         self._pair_forces(self.count, 0.0)
-        self._gather(self.count, 0.0, 0, 0)
+        self._gather(self.count, 0.0, 0, 0, self.time)
         return self.count
+
+    def rebuild(self, n: int):
+        """Drop dead particles, re-sort and rebuild the neighbour lists."""
+        self.flags[0] = 0
+        if self.process is not None and self.process.log_enabled:
+            batch = self.process.drain()
+            if batch is not None:
+                self.removed_batches.append(batch)
+        self.count = self.broadphase.rebuild(n)
+        self.flags[2] = 0
 
     def advance(self, steps: int, record_last: bool = False):
         """Advance ``steps`` time steps of ``self.dt``."""
@@ -448,7 +486,8 @@ class Engine:
         for k in range(steps):
             n = self.count
             if k == 0:
-                self._drift(n, dt)      # later steps drifted at the end of the previous gather
+                # later steps drifted at the end of the previous gather
+                self._drift(n, dt, self.time + dt)
             self.time += dt
             rebuild = self.flags[0] != 0
             if self.mesh is not None:
@@ -456,8 +495,7 @@ class Engine:
                 self.mesh.interval_steps += 1
                 rebuild = rebuild or self.mesh.needs_rebinning(self.time)
             if rebuild:
-                self.flags[0] = 0
-                self.count = self.broadphase.rebuild(n)
+                self.rebuild(n)
             last = k == steps - 1
             record = 1 if (record_last and last) else 0
             if record:
@@ -466,7 +504,7 @@ class Engine:
                     self.wall_heat.fill(0.0)
             self._pair_forces(self.count, dt)
             # the state is left at a whole step (no pending drift) when advance returns
-            self._gather(self.count, dt, record, 0 if last else 1)
+            self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
 
     def measure(self) -> dict:
         self._measure(self.count)
@@ -480,6 +518,102 @@ class Engine:
     @property
     def lost(self) -> int:
         return int(self.flags[1])
+
+    @property
+    def alive_count(self) -> int:
+        """Particles in the simulation now (slots in use minus those removed since the last
+        rebuild)."""
+        return self.count - int(self.flags[2])
+
+    def insert(self, arrays: dict):
+        """Put new particles into the slots after the last one in use and flag a rebuild.
+        ``arrays``: position, velocity (n,3) m, m/s; radius m, mass kg, key (slot keys not in
+        use), serial, origin (n,), birth_time s; temperature K and inverse_thermal_mass 1/(J/K)
+        when thermal. The state must be at a whole step (between ``advance`` calls)."""
+        k = len(arrays["radius"])
+        if k == 0:
+            return
+        if self.count + k > self.state.capacity:
+            raise RuntimeError("particle capacity exceeded")
+        npf = np.float64
+        zeros = np.zeros(k, npf)
+        self._insert(self.count, k,
+                     np.ascontiguousarray(arrays["position"], npf),
+                     np.ascontiguousarray(arrays["velocity"], npf),
+                     np.ascontiguousarray(arrays["radius"], npf),
+                     np.ascontiguousarray(arrays["mass"], npf),
+                     np.ascontiguousarray(arrays["material"], np.int32),
+                     np.ascontiguousarray(arrays["key"], np.int32),
+                     np.ascontiguousarray(arrays["serial"], np.int32),
+                     np.ascontiguousarray(arrays["origin"], np.int32),
+                     np.ascontiguousarray(arrays["birth_time"], npf),
+                     np.ascontiguousarray(arrays.get("temperature", zeros), npf),
+                     np.ascontiguousarray(arrays.get("inverse_thermal_mass", zeros), npf))
+        self.count += k
+
+    def _compile_insert(self):
+        s = self.state
+        gravity = ti.Vector(list(self.scene.simulation.gravity))
+        thermal = self.thermal
+        process = s.process
+        n_walls = s.n_walls
+        wall_fields = [getattr(s, n) for n in ("wall_tangential_history", "wall_rolling_history")
+                       if hasattr(s, n)]
+        mesh = self.mesh
+        has_mesh = mesh is not None
+        n_bodies = mesh.n_bodies if has_mesh else 0
+        heat_loads = has_mesh and mesh.particle_load_heat is not None
+        flags = self.flags
+
+        @ti.kernel
+        def insert(start: ti.i32, k: ti.i32, position: ti.types.ndarray(),
+                   velocity: ti.types.ndarray(), radius: ti.types.ndarray(),
+                   mass: ti.types.ndarray(), material: ti.types.ndarray(),
+                   key: ti.types.ndarray(), serial: ti.types.ndarray(),
+                   origin: ti.types.ndarray(), birth_time: ti.types.ndarray(),
+                   temperature: ti.types.ndarray(), inverse_thermal_mass: ti.types.ndarray()):
+            for q in range(k):
+                i = start + q
+                x = ti.Vector([position[q, 0], position[q, 1], position[q, 2]])
+                s.position[i] = x
+                s.reference_position[i] = x
+                s.velocity[i] = ti.Vector([velocity[q, 0], velocity[q, 1], velocity[q, 2]])
+                s.angular_velocity[i] = ti.Vector([0.0, 0.0, 0.0])
+                # inserted clear of every contact: free flight is the first step's acceleration
+                s.acceleration[i] = gravity
+                s.angular_acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
+                r = radius[q]
+                m = mass[q]
+                s.radius[i] = r
+                s.mass[i] = m
+                s.inverse_mass[i] = 1.0 / m
+                s.inverse_inertia[i] = 1.0 / (0.4 * m * r * r)
+                s.material[i] = material[q]
+                s.particle_id[i] = key[q]
+                s.alive[i] = 1
+                if ti.static(process):
+                    s.serial[i] = serial[q]
+                    s.origin[i] = origin[q]
+                    s.birth_time[i] = birth_time[q]
+                if ti.static(thermal):
+                    s.temperature[i] = temperature[q]
+                    s.inverse_thermal_mass[i] = inverse_thermal_mass[q]
+                # the slot may hold what a removed particle left: no rows, no history, no loads
+                s.row_owned[i] = 0
+                s.row_count[i] = 0
+                for f in ti.static(wall_fields):
+                    for w in ti.static(range(n_walls)):
+                        f[i, w] = ti.Vector([0.0, 0.0, 0.0])
+                if ti.static(has_mesh):
+                    mesh.mesh_count[i] = 0
+                    for b in ti.static(range(n_bodies)):
+                        mesh.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                        mesh.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                        if ti.static(heat_loads):
+                            mesh.particle_load_heat[i, b] = 0.0
+            flags[0] = 1
+
+        self._insert = insert
 
 
 def _pad(a: np.ndarray, n: int) -> np.ndarray:

@@ -55,6 +55,16 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
             effects.append(Effect("convection", "particle",
                                   f"convection to a {th.gas.model} gas at {th.gas.temperature:g} K "
                                   f"({th.gas.correlation})"))
+    for f in scene.factories:
+        effects.append(Effect("factory", "process",
+                              f"factory '{f.name}': {f.material} at "
+                              + " then ".join(f"{r * 3.6:g} t/h from {t:g} s" for t, r in f.mass_rate.points)))
+    if scene.outlets:
+        effects.append(Effect("outlets", "process",
+                              "outlets " + ", ".join(o.name for o in scene.outlets)
+                              + ": particles removed and accounted"))
+    for x in scene.sensors:
+        effects.append(Effect(f"sensor_{x.kind}", "observe", f"sensor '{x.name}' ({x.kind})"))
     if scene.domain.periodic:
         effects.append(Effect("periodic", "integrate",
                               "periodic faces: " + ", ".join(scene.domain.periodic)))

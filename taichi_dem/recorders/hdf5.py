@@ -39,6 +39,17 @@ class HDF5Recorder:
             ds.resize(ds.shape[0] + 1, axis=0)
             ds[-1] = value
 
+    def append_residence(self, name: str, records: np.ndarray):
+        """Append (id, t_in s, t_out s) rows under /residence/<name>/id, t_in, t_out."""
+        g = self.file.require_group("residence").require_group(name)
+        for col, key, dtype in ((0, "id", np.int64), (1, "t_in", np.float64), (2, "t_out", np.float64)):
+            if key not in g:
+                g.create_dataset(key, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(4096,))
+            ds = g[key]
+            n = ds.shape[0]
+            ds.resize(n + len(records), axis=0)
+            ds[n:] = records[:, col].astype(dtype)
+
     def append_frame(self, time: float, arrays: dict[str, np.ndarray]):
         g = self.frames.create_group(str(self.frame_count))
         g.attrs["time"] = time

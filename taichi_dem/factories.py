@@ -1,0 +1,291 @@
+"""Factories: continuous insertion at a scheduled mass rate (host side, numpy).
+
+Every ``interval`` a factory inserts the particles that bring its inserted mass to the
+scheduled mass (the integral of the rate), rounded to whole particles, so the inserted mass
+never drifts from the schedule by more than one particle plus what the region could not take.
+Particles are placed at random in the region without overlap: clear of the particles already
+there, of walls and of body triangles at their current pose. When the region is full the rest
+waits for the next insertion and the run says so once per episode - never a silent shortfall;
+``/series/factories/<name>/behind`` is the mass behind schedule (kg).
+
+The particles go into free slots of the engine (``Engine.insert``); each gets a slot key not in
+use (``particle_id``, re-used after its particle is gone) and a run-wide ``serial`` id, its
+factory index and its birth time (for the residence time).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+
+import numpy as np
+
+from .bodies import rotation_matrix
+from .placement import _Grid, _Triangles, _frame, _local_bounds, _valid, sample_radii
+
+# automatic interval: the time the particles need to clear their own diameter, within
+# [MIN_INTERVAL_STEPS steps, the output interval]
+MIN_INTERVAL_STEPS = 20
+CANDIDATES_PER_PARTICLE = 6     # random trial positions per particle wanted, per attempt
+ATTEMPTS = 3
+
+
+class FactorySet:
+    """The scene's factories and their progress. ``sim``: the Simulation (engine, tables)."""
+
+    def __init__(self, sim, first_serial: int):
+        self.sim = sim
+        scene = sim.scene
+        self.scene = scene
+        self.factories = scene.factories
+        self.rng = np.random.default_rng([scene.simulation.seed, 7919])
+        self.next_serial = first_serial
+        n = len(self.factories)
+        self.inserted_mass = np.zeros(n)          # kg
+        self.inserted_count = np.zeros(n, np.int64)
+        self.behind = np.zeros(n)                 # kg behind schedule after the last insertion
+        self.waiting = [False] * n                # in a "region full" episode (warned)
+        self.capacity_warned = False
+        self.next_radius = [self._sample_radius(k) for k in range(n)]
+        dt = sim.dt
+        g = float(np.linalg.norm(scene.simulation.gravity))
+        self.every = []                           # steps between insertions
+        for f in self.factories:
+            if f.interval is not None:
+                interval = f.interval
+            else:
+                v = float(np.linalg.norm(f.velocity))
+                d = 2.0 * f.largest_radius
+                # time to move one diameter from the insertion speed under gravity
+                t_clear = (d / v if g == 0 else (-v + math.sqrt(v * v + 2.0 * g * d)) / g) if (v or g) else 0.0
+                interval = min(max(t_clear, MIN_INTERVAL_STEPS * dt), scene.output.interval)
+            self.every.append(max(1, int(round(interval / dt))))
+        names = sim.tables.names
+        self.material = [names.index(f.material) for f in self.factories]
+        self.density = [scene.materials[f.material].density for f in self.factories]
+        self.heat_capacity = [scene.materials[f.material].heat_capacity for f in self.factories]
+        self.npf = np.float64 if sim.precision == "f64" else np.float32
+
+    # ------------------------------------------------------------------ radii
+    def _sample_radius(self, k: int) -> float:
+        f = self.factories[k]
+        if f.sizes:
+            r = np.array([s[0] for s in f.sizes])
+            # mass fraction f_k of size r_k means a number fraction ~ f_k / r_k^3
+            p = np.array([s[1] for s in f.sizes]) / r ** 3
+            return float(r[self.rng.choice(len(r), p=p / p.sum())])
+        return float(sample_radii(f.radius, 1, self.rng)[0])
+
+    def particle_mass(self, k: int, radius: float) -> float:
+        """Mass of a sphere of factory k as the device stores it (rounded to its precision)."""
+        return float(self.npf(4.0 / 3.0 * math.pi * radius ** 3 * self.density[k]))
+
+    # ------------------------------------------------------------------ stepping
+    def steps_to_next(self, step: int) -> int:
+        """Steps from ``step`` to the next insertion of any factory (>= 1)."""
+        return min(e - (step % e) for e in self.every) if self.every else 1 << 62
+
+    def due(self, step: int) -> list[int]:
+        return [k for k, e in enumerate(self.every) if step % e == 0]
+
+    def insert_due(self, step: int, time: float):
+        """Insert for every factory due at ``step`` (state at a whole step, time s)."""
+        due = self.due(step)
+        if not due:
+            return
+        engine = self.sim.engine
+        st = engine.state
+        n = engine.count
+        # what is in the simulation now (the placement avoids it)
+        alive = st.alive.to_numpy()[:n] != 0
+        pos = st.position.to_numpy()[:n][alive].astype(np.float64)
+        rad = st.radius.to_numpy()[:n][alive].astype(np.float64)
+        keys_in_use = st.particle_id.to_numpy()[:n]
+        batches = []
+        for k in due:
+            batch = self._batch(k, time, pos, rad)
+            if batch is not None:
+                batches.append(batch)
+                pos = np.concatenate([pos, batch["position"]])
+                rad = np.concatenate([rad, batch["radius"]])
+        if not batches:
+            return
+        arrays = {key: np.concatenate([b[key] for b in batches]) for key in batches[0]}
+        m = len(arrays["radius"])
+        free = engine.state.capacity - n
+        if m > free:
+            if not self.capacity_warned:
+                self.capacity_warned = True
+                print(f"taichi-dem: warning: at t = {time:.4g} s the particle capacity "
+                      f"({engine.state.capacity}) is reached; factories wait. Raise "
+                      f"[simulation] max_particles.", file=sys.stderr)
+            # give back what does not fit (its mass stays behind schedule)
+            for k in due:
+                sel = arrays["origin"][free:] == k
+                self.inserted_mass[k] -= float(np.sum(arrays["mass"][free:][sel]))
+                self.inserted_count[k] -= int(np.sum(sel))
+                self.behind[k] = max(self.factories[k].mass_rate.mass_until(time)
+                                     - self.inserted_mass[k], 0.0)
+            for key in arrays:
+                arrays[key] = arrays[key][:free]
+            m = free
+            if m == 0:
+                return
+        used = np.zeros(engine.state.capacity, bool)
+        used[keys_in_use] = True
+        arrays["key"] = np.nonzero(~used)[0][:m].astype(np.int32)
+        arrays["serial"] = np.arange(self.next_serial, self.next_serial + m, dtype=np.int64)
+        self.next_serial += m
+        arrays["birth_time"] = np.full(m, time)
+        engine.insert(arrays)
+
+    def _batch(self, k: int, time: float, pos: np.ndarray, rad: np.ndarray):
+        f = self.factories[k]
+        target = f.mass_rate.mass_until(time)
+        radii, masses = [], []
+        planned = self.inserted_mass[k]
+        # whole particles up to the scheduled mass (a particle goes in once half of it is due)
+        while True:
+            r = self.next_radius[k]
+            m = self.particle_mass(k, r)
+            if planned + 0.5 * m > target:
+                break
+            radii.append(r)
+            masses.append(m)
+            planned += m
+            self.next_radius[k] = self._sample_radius(k)
+        if not radii:
+            self.behind[k] = max(target - self.inserted_mass[k], 0.0)
+            return None
+        radii = np.array(radii)
+        placed_pos, ok = self._place(f, radii, time, pos, rad)
+        # the radii that did not fit wait (their order is kept: the next batch starts with them)
+        waiting = radii[~ok]
+        if len(waiting):
+            self.next_radius[k] = float(waiting[0])
+            # (the later unplaced radii are re-sampled; the distribution is unchanged)
+        radii, masses = radii[ok], np.array(masses)[ok]
+        placed_pos = placed_pos[ok]
+        self.inserted_mass[k] += float(np.sum(masses))
+        self.inserted_count[k] += len(radii)
+        self.behind[k] = max(target - self.inserted_mass[k], 0.0)
+        if len(waiting) and not self.waiting[k]:
+            self.waiting[k] = True
+            print(f"taichi-dem: warning: at t = {time:.4g} s factory '{f.name}' could place only "
+                  f"{len(radii)} of {len(radii) + len(waiting)} particles: its region is full. "
+                  f"Insertion waits ({self.behind[k]:.4g} kg behind schedule); enlarge the region "
+                  f"or check that the material leaves it.", file=sys.stderr)
+        elif not len(waiting) and self.waiting[k]:
+            self.waiting[k] = False
+            print(f"taichi-dem: at t = {time:.4g} s factory '{f.name}' inserts again "
+                  f"({self.behind[k]:.4g} kg behind schedule)", file=sys.stderr)
+        if not len(radii):
+            return None
+        n = len(radii)
+        out = {"position": placed_pos, "velocity": np.tile(np.asarray(f.velocity, float), (n, 1)),
+               "radius": radii, "mass": masses,
+               "material": np.full(n, self.material[k], np.int32),
+               "origin": np.full(n, k, np.int32)}
+        if self.sim.engine.thermal:
+            out["temperature"] = np.full(n, f.temperature)
+            out["inverse_thermal_mass"] = 1.0 / (masses * self.heat_capacity[k])
+        return out
+
+    def _place(self, f, radii: np.ndarray, time: float, pos: np.ndarray, rad: np.ndarray):
+        """Random positions in the factory region, clear of ``pos``/``rad`` spheres, walls,
+        body triangles at ``time`` and each other. Returns (positions, placed mask)."""
+        scene = self.scene
+        region = f.region
+        origin, axes = _frame(region)
+        lo, hi = _local_bounds(region)
+        r_max = float(radii.max())
+        # only what is near the region matters
+        wlo, whi = self._world_bounds(region, r_max + (float(rad.max()) if len(rad) else 0.0))
+        near = np.all((pos >= wlo) & (pos <= whi), axis=1) if len(pos) else np.zeros(0, bool)
+        npos, nrad = pos[near], rad[near]
+        dlo, dhi = np.asarray(scene.domain.min), np.asarray(scene.domain.max)
+        per = [ax in scene.domain.periodic for ax in "xyz"]
+        tris = self._triangles(time, wlo, whi, r_max)
+        out = np.zeros((len(radii), 3))
+        ok = np.zeros(len(radii), bool)
+        accepted_pos: list[np.ndarray] = []
+        accepted_r: list[float] = []
+        for _ in range(ATTEMPTS):
+            todo = np.nonzero(~ok)[0]
+            if len(todo) == 0:
+                break
+            m = CANDIDATES_PER_PARTICLE * len(todo) + 16
+            local = lo + (hi - lo) * self.rng.uniform(size=(m, 3))
+            if region.kind == "cylinder":
+                # uniform in the disk: radius ~ sqrt(u)
+                rho = region.radius * np.sqrt(self.rng.uniform(size=m))
+                phi = self.rng.uniform(0.0, 2.0 * math.pi, m)
+                local[:, 1], local[:, 2] = rho * np.cos(phi), rho * np.sin(phi)
+            cand = origin + local @ axes
+            # each candidate is tried for the largest radius still to place (conservative)
+            rr = np.full(m, float(radii[todo].max()))
+            grid = _Grid(npos, 2.0 * max(r_max, float(nrad.max()) if len(nrad) else r_max),
+                         dlo, dhi, per) if len(npos) else None
+            valid = _valid(scene, region, cand, rr, grid, nrad, tris)
+            cand = cand[valid]
+            for c in cand:
+                if len(todo) == 0:
+                    break
+                i = todo[0]
+                if accepted_pos:
+                    ap = np.asarray(accepted_pos)
+                    d2 = np.sum((ap - c) ** 2, axis=1)
+                    if np.any(d2 < (np.asarray(accepted_r) + radii[i]) ** 2 * (1.0 + 1e-9)):
+                        continue
+                out[i] = c
+                ok[i] = True
+                accepted_pos.append(c)
+                accepted_r.append(radii[i])
+                todo = todo[1:]
+        return out, ok
+
+    def _world_bounds(self, region, pad: float):
+        from .loader import region_bounds
+        lo, hi = region_bounds(region)
+        return lo - pad, hi + pad
+
+    def _triangles(self, time: float, lo, hi, r_max: float):
+        """Body triangles near [lo, hi] at their pose at ``time`` (None without bodies)."""
+        if not self.scene.bodies:
+            return None
+        kin = self.sim.engine.kinematics
+        moved = []
+        for k, b in enumerate(self.scene.bodies):
+            m = b.motion
+            rot = rotation_matrix(np.asarray(m.axis_direction, float), kin.angle(k, time))
+            p = np.asarray(m.axis_point, float)
+            v = (np.asarray(b.vertices, float) - p) @ rot.T + p + np.asarray(m.velocity) * time
+            faces = np.asarray(b.faces, np.int64).reshape(-1, 3)
+            tri = v[faces]
+            keep = np.all((tri.max(axis=1) >= lo - r_max) & (tri.min(axis=1) <= hi + r_max), axis=1)
+            moved.append(dataclasses.replace(b, vertices=v, faces=faces[keep]))
+        fake = dataclasses.replace(self.scene, bodies=tuple(moved))
+        return _Triangles(fake, 2.0 * r_max)
+
+    # ------------------------------------------------------------------ series
+    def sample(self, time: float, values: dict):
+        for k, f in enumerate(self.factories):
+            values[f"factories/{f.name}/mass"] = self.inserted_mass[k]
+            values[f"factories/{f.name}/count"] = float(self.inserted_count[k])
+            values[f"factories/{f.name}/behind"] = self.behind[k]
+
+    def state_dict(self) -> dict:
+        return {"inserted_mass": self.inserted_mass.copy(), "inserted_count": self.inserted_count.copy(),
+                "behind": self.behind.copy(), "waiting": np.array(self.waiting, bool),
+                "next_radius": np.array(self.next_radius), "next_serial": self.next_serial,
+                "rng": str(self.rng.bit_generator.state)}
+
+    def load_state_dict(self, d: dict):
+        import ast
+        self.inserted_mass = np.asarray(d["inserted_mass"], float).copy()
+        self.inserted_count = np.asarray(d["inserted_count"], np.int64).copy()
+        self.behind = np.asarray(d["behind"], float).copy()
+        self.waiting = [bool(x) for x in d["waiting"]]
+        self.next_radius = [float(x) for x in d["next_radius"]]
+        self.next_serial = int(d["next_serial"])
+        self.rng.bit_generator.state = ast.literal_eval(str(d["rng"]))

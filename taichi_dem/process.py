@@ -1,0 +1,179 @@
+"""Process tooling on the device: outlets that remove particles, the removal log they write,
+and the mass-flow planes that count crossings. The engine's drift calls ``after_drift`` once
+per moving particle and step; nothing here is compiled when a scene has no factories, outlets
+or mass-flow sensors.
+
+A removed particle (outlet or left the domain) is written to the log with what the accounting
+needs (id, factory, exit, times, mass, temperature), marked dead and moved to a far-away
+``PARKED`` position, so it touches nothing until the next neighbour rebuild drops it (no
+rebuild is forced per removal). The log has one entry per particle slot, so it cannot overflow
+between two rebuilds; the host drains it (accounting.py) whenever it is more than half full at
+a rebuild and at every output sample.
+"""
+
+import numpy as np
+import taichi as ti
+
+EXIT_LOST = -1          # the particle left the domain
+
+# parked position of dead particles: far outside any domain, but finite in f32 so squared
+# distances to it stay finite
+PARKED = 1.0e9
+
+
+def region_test(region):
+    """ti.func x -> True when the point x lies inside ``region`` (box or finite cylinder)."""
+    if region.kind == "box":
+        lo = ti.Vector(list(region.box_min))
+        hi = ti.Vector(list(region.box_max))
+
+        @ti.func
+        def inside(x):
+            return (x[0] >= lo[0] and x[0] <= hi[0] and x[1] >= lo[1] and x[1] <= hi[1]
+                    and x[2] >= lo[2] and x[2] <= hi[2])
+        return inside
+    p = ti.Vector(list(region.axis_point))
+    a = ti.Vector(list(region.axis_direction))
+    length, radius_sq = region.length, region.radius ** 2
+
+    @ti.func
+    def inside_cylinder(x):
+        d = x - p
+        u = d.dot(a)
+        radial = d - u * a
+        return u >= 0.0 and u <= length and radial.dot(radial) <= radius_sq
+    return inside_cylinder
+
+
+class ProcessDevice:
+    """Fields and ti.funcs of outlets, the removal log and mass-flow planes of one engine."""
+
+    def __init__(self, engine, tree):
+        scene = engine.scene
+        s = engine.state
+        self.outlets = scene.outlets
+        self.planes = [x for x in scene.sensors if x.kind == "mass_flow"]
+        self.log_enabled = bool(scene.factories or scene.outlets)
+        self.thermal = engine.thermal
+        cap = s.capacity
+        self.log_capacity = 0
+        self.log_temperature = None
+        if self.log_enabled:
+            self.log_capacity = cap
+            self.log_count = tree.add("log_count", ti.i32, 1)
+            self.log_id = tree.add("log_id", ti.i32, cap)
+            self.log_origin = tree.add("log_origin", ti.i32, cap)
+            self.log_exit = tree.add("log_exit", ti.i32, cap)
+            self.log_t_in = tree.add("log_t_in", ti.f64, cap)
+            self.log_t_out = tree.add("log_t_out", ti.f64, cap)
+            self.log_mass = tree.add("log_mass", ti.f64, cap)
+            self.log_temperature = tree.add("log_temperature", ti.f64, cap) if self.thermal else None
+        n_planes = max(len(self.planes), 1)
+        # mass (kg, signed along the normal) and count of crossings since the last sample
+        self.plane_mass = tree.add("plane_mass", ti.f64, n_planes)
+        self.plane_count = tree.add("plane_count", ti.i32, n_planes)
+
+    def make_funcs(self, engine):
+        """Compile-time construction of ``after_drift(i, x_old, x_new, x_wrapped, inside, t)``:
+        x_old and x_new are the particle's centre before and after this step's drift (m,
+        unwrapped), x_wrapped the new centre wrapped into a periodic domain, inside whether it is
+        in the domain, t the time after the step (s); returns True when the particle was
+        removed."""
+        s = engine.state
+        flags = engine.flags
+        log_enabled = self.log_enabled
+        outlet_tests = [region_test(o.region) for o in self.outlets]
+        n_outlets = len(outlet_tests)
+        thermal = self.thermal
+        process_fields = s.process
+        planes = [(tuple(x.point), tuple(x.normal), x.radius if x.radius is not None else -1.0,
+                   tuple(x.box_min) if x.box_min is not None else (0.0, 0.0, 0.0),
+                   tuple(x.box_max) if x.box_max is not None else (0.0, 0.0, 0.0),
+                   x.box_min is not None) for x in self.planes]
+        n_planes = len(planes)
+        me = self
+
+        @ti.func
+        def log_removal(i, exit_index, t):
+            if ti.static(log_enabled):
+                slot = ti.atomic_add(me.log_count[0], 1)
+                me.log_exit[slot] = exit_index
+                me.log_t_out[slot] = t
+                me.log_mass[slot] = ti.cast(s.mass[i], ti.f64)
+                if ti.static(process_fields):
+                    me.log_id[slot] = s.serial[i]
+                    me.log_origin[slot] = s.origin[i]
+                    me.log_t_in[slot] = ti.cast(s.birth_time[i], ti.f64)
+                else:
+                    me.log_id[slot] = s.particle_id[i]
+                    me.log_origin[slot] = -1
+                    me.log_t_in[slot] = 0.0
+                if ti.static(thermal):
+                    me.log_temperature[slot] = ti.cast(s.temperature[i], ti.f64)
+                if slot * 2 > ti.static(me.log_capacity):
+                    flags[0] = 1          # rebuild soon: the host drains the log then
+
+        @ti.func
+        def after_drift(i, x_old, x_new, x_wrapped, inside, t):
+            for k in ti.static(range(n_planes)):
+                point = ti.Vector(planes[k][0])
+                normal = ti.Vector(planes[k][1])
+                before = (x_old - point).dot(normal)
+                after = (x_new - point).dot(normal)
+                if (before < 0.0) != (after < 0.0):
+                    crossing = x_old + (x_new - x_old) * (before / (before - after))
+                    within = True
+                    if ti.static(planes[k][2] > 0.0):
+                        off = crossing - point
+                        within = off.dot(off) <= ti.static(planes[k][2] ** 2)
+                    if ti.static(planes[k][5]):
+                        lo = ti.Vector(planes[k][3])
+                        hi = ti.Vector(planes[k][4])
+                        for a in ti.static(range(3)):
+                            if crossing[a] < lo[a] or crossing[a] > hi[a]:
+                                within = False
+                    if within:
+                        sign = 1.0 if after >= 0.0 else -1.0
+                        ti.atomic_add(me.plane_mass[k], sign * ti.cast(s.mass[i], ti.f64))
+                        ti.atomic_add(me.plane_count[k], 1)
+            exit_index = -2
+            if not inside:
+                exit_index = EXIT_LOST
+            else:
+                for o in ti.static(range(n_outlets)):
+                    if exit_index == -2:
+                        if outlet_tests[o](x_wrapped):
+                            exit_index = o
+            removed = exit_index != -2
+            if removed:
+                log_removal(i, exit_index, t)
+                s.alive[i] = 0
+                s.position[i] = ti.Vector([PARKED, PARKED, PARKED])
+                s.velocity[i] = ti.Vector([0.0, 0.0, 0.0])
+                ti.atomic_add(flags[2], 1)            # dead, still holding a slot
+                if exit_index == EXIT_LOST:
+                    ti.atomic_add(flags[1], 1)
+            return removed
+
+        return after_drift
+
+    def drain(self):
+        """The log's entries since the last drain as numpy arrays (float64 / int), reset."""
+        n = int(self.log_count[0])
+        if n == 0:
+            return None
+        out = {"id": self.log_id.to_numpy()[:n], "origin": self.log_origin.to_numpy()[:n],
+               "exit": self.log_exit.to_numpy()[:n], "t_in": self.log_t_in.to_numpy()[:n],
+               "t_out": self.log_t_out.to_numpy()[:n], "mass": self.log_mass.to_numpy()[:n]}
+        if self.log_temperature is not None:
+            out["temperature"] = self.log_temperature.to_numpy()[:n]
+        self.log_count[0] = 0
+        return out
+
+    def take_plane_flows(self):
+        """(mass kg signed, count) crossed per mass-flow plane since the last call; reset."""
+        m = self.plane_mass.to_numpy()[: len(self.planes)].astype(np.float64)
+        c = self.plane_count.to_numpy()[: len(self.planes)].astype(np.int64)
+        self.plane_mass.fill(0.0)
+        self.plane_count.fill(0)
+        return m, c
