@@ -24,8 +24,9 @@ from .bodies import rotation_matrix
 from .placement import _Grid, _Triangles, _frame, _local_bounds, _valid, sample_radii
 
 # automatic interval: the time the particles need to clear their own diameter, within
-# [MIN_INTERVAL_STEPS steps, the output interval]
+# [MIN_INTERVAL_STEPS steps, MAX_INTERVAL]; one batch is then at most 0.5 % of a second's feed
 MIN_INTERVAL_STEPS = 20
+MAX_INTERVAL = 0.005            # s
 CANDIDATES_PER_PARTICLE = 6     # random trial positions per particle wanted, per attempt
 ATTEMPTS = 3
 
@@ -58,8 +59,12 @@ class FactorySet:
                 d = 2.0 * f.largest_radius
                 # time to move one diameter from the insertion speed under gravity
                 t_clear = (d / v if g == 0 else (-v + math.sqrt(v * v + 2.0 * g * d)) / g) if (v or g) else 0.0
-                interval = min(max(t_clear, MIN_INTERVAL_STEPS * dt), scene.output.interval)
-            self.every.append(max(1, int(round(interval / dt))))
+                interval = min(max(t_clear, MIN_INTERVAL_STEPS * dt), MAX_INTERVAL)
+            wanted = max(1, int(round(interval / dt)))
+            # a whole number of insertions per output interval, so every sample sees the
+            # inserted mass on schedule (to half a particle)
+            out = sim.output_every
+            self.every.append(max(1, out // max(1, -(-out // wanted))) if wanted < out else wanted)
         names = sim.tables.names
         self.material = [names.index(f.material) for f in self.factories]
         self.density = [scene.materials[f.material].density for f in self.factories]
@@ -215,15 +220,17 @@ class FactorySet:
             if len(todo) == 0:
                 break
             m = CANDIDATES_PER_PARTICLE * len(todo) + 16
-            local = lo + (hi - lo) * self.rng.uniform(size=(m, 3))
+            # centres where the largest sphere still to place lies wholly inside the region
+            room = float(radii[todo].max())
+            local = (lo + room) + (hi - lo - 2.0 * room) * self.rng.uniform(size=(m, 3))
             if region.kind == "cylinder":
                 # uniform in the disk: radius ~ sqrt(u)
-                rho = region.radius * np.sqrt(self.rng.uniform(size=m))
+                rho = (region.radius - room) * np.sqrt(self.rng.uniform(size=m))
                 phi = self.rng.uniform(0.0, 2.0 * math.pi, m)
                 local[:, 1], local[:, 2] = rho * np.cos(phi), rho * np.sin(phi)
             cand = origin + local @ axes
             # each candidate is tried for the largest radius still to place (conservative)
-            rr = np.full(m, float(radii[todo].max()))
+            rr = np.full(m, room)
             grid = _Grid(npos, 2.0 * max(r_max, float(nrad.max()) if len(nrad) else r_max),
                          dlo, dhi, per) if len(npos) else None
             valid = _valid(scene, region, cand, rr, grid, nrad, tris)

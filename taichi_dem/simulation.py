@@ -215,10 +215,11 @@ class Simulation:
             self.step_count += chunk
             self.time = self.step_count * self.dt
             remaining -= chunk
+            if self.factories is not None:
+                # before the sample, so a sample sees the mass inserted on schedule
+                self.factories.insert_due(self.step_count, self.time)
             if self.step_count % self.output_every == 0:
                 self._sample()
-            if self.factories is not None:
-                self.factories.insert_due(self.step_count, self.time)
         self.wall_seconds += _time.perf_counter() - t0
 
     def run(self, until: Optional[float] = None, *, progress: bool = False):
