@@ -91,11 +91,14 @@ def describe_scene(scene) -> str:
 
     placed = place_fills(scene, np.random.default_rng(scene.simulation.seed))
     tables = build_pair_tables(scene)
+    from .simulation import _factory_capacity, _sizes_to_expect
     n = len(placed.radius)
-    if n == 0:
+    if n == 0 and not scene.factories:
         raise SceneError(scene.source, "particles", "the scene has no particles")
-    ts, skin = choose_step_and_skin(scene, placed.radius, placed.material, tables.names,
-                                    np.linalg.norm(placed.velocity, axis=1), placed.fixed)
+    radii, mats, speeds, fixed = _sizes_to_expect(scene, placed, tables.names)
+    ts, skin = choose_step_and_skin(scene, radii, mats, tables.names, speeds, fixed)
+    n_initial = n
+    n = n + _factory_capacity(scene)
     real_bytes = 8 if scene.simulation.precision == "f64" else 4
     # per particle: 6 vec3 + 4 reals + 3 ints of state, shadows and rows (~12 ints)
     per_particle = (6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes
@@ -107,8 +110,10 @@ def describe_scene(scene) -> str:
     for e in enabled_effects(scene):
         lines.append(f"  - {e.name:24s} {e.description}")
     lines += [
-        f"particles: {n} ({', '.join(f'{c} {m}' for m, c in zip(tables.names, np.bincount(placed.material, minlength=len(tables.names))) if c)})"
-        f", radius {placed.radius.min():.4g} - {placed.radius.max():.4g} m",
+        f"particles: {n_initial} initially ({', '.join(f'{c} {m}' for m, c in zip(tables.names, np.bincount(placed.material, minlength=len(tables.names))) if c) or 'none'})"
+        + (f"; up to {n} with the factories (the particle-step estimate below assumes them all)"
+           if scene.factories else "")
+        + f", radius {radii.min():.4g} - {radii.max():.4g} m",
         f"Rayleigh time (smallest particle): {ts.rayleigh_time:.4g} s",
         f"Hertz contact time at {ts.expected_speed:.3g} m/s: {ts.contact_time:.4g} s",
         f"time step: {ts.dt:.4g} s ({ts.dt / ts.rayleigh_time:.1%} of Rayleigh; set by {ts.limited_by})",
@@ -124,7 +129,7 @@ def describe_scene(scene) -> str:
             lines.append(f"body {b.name}: {len(b.faces)} triangles, material {b.material}, "
                          f"up to {w * 60 / (2 * math.pi):.3g} rpm")
         lines.append(f"fastest body surface: {body_surface_speed(scene):.3g} m/s "
-                     f"({body_surface_speed(scene) * ts.dt / float(np.min(placed.radius)):.3f} "
+                     f"({body_surface_speed(scene) * ts.dt / float(np.min(radii)):.3f} "
                      f"of the smallest radius per step)")
     lines += [f"note: {note}" for note in ts.notes]
     return "\n".join(lines)

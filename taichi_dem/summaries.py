@@ -1,0 +1,84 @@
+"""End-of-run summaries of process scenes: what a process engineer asks first - the shaft
+torque and power, how long the material stayed, how hot it left, what went in and out."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def _tail(a: np.ndarray, frac: float = 0.25) -> np.ndarray:
+    """The last ``frac`` of a series (at least one sample)."""
+    return a[-max(1, int(len(a) * frac)):]
+
+
+def process_summary(sim, window: float = 0.25) -> dict:
+    """Print and return the key numbers of a run: per body the mean axial torque (N m) and
+    drive power (W) over the last ``window`` fraction of the run; per residence sensor the
+    mean, median and 10/90 % residence times (s); per outlet the mass removed, the mean mass
+    flow (t/h) and the mean outlet temperature (K) over the window; per factory the mass fed;
+    the mass balance."""
+    s = sim.series
+    out: dict = {}
+    t = s["time"]
+    span = t[-1] - _tail(t, window)[0]
+    for b in sim.scene.bodies:
+        if b.motion.speed is None:
+            continue
+        tq = float(np.mean(_tail(s[f"bodies/{b.name}/axial_torque"], window)))
+        pw = float(np.mean(_tail(s[f"bodies/{b.name}/power"], window)))
+        out[f"{b.name}/axial_torque"] = tq
+        out[f"{b.name}/power"] = pw
+        print(f"summary: {b.name}: axial torque {tq:.4g} N m, drive power {pw:.4g} W "
+              f"(mean of the last {span:.3g} s)")
+    for x in sim.scene.sensors:
+        if x.kind == "residence_time":
+            rec = sim.residence_times(x.name)
+            if len(rec):
+                rt = rec[:, 2] - rec[:, 1]
+                p10, p50, p90 = np.percentile(rt, [10, 50, 90])
+                out[f"{x.name}/mean"] = float(np.mean(rt))
+                out[f"{x.name}/median"] = float(p50)
+                print(f"summary: residence time '{x.name}' ({x.source} -> {x.target}, "
+                      f"{len(rt)} particles): mean {np.mean(rt):.3g} s, median {p50:.3g} s, "
+                      f"10-90 % {p10:.3g} - {p90:.3g} s")
+            else:
+                print(f"summary: residence time '{x.name}': no particle has made it yet")
+        elif x.kind == "mass_flow":
+            mf = float(np.mean(_tail(s[f"sensors/{x.name}/mass_flow"], window)))
+            out[f"{x.name}/mass_flow"] = mf
+            print(f"summary: mass flow through '{x.name}': {mf * 3.6:.3g} t/h "
+                  f"(mean of the last {span:.3g} s)")
+        elif x.kind == "contact_count":
+            cc = float(np.mean(_tail(s[f"sensors/{x.name}/contact_count"], window)))
+            out[f"{x.name}/contact_count"] = cc
+            print(f"summary: particles touching '{x.body}': {cc:.4g} (mean of the last {span:.3g} s)")
+    for o in sim.scene.outlets:
+        p = f"outlets/{o.name}/"
+        flow = float(np.mean(_tail(s[p + "mass_flow"], window)))
+        out[f"{o.name}/mass_flow"] = flow
+        line = (f"summary: outlet '{o.name}': {s[p + 'mass'][-1]:.4g} kg removed, "
+                f"{flow * 3.6:.3g} t/h over the last {span:.3g} s")
+        if p + "mean_temperature" in s:
+            temps = _tail(s[p + "mean_temperature"], window)
+            flows = _tail(s[p + "mass_flow"], window)
+            ok = np.isfinite(temps) & (flows > 0)
+            if np.any(ok):
+                mean_t = float(np.sum(temps[ok] * flows[ok]) / np.sum(flows[ok]))
+                out[f"{o.name}/temperature"] = mean_t
+                line += f", leaving at {mean_t:.4g} K ({mean_t - 273.15:.4g} C)"
+        print(line)
+    for f in sim.scene.factories:
+        fed = float(s[f"factories/{f.name}/mass"][-1])
+        behind = float(s[f"factories/{f.name}/behind"][-1])
+        out[f"{f.name}/fed"] = fed
+        print(f"summary: factory '{f.name}': {fed:.4g} kg fed"
+              + (f", {behind:.4g} kg behind schedule (the inlet chokes)" if behind > 0.01 * max(fed, 1e-30) else ""))
+    if sim.scene.factories or sim.scene.outlets:
+        b = sim.mass_balance()
+        out["mass_balance_error"] = b["error"]
+        print(f"summary: mass balance: {b['initial']:.4g} initial + {b['fed']:.4g} fed = "
+              f"{b['inside']:.4g} inside + {b['removed']:.4g} removed + "
+              f"{b['lost'] if not math.isnan(b['lost']) else 0.0:.4g} lost "
+              f"(difference {b['error']:.2g} kg)")
+    return out
