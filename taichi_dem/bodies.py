@@ -689,6 +689,34 @@ class MeshContacts:
         self._count_contacts(n)
         return self.touching.to_numpy()[: self.n_bodies].astype(np.int64)
 
+    def deepest_overlaps(self, n: int) -> np.ndarray:
+        """Per body, the largest overlap of a touching particle now, as a fraction of that
+        particle's radius, (B,). A large one means particles are pinched (a gap narrower than
+        the particles, e.g. paddle tips and the shell)."""
+        if getattr(self, "_deepest_for", None) is not self.mesh_overlap:
+            self._deepest_for = self.mesh_overlap
+            m = self
+            s = self.e.state
+            nb = self.n_bodies
+            if not hasattr(self, "deepest"):
+                tree = self.e.new_tree()
+                self.deepest = tree.add("deepest", self.e.real, max(nb, 1))
+                tree.finalize()
+
+            @ti.kernel
+            def deepest_overlap(n: ti.i32):
+                for b in range(nb):
+                    m.deepest[b] = 0.0
+                for i in range(n):
+                    if s.alive[i] != 0:
+                        for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
+                            if m.mesh_contact[k] != 0:
+                                ti.atomic_max(m.deepest[m.tri_body[m.mesh_tri[k]]],
+                                              m.mesh_overlap[k] / s.radius[i])
+            self._deepest_overlap = deepest_overlap
+        self._deepest_overlap(n)
+        return self.deepest.to_numpy()[: self.n_bodies].astype(np.float64)
+
     def take_loads(self, n: int):
         """Mean force (N) and torque about the axis point (N m) per body over the steps since
         the last call; resets the sums. ``n``: particles alive."""

@@ -60,6 +60,10 @@ def _factory_capacity(scene: Scene) -> int:
     return int(min(1.1 * total + 64, packing))
 
 
+# overlap (fraction of the radius) with a body beyond which particles are reported as pinched
+PINCH_WARNING = 0.2
+
+
 class DivergenceError(RuntimeError):
     """The simulation blew up (non-finite state); the message says when and the likely fix."""
 
@@ -269,6 +273,7 @@ class Simulation:
         self._last_sample_time = self.time
         mesh = self.engine.mesh
         if mesh is not None:
+            self._check_pinching(mesh.deepest_overlaps(self.engine.count))
             forces, torques, heats = mesh.take_loads(self.engine.count)
             for k, body in enumerate(self.scene.bodies):
                 axis = np.asarray(body.motion.axis_direction, float)
@@ -304,6 +309,21 @@ class Simulation:
                 "id", "position", "velocity", "angular_velocity", "radius", "temperature")
                 if k in arrays})
             self.recorder.flush()
+
+    def _check_pinching(self, deepest: np.ndarray):
+        """Say once per body when particles are pinched against it: an overlap beyond
+        PINCH_WARNING of the radius means a gap narrower than the particles (paddle tips and
+        the shell) squeezes them; the run goes on - stable, the kinematic body wins - but the
+        forces there are not those of real particles, which would break or block the drive."""
+        warned = self.__dict__.setdefault("_warned_pinch", set())
+        for k, body in enumerate(self.scene.bodies):
+            if deepest[k] > PINCH_WARNING and body.name not in warned:
+                warned.add(body.name)
+                print(f"taichi-dem: warning: at t = {self.time:.4g} s particles are pinched "
+                      f"against '{body.name}': overlap {deepest[k]:.0%} of the radius (beyond "
+                      f"{PINCH_WARNING:.0%}). A gap narrower than the particles (a paddle-tip "
+                      f"clearance?) squeezes them; the run stays stable but the loads there are "
+                      f"not physical. Widen the gap or use smaller particles.", file=sys.stderr)
 
     def _warn_biot(self):
         """A particle is one temperature (lumped) only while its Biot number h (r/3) / k_p is
