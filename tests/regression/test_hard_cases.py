@@ -99,12 +99,15 @@ def test_jammed_run_stays_stable(choked):
     kinematic (unstoppable) body: its overlaps are set by the geometry, at most (2 r - gap) =
     1.33 r shared between tip and shell. The run must stay finite, the overlaps within that
     geometric bound (measured: 0.53 r with the shell, 0.41 r between particles), the kinetic
-    energy below that of the whole charge moving at the paddle tip speed - and it must say
+    energy bounded by the speeds the paddles and gravity can give - and it must say
     that particles are pinched."""
     s, worst, err, mass = choked
     assert np.all(np.isfinite(s["particles/kinetic_energy"]))
     assert worst["shell"] < (2 * R_P - 0.01) / R_P, worst
     assert worst["pair"] < (2 * R_P - 0.01) / R_P, worst
     assert "pinched against" in err
+    # every particle at most as fast as a paddle tip plus a fall across the shell from the
+    # inlet speed (measured: 0.34 J against this bound of 19 J; a blow-up is many decades up)
     tip = (R_SHELL - 0.01) * 20 * 2 * np.pi / 60
-    assert worst["ke"] < 0.5 * mass * tip ** 2, (worst, mass)
+    fall = np.sqrt(0.5 ** 2 + 2 * 9.81 * 2 * R_SHELL)
+    assert worst["ke"] < 0.5 * mass * (tip + fall) ** 2, (worst, mass)
