@@ -30,6 +30,9 @@ import taichi as ti
 from . import convection as gas_convection
 
 
+BLOCKS = 64        # CPU: particle blocks summed without atomics (a few per thread)
+
+
 def _phi(x):
     """(1 - exp(-x)) / x, accurate for small x (f32: 1 - exp(-1e-6) has no digits left)."""
     return ti.select(x < 1e-3, 1.0 - x * (0.5 - x * (1.0 / 6.0 - x / 24.0)),
@@ -55,6 +58,15 @@ class AxialPlugFlowGas:
         self.exit_temperature = tree.add("gas_exit_temperature", real, n_cells)   # K
         # [heat flow to the particles in the last step W, its time integral J, outlet K]
         self.totals = tree.add("gas_totals", ti.f64, 3)
+        # per-block partial cell sums (CPU): each block of particles sums into its own row with
+        # plain stores; atomic adds from every particle onto a few cells cost more than the
+        # pair kernel on the drum benchmark (BENCHMARKS.md). On a GPU atomics are cheap and
+        # blocks would starve it, so there each particle adds atomically (``blocks`` = 0).
+        arch = ti.lang.impl.current_cfg().arch
+        self.blocks = BLOCKS if arch in (ti.x64, ti.arm64) else 0
+        if self.blocks:
+            self.partial_conductance = tree.add("gas_partial_conductance", real, (self.blocks, n_cells))
+            self.partial_weighted = tree.add("gas_partial_weighted", real, (self.blocks, n_cells))
         self.state = state
         self.real = real
 
@@ -78,28 +90,47 @@ class AxialPlugFlowGas:
         TC, TX, totals = self.cell_temperature, self.exit_temperature, self.totals
         phi = ti.func(_phi)
 
+        blocks = self.blocks
+        PG = self.partial_conductance if blocks else None
+        PS = self.partial_weighted if blocks else None
+
+        @ti.func
+        def particle_conductance(i):
+            """(cell or -1, h A W/K) of particle i in the stream."""
+            c = -1
+            h_area = 0.0
+            if s.alive[i] != 0:
+                axial = (s.position[i] - p0).dot(axis)
+                if axial >= 0.0 and axial < length:
+                    c = ti.min(ti.cast(axial * inv_dx, ti.i32), n_cells - 1)
+                    diameter = 2.0 * s.radius[i]
+                    reynolds = re_factor * diameter * (u_gas - s.velocity[i]).norm()
+                    nusselt = 0.0
+                    if ti.static(gunn):
+                        nusselt = gas_convection.nusselt_gunn(reynolds, prandtl_cube_root, porosity)
+                    else:
+                        nusselt = gas_convection.nusselt_ranz_marshall(reynolds, prandtl_cube_root)
+                    h_area = gas_convection.convective_conductance(k_gas, nusselt, diameter)
+            cell_of[i] = c
+            G[i] = h_area
+            return c, h_area
+
         @ti.kernel
         def exchange(n: ti.i32, dt: self.real):
-            for i in range(n):
-                c = -1
-                h_area = 0.0
-                if s.alive[i] != 0:
-                    axial = (s.position[i] - p0).dot(axis)
-                    if axial >= 0.0 and axial < length:
-                        c = ti.min(ti.cast(axial * inv_dx, ti.i32), n_cells - 1)
-                        diameter = 2.0 * s.radius[i]
-                        reynolds = re_factor * diameter * (u_gas - s.velocity[i]).norm()
-                        nusselt = 0.0
-                        if ti.static(gunn):
-                            nusselt = gas_convection.nusselt_gunn(reynolds, prandtl_cube_root, porosity)
-                        else:
-                            nusselt = gas_convection.nusselt_ranz_marshall(reynolds, prandtl_cube_root)
-                        h_area = gas_convection.convective_conductance(k_gas, nusselt, diameter)
-                        # few addresses, all particles: measured in BENCHMARKS.md
+            if ti.static(blocks):
+                for b in range(blocks):
+                    chunk = (n + blocks - 1) // blocks
+                    for i in range(b * chunk, ti.min(n, (b + 1) * chunk)):     # serial in a block
+                        c, h_area = particle_conductance(i)
+                        if c >= 0:
+                            PG[b, c] = PG[b, c] + h_area                 # own row: no atomics
+                            PS[b, c] = PS[b, c] + h_area * s.temperature[i]
+            else:
+                for i in range(n):
+                    c, h_area = particle_conductance(i)
+                    if c >= 0:
                         ti.atomic_add(GC[c], h_area)
                         ti.atomic_add(SC[c], h_area * s.temperature[i])
-                cell_of[i] = c
-                G[i] = h_area
             for _ in range(1):           # one serial march from the inlet
                 t_gas = ti.cast(t_in, self.real)
                 total = 0.0
@@ -107,6 +138,12 @@ class AxialPlugFlowGas:
                     c = k
                     if ti.static(not along):
                         c = n_cells - 1 - k
+                    if ti.static(blocks):
+                        for b in range(blocks):
+                            GC[c] += PG[b, c]
+                            SC[c] += PS[b, c]
+                            PG[b, c] = 0.0
+                            PS[b, c] = 0.0
                     g_c = GC[c]
                     t_out = t_gas
                     t_seen = t_gas

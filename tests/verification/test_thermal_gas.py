@@ -97,11 +97,18 @@ def _march(cell_temperatures, g_cell, flow):
     return out
 
 
-def test_plug_flow_profile_at_one_particle_temperature(tmp_path):
+@pytest.mark.parametrize("sums", ["blocks", "atomics"])
+def test_plug_flow_profile_at_one_particle_temperature(tmp_path, monkeypatch, sums):
+    """Both ways of summing per cell: per-block rows (CPU) and atomic adds (the GPU path,
+    forced here on the CPU)."""
+    if sums == "atomics":
+        import thermal.plug_flow
+        monkeypatch.setattr(thermal.plug_flow, "BLOCKS", 0)
     tp = 350.0
     g_cell = 2 * _ranz_marshall_hA(MDOT / (AIR["density"] * AREA))
     ntu = g_cell / (MDOT * AIR["heat_capacity"])
     with _cells_scene(tmp_path, "along_axis", [tp] * CELLS) as sim:
+        assert sim.engine.gas_stream.blocks == (0 if sums == "atomics" else 64)
         sim.step(10)
         profile = sim.series["gas/temperature"][-1]
         outlet = sim.series["gas/outlet_temperature"][-1]
@@ -210,6 +217,31 @@ def test_radiation_lumped(tmp_path, source):
         assert temps[1] == t0                # outside radiation_region
     else:
         assert temps[1] == pytest.approx(temps[0], rel=1e-12)
+
+
+def test_radiation_to_the_gas_adds_to_convection(tmp_path):
+    """radiation_to = "gas" with a fixed gas: C dT/dt = hA (T_g - T) + eps sigma A (T_g^4 - T^4),
+    t(T) = integral of C dT / (...) by the trapezoid rule on 20001 points (error ~1e-9)."""
+    eps, c, t_gas, t0, u = 0.8, 100.0, 1200.0, 300.0, 1.0
+    hA = _ranz_marshall_hA(u)
+    k_rad = eps * SIGMA * 4 * math.pi * R ** 2
+    text = (h.header(dt=1e-3, lo=(-0.1,) * 3, hi=(0.1,) * 3, output_interval=0.5)
+            + _material("glass", c, f"emissivity = {eps}") + h.interaction("glass", "glass", 0.5, 0.5)
+            + _fill(tmp_path, "p.csv", "glass", [[0, 0, 0]], t0)
+            + f"[thermal]\nradiation = true\nradiation_to = \"gas\"\n[thermal.gas]\n"
+              f"temperature = \"{t_gas - 273.15} C\"\nvelocity = [{u}, 0, 0]\n")
+    with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
+        sim.run(4.0)
+        temp = sim.particles()["temperature"][0]
+    grid = np.linspace(t0, temp, 20001)
+    rate = (hA * (t_gas - grid) + k_rad * (t_gas ** 4 - grid ** 4)) / (_mass() * c)
+    f = 1.0 / rate
+    t_of_T = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(grid)))
+    without = (_mass() * c / hA) * math.log((t_gas - t0) / (t_gas - temp))
+    print(f"\n  radiation to the gas + convection: T = {temp:.3f} K at t = {sim.time:.3f} s; t(T) by "
+          f"quadrature {t_of_T:.4f} s (convection alone would take {without:.3f} s)")
+    assert t_of_T == pytest.approx(sim.time, rel=1e-3)
+    assert without > 1.5 * sim.time                   # radiation does matter here
 
 
 # ------------------------------------------------------------------------------ drying
