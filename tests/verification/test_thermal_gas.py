@@ -244,6 +244,30 @@ def test_radiation_to_the_gas_adds_to_convection(tmp_path):
     assert without > 1.5 * sim.time                   # radiation does matter here
 
 
+def test_radiation_to_the_plug_flow_gas_of_the_cell(tmp_path):
+    """radiation_to = "gas" with a plug-flow gas: a lone particle in the first cell sees the
+    cell's gas temperature T_gc = T_p + (T_in - T_p)(1 - e^-NTU)/NTU, by convection and by
+    radiation; one step of the explicit update is T += dt (G (T_gc - T) + eps sigma A (T_gc^4 -
+    T^4)) / (m c) exactly (1e-12). A particle outside the span gets neither."""
+    eps, c, t0 = 0.9, 100.0, 400.0
+    text = (h.header(dt=1e-3, lo=(-0.1, -0.05, -0.05), hi=(0.6, 0.05, 0.05), output_interval=0.01)
+            + _material("glass", c, f"emissivity = {eps}") + h.interaction("glass", "glass", 0.5, 0.5)
+            + _fill(tmp_path, "p.csv", "glass", [[0.05, 0, 0], [-0.05, 0, 0]], t0)
+            + "[thermal]\nradiation = true\nradiation_to = \"gas\"\n" + _plug_gas())
+    with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
+        sim.step(1)
+        temps = sim.particles()["temperature"]
+    g = _ranz_marshall_hA(MDOT / (AIR["density"] * AREA))
+    ntu = g / (MDOT * AIR["heat_capacity"])
+    t_gc = t0 + (T_IN - t0) * (1 - math.exp(-ntu)) / ntu
+    q = g * (t_gc - t0) + eps * SIGMA * 4 * math.pi * R ** 2 * (t_gc ** 4 - t0 ** 4)
+    expected = t0 + sim.dt * q / (_mass() * c)
+    print(f"\n  radiation to the plug-flow gas: cell gas {t_gc:.3f} K; after one step T = {temps[0]:.9f} K, "
+          f"expected {expected:.9f} K")
+    assert temps[0] == pytest.approx(expected, rel=1e-12)
+    assert temps[1] == t0
+
+
 # ------------------------------------------------------------------------------ drying
 def test_drying_holds_at_evaporation_temperature(tmp_path):
     u, t_gas, t0, t_evap = 2.0, 500.0, 300.0, 373.15
