@@ -172,6 +172,77 @@ def gas_cost(sim, calls: int = 200):
           f"({gas / pair:.1%} of the pairs)")
 
 
+VARIANTS = {      # name -> scene_text keyword arguments
+    "off": dict(thermal=False),
+    "fixed": dict(thermal=True, gas="fixed"),
+    "plug_flow": dict(thermal=True, gas="plug_flow"),
+    "plug_flow+radiation": dict(thermal=True, gas="plug_flow", radiation=True),
+    "plug_flow+radiation+moisture": dict(thermal=True, gas="plug_flow", radiation=True, moisture=True),
+}
+
+
+def kernel_costs(sims, rounds: int, calls: int = 30):
+    """The step's kernels (pairs, plug-flow gas, per-particle gather) of each variant on its
+    settled state with dt = 0 (nothing moves), round-robin; median and least time per step.
+    The least is the run least disturbed by other processes on a shared machine."""
+    import taichi as ti
+    times = {name: [] for name in sims}
+    for _ in range(rounds):
+        for name, sim in sims.items():
+            e = sim.engine
+            n = e.count
+
+            def step():
+                e._pair_forces(n, 0.0)
+                if e.gas_stream is not None:
+                    e.gas_stream.exchange(n, 0.0)
+                e._gather(n, 0.0, 0, 0)
+            step()
+            ti.sync()
+            t0 = time.perf_counter()
+            for _ in range(calls):
+                step()
+            ti.sync()
+            times[name].append((time.perf_counter() - t0) / calls)
+    base_med, base_min = statistics.median(times["off"]), min(times["off"])
+    print("| variant | pair+gas+gather ms (median) | ratio | least ms | ratio |\n|---|---|---|---|---|")
+    for name, v in times.items():
+        print(f"| {name} | {statistics.median(v) * 1e3:.3f} | {statistics.median(v) / base_med:.2f} "
+              f"| {min(v) * 1e3:.3f} | {min(v) / base_min:.2f} |")
+
+
+def compare(a) -> int:
+    """The heat variants in one process, timed round-robin (each round times every variant
+    once, so load from other processes on a shared machine hits them alike); medians over the
+    rounds and time ratios against thermal off."""
+    import taichi_dem as td
+    sims = {}
+    for name, kw in VARIANTS.items():
+        sim = td.Simulation.from_text(scene_text(a.particles, a.precision, **kw), h5="")
+        sim.run(a.settle)
+        sim.step(max(a.steps // 10, 1))       # warm: every kernel compiled (sampling included)
+        sims[name] = sim
+        print(f"{name}: {sim.particle_count} particles settled {a.settle} s", flush=True)
+    rates = {name: [] for name in sims}
+    for r in range(a.repeats):
+        for name, sim in sims.items():
+            t0 = time.perf_counter()
+            sim.step(a.steps)
+            sim.engine.flags.to_numpy()
+            rates[name].append(sim.particle_count * a.steps / (time.perf_counter() - t0))
+        print(f"round {r + 1}: " + ", ".join(f"{n} {v[-1] / 1e6:.2f}" for n, v in rates.items()), flush=True)
+    base = statistics.median(rates["off"])
+    print("| variant | M particle-steps/s (median) | time ratio vs thermal off |\n|---|---|---|")
+    for name, v in rates.items():
+        m = statistics.median(v)
+        print(f"| {name} | {m / 1e6:.2f} | {base / m:.2f} |")
+    kernel_costs(sims, a.repeats)
+    gas_cost(sims["plug_flow"])
+    for sim in sims.values():
+        sim.close()
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--particles", type=int, default=20000)
@@ -188,7 +259,11 @@ def main(argv=None) -> int:
                    "burner end (the last 0.1 m)")
     p.add_argument("--moisture", action="store_true", help="with --thermal: wet particles "
                    "(X = 0.05) that dry")
+    p.add_argument("--compare", action="store_true", help="time thermal off, fixed gas, plug-flow "
+                   "gas, + radiation, + moisture in one process, round-robin, as ratios")
     a = p.parse_args(argv)
+    if a.compare:
+        return compare(a)
     import taichi as ti
     if a.profile:
         orig = ti.init

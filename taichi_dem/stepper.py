@@ -8,8 +8,11 @@ One step (velocity Verlet):
           every enabled pair effect on it (Hertz-Mindlin, rolling friction); the owner sums its
           own share, the partner's share is stored at the entry (only while touching) - no
           atomics
+  gas:    (plug-flow gas only, thermal/plug_flow.py) per-cell sums of the particles' h A and
+          h A T, then the gas marches from its inlet cell by cell
   gather: each particle adds its partners' shares through the mirror index, adds plane walls and gravity, and completes the kick: v += a dt/2; within a
-          run of steps it goes on with the next step's drift (one pass over the particles less)
+          run of steps it goes on with the next step's drift (one pass over the particles less);
+          thermal: adds convection, radiation, then updates T (and dries, thermal/moisture.py)
 Effects not enabled are excluded with ``ti.static`` and so never compiled.
 """
 

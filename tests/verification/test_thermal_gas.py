@@ -14,7 +14,10 @@ gas loses.
       outside the axial span exchange nothing.
 Radiation: a lumped particle in an enclosure at T_w, m c dT/dt = eps sigma A (T_w^4 - T^4),
   has the implicit solution t(T) = m c / (4 eps sigma A T_w^3) [ln((T_w + T)/(T_w - T))
-  + 2 atan(T/T_w)] from T0 to T; explicit Euler with rate dt < 3e-4 keeps t within 1e-3.
+  + 2 atan(T/T_w)] from T0 to T; explicit Euler with rate dt < 3e-4 keeps t within 1e-3 (an
+  enclosure temperature, and a hot wall with a region that leaves a second particle out).
+  Radiating to a fixed gas adds to convection (t(T) by quadrature); to a plug-flow gas, the
+  particle sees its cell's gas temperature (one explicit step checked exactly).
 Drying: a wet particle in a hot fixed gas heats as exp(-t hA/C_wet), C_wet = m (c + X0 c_w),
   to T_e, holds there for t_dry = X0 m L / (hA (T_g - T_e)), its moisture falling linearly,
   then heats as exp(-t hA/(m c)).
