@@ -11,7 +11,8 @@ enters. Limits, said plainly: no view factors and no shadowing - a particle buri
 radiates as freely as one on its surface, so restrict the exchange to where the bed surface
 faces the source with ``radiation_region`` (and expect an overestimate inside it); no
 particle-particle radiation; the gas neither absorbs nor is cooled by it (the plug-flow energy
-balance carries convection only).
+balance carries convection only), and with a plug-flow gas a particle outside the gas's axial
+span does not radiate (it has no gas temperature).
 
 Stability of the explicit update: the exchange is linearised as the conductance
 4 eps sigma A T^3 with T = max(T_p, T_s) (dQ/dT_p is 4 eps sigma A T_p^3; the larger T bounds
