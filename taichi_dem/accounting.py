@@ -38,12 +38,14 @@ class ProcessAccounts:
         self.residence_interval = {x.name: [] for x in self.residence}
         self.residence_all = {x.name: [] for x in self.residence}
         self.thermal = sim.engine.thermal
+        self.drying = sim.engine.moisture
 
     def _reset_interval(self):
         no = len(self.outlets)
         self.i_mass = np.zeros(no)
         self.i_count = np.zeros(no, np.int64)
         self.i_heat = np.zeros(no)               # sum m T (for the mass-weighted mean)
+        self.i_water = np.zeros(no)              # sum m X, kg water (dry mass m)
 
     # ------------------------------------------------------------------ removals
     def take(self, batch: dict):
@@ -64,6 +66,8 @@ class ProcessAccounts:
             self.i_count[o] += int(np.sum(sel))
             if self.thermal:
                 self.i_heat[o] += float(np.sum(mass[sel] * batch["temperature"][sel]))
+            if "moisture" in batch:
+                self.i_water[o] += float(np.sum(mass[sel] * batch["moisture"][sel]))
         for x in self.residence:
             src = self.factory_names.index(x.source)
             dst = self.outlet_names.index(x.target)
@@ -99,6 +103,10 @@ class ProcessAccounts:
             if self.thermal:
                 values[p + "mean_temperature"] = (self.i_heat[o] / self.i_mass[o]
                                                   if self.i_mass[o] > 0 else math.nan)
+            if self.drying:
+                # kg water per kg dry solid of what left in the interval
+                values[p + "mean_moisture"] = (self.i_water[o] / self.i_mass[o]
+                                               if self.i_mass[o] > 0 else math.nan)
         if self.outlets or self.sim.scene.factories:
             values["particles/lost_mass"] = self.lost_mass
         self._reset_interval()

@@ -193,7 +193,12 @@ class FactorySet:
                "origin": np.full(n, k, np.int32)}
         if self.sim.engine.thermal:
             out["temperature"] = np.full(n, f.temperature)
-            out["inverse_thermal_mass"] = 1.0 / (masses * self.heat_capacity[k])
+            # a wet particle's thermal mass holds its water too: m (c + X c_w) (thermal/moisture)
+            x = (f.moisture or 0.0) if self.sim.engine.moisture else 0.0
+            c_w = self.scene.thermal.water_heat_capacity if self.sim.engine.moisture else 0.0
+            out["inverse_thermal_mass"] = 1.0 / (masses * (self.heat_capacity[k] + x * c_w))
+            if self.sim.engine.moisture:
+                out["moisture"] = np.full(n, x)
         return out
 
     def _place(self, f, radii: np.ndarray, time: float, pos: np.ndarray, rad: np.ndarray):

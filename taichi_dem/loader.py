@@ -33,9 +33,16 @@ SENSOR_KINDS = ("mass_flow", "residence_time", "contact_count")
 SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
                "residence_time": ("kind", "name", "from", "to"),
                "contact_count": ("kind", "name", "body")}
-THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction")
+THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction",
+                "radiation_to", "radiation_region", "evaporation_temperature", "latent_heat",
+                "water_heat_capacity")
 GAS_KEYS = ("model", "temperature", "velocity", "correlation", "porosity", "density",
-            "viscosity", "conductivity", "heat_capacity")
+            "viscosity", "conductivity", "heat_capacity", "axis_point", "axis_direction",
+            "length", "cells", "flow_area", "radius", "mass_flow", "inlet_temperature", "flow")
+FIXED_GAS_ONLY = ("temperature", "velocity")
+PLUG_FLOW_KEYS = ("axis_point", "axis_direction", "length", "cells", "flow_area", "radius",
+                  "mass_flow", "inlet_temperature", "flow")
+PLUG_FLOW_REQUIRED = ("axis_direction", "length", "cells", "mass_flow", "inlet_temperature")
 
 SIMULATION_KEYS = ("end_time", "dt", "rayleigh_fraction", "gravity", "precision", "seed", "skin",
                    "max_particles")
@@ -46,7 +53,7 @@ INTERACTION_KEYS = ("pair", "restitution", "friction", "rolling_friction", "mode
                     "rolling_damping")
 ROLLING_MODELS = ("constant_torque", "epsd")
 PARTICLE_KEYS = ("material", "radius", "count", "region", "velocity", "angular_velocity",
-                 "temperature", "fixed", "file")
+                 "temperature", "moisture", "fixed", "file")
 RADIUS_KEYS = ("mean", "std", "min", "max")
 REGION_KINDS = ("box", "cylinder")
 BOX_KEYS = ("min", "max")
@@ -241,6 +248,11 @@ class _Parser:
         sources = tuple(fills) + factories
         self.check_coverage(interactions, sources, walls, bodies)
         thermal = self.parse_thermal(doc["thermal"], sources, walls, bodies) if "thermal" in doc else None
+        if thermal is None:
+            for f in sources:
+                if f.moisture is not None:
+                    raise self.err(f"{f.key}.moisture", "drying needs heat transfer: add a "
+                                                        "[thermal] section (and a gas to dry in)")
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
                      walls=walls, bodies=bodies, output=output, thermal=thermal,
@@ -759,6 +771,8 @@ class _Parser:
         if "temperature" in t:
             kw["temperature"] = self.positive(t["temperature"], "temperature",
                                               f"{key}.temperature")
+        if "moisture" in t:
+            kw["moisture"] = self.nonnegative(t["moisture"], "dimensionless", f"{key}.moisture")
         if "fixed" in t:
             kw["fixed"] = self.boolean(t["fixed"], f"{key}.fixed")
         if "file" in t:
@@ -880,9 +894,6 @@ class _Parser:
         for k in ("conduction", "wall_conduction", "radiation"):
             if k in t:
                 kw[k] = self.boolean(t[k], f"{key}.{k}")
-        if kw.get("radiation"):
-            raise self.err(f"{key}.radiation", "radiation is not supported yet by this version "
-                                               "of taichi_dem (planned); set it to false")
         if "contact_radius_correction" in t:
             c = self.string(t["contact_radius_correction"], f"{key}.contact_radius_correction")
             if c not in ("static", "collision", "none"):
@@ -890,34 +901,21 @@ class _Parser:
                                f"must be \"static\", \"collision\" or \"none\", got \"{c}\"")
             kw["contact_radius_correction"] = c
         if "gas" in t:
-            g = self.table(t["gas"], f"{key}.gas")
-            self.check_keys(g, f"{key}.gas", GAS_KEYS)
-            gk: dict[str, Any] = {}
-            model = self.string(g.get("model", "fixed"), f"{key}.gas.model")
-            if model == "axial_plug_flow":
-                raise self.err(f"{key}.gas.model", "\"axial_plug_flow\" is not supported yet by "
-                                                   "this version of taichi_dem (planned); use \"fixed\"")
-            if model != "fixed":
-                raise self.err(f"{key}.gas.model", f"must be \"fixed\" or \"axial_plug_flow\", got \"{model}\"")
-            gk["model"] = model
-            corr = self.string(g.get("correlation", "ranz_marshall"), f"{key}.gas.correlation")
-            if corr not in ("ranz_marshall", "gunn"):
-                raise self.err(f"{key}.gas.correlation", f"must be \"ranz_marshall\" or \"gunn\", got \"{corr}\"")
-            gk["correlation"] = corr
-            if "temperature" in g:
-                gk["temperature"] = self.positive(g["temperature"], "temperature", f"{key}.gas.temperature")
-            if "velocity" in g:
-                gk["velocity"] = self.vec3(g["velocity"], "speed", f"{key}.gas.velocity")
-            if "porosity" in g:
-                eps = self.q(g["porosity"], "dimensionless", f"{key}.gas.porosity")
-                if not 0.0 < eps < 1.0:
-                    raise self.err(f"{key}.gas.porosity", f"must be in (0, 1), got {eps:g}")
-                gk["porosity"] = eps
-            for k, dim in (("density", "density"), ("viscosity", "viscosity"),
-                           ("conductivity", "thermal_conductivity"), ("heat_capacity", "specific_heat")):
-                if k in g:
-                    gk[k] = self.positive(g[k], dim, f"{key}.gas.{k}")
-            kw["gas"] = GasSettings(**gk)
+            kw["gas"] = self.parse_gas(t["gas"], f"{key}.gas")
+        for k in ("radiation_to", "radiation_region"):
+            if k in t and not kw.get("radiation"):
+                raise self.err(f"{key}.{k}", "given but radiation is off; set radiation = true")
+        if kw.get("radiation"):
+            kw.update(self.parse_radiation(t, key, kw.get("gas"), fills, walls, bodies))
+        kw["moisture"] = any(f.moisture is not None for f in fills)
+        if "evaporation_temperature" in t:
+            kw["evaporation_temperature"] = self.positive(
+                t["evaporation_temperature"], "temperature", f"{key}.evaporation_temperature")
+        if "latent_heat" in t:
+            kw["latent_heat"] = self.positive(t["latent_heat"], "specific_energy", f"{key}.latent_heat")
+        if "water_heat_capacity" in t:
+            kw["water_heat_capacity"] = self.nonnegative(
+                t["water_heat_capacity"], "specific_heat", f"{key}.water_heat_capacity")
         settings = ThermalSettings(**kw)
         for f in fills:
             mat = self.materials[f.material]
@@ -934,6 +932,120 @@ class _Parser:
                                    f"required: '{w.name}' has a temperature and [thermal] "
                                    f"wall_conduction is on")
         return settings
+
+    def parse_gas(self, value: Any, key: str) -> GasSettings:
+        """[thermal.gas]: a fixed gas, or an axial plug-flow stream (its velocity derived from
+        the mass flow, density and flow area)."""
+        g = self.table(value, key)
+        self.check_keys(g, key, GAS_KEYS)
+        gk: dict[str, Any] = {}
+        model = self.string(g.get("model", "fixed"), f"{key}.model")
+        if model not in ("fixed", "axial_plug_flow"):
+            raise self.err(f"{key}.model", f"must be \"fixed\" or \"axial_plug_flow\", got \"{model}\"")
+        gk["model"] = model
+        if model == "fixed":
+            for k in PLUG_FLOW_KEYS:
+                if k in g:
+                    raise self.err(f"{key}.{k}", f"only for model = \"axial_plug_flow\" (this "
+                                                 f"gas is \"fixed\")")
+        else:
+            for k in FIXED_GAS_ONLY:
+                if k in g:
+                    what = ("the inlet temperature is inlet_temperature" if k == "temperature"
+                            else "the stream's velocity follows from mass_flow, density and "
+                                 "flow_area (or radius)")
+                    raise self.err(f"{key}.{k}", f"not used by model = \"axial_plug_flow\": {what}")
+        corr = self.string(g.get("correlation", "ranz_marshall"), f"{key}.correlation")
+        if corr not in ("ranz_marshall", "gunn"):
+            raise self.err(f"{key}.correlation", f"must be \"ranz_marshall\" or \"gunn\", got \"{corr}\"")
+        gk["correlation"] = corr
+        if "temperature" in g:
+            gk["temperature"] = self.positive(g["temperature"], "temperature", f"{key}.temperature")
+        if "velocity" in g:
+            gk["velocity"] = self.vec3(g["velocity"], "speed", f"{key}.velocity")
+        if "porosity" in g:
+            eps = self.q(g["porosity"], "dimensionless", f"{key}.porosity")
+            if not 0.0 < eps < 1.0:
+                raise self.err(f"{key}.porosity", f"must be in (0, 1), got {eps:g}")
+            gk["porosity"] = eps
+        for k, dim in (("density", "density"), ("viscosity", "viscosity"),
+                       ("conductivity", "thermal_conductivity"), ("heat_capacity", "specific_heat")):
+            if k in g:
+                gk[k] = self.positive(g[k], dim, f"{key}.{k}")
+        if model == "axial_plug_flow":
+            for k in PLUG_FLOW_REQUIRED:
+                if k not in g:
+                    raise self.err(f"{key}.{k}", "required for model = \"axial_plug_flow\" "
+                                                 "(axis_point, axis_direction, length, cells, "
+                                                 "flow_area or radius, mass_flow, inlet_temperature)")
+            if ("flow_area" in g) == ("radius" in g):
+                raise self.err(f"{key}.flow_area", "give exactly one of flow_area (m^2, the gas's "
+                                                   "free cross-section) or radius (m: pi r^2)")
+            if "axis_point" in g:
+                gk["axis_point"] = self.vec3(g["axis_point"], "length", f"{key}.axis_point")
+            gk["axis_direction"] = self.direction(g["axis_direction"], f"{key}.axis_direction")
+            gk["length"] = self.positive(g["length"], "length", f"{key}.length")
+            cells = self.integer(g["cells"], f"{key}.cells")
+            if not 1 <= cells <= 10000:
+                raise self.err(f"{key}.cells", f"must be between 1 and 10000, got {cells}")
+            gk["cells"] = cells
+            if "flow_area" in g:
+                gk["flow_area"] = self.positive(g["flow_area"], "area", f"{key}.flow_area")
+            else:
+                gk["flow_area"] = math.pi * self.positive(g["radius"], "length", f"{key}.radius") ** 2
+            gk["mass_flow"] = self.positive(g["mass_flow"], "mass_rate", f"{key}.mass_flow")
+            gk["temperature"] = self.positive(g["inlet_temperature"], "temperature",
+                                              f"{key}.inlet_temperature")
+            flow = self.string(g.get("flow", "along_axis"), f"{key}.flow")
+            if flow not in ("along_axis", "against_axis"):
+                raise self.err(f"{key}.flow", f"must be \"along_axis\" (entering at axis_point) or "
+                                              f"\"against_axis\" (entering at the far end), got \"{flow}\"")
+            gk["flow"] = flow
+            density = gk.get("density", GasSettings.density)
+            speed = gk["mass_flow"] / (density * gk["flow_area"])
+            sign = 1.0 if flow == "along_axis" else -1.0
+            gk["velocity"] = tuple(sign * speed * c for c in gk["axis_direction"])
+        return GasSettings(**gk)
+
+    def parse_radiation(self, t: dict, key: str, gas, fills, walls, bodies) -> dict:
+        """radiation_to = "gas" | a wall or body name (with a temperature) | a temperature;
+        radiation_region optional; every particle material needs an emissivity."""
+        if "radiation_to" not in t:
+            raise self.err(f"{key}.radiation_to", "required when radiation = true: \"gas\" (the "
+                                                  "local gas temperature), the name of a wall or "
+                                                  "body with a temperature, or a temperature "
+                                                  "(an enclosure, e.g. \"1200 C\")")
+        to = t["radiation_to"]
+        k = f"{key}.radiation_to"
+        out: dict[str, Any] = {}
+        surfaces = {w.name: w for w in list(walls) + list(bodies)}
+        if to == "gas":
+            if gas is None:
+                raise self.err(k, "\"gas\" needs a [thermal.gas] table")
+            out["radiation_to"] = "gas"
+        elif isinstance(to, str) and to in surfaces:
+            w = surfaces[to]
+            if w.temperature is None:
+                raise self.err(k, f"'{to}' has no temperature (it is adiabatic); give it a "
+                                  f"temperature to radiate to it")
+            out.update(radiation_to="surface", radiation_surface=to,
+                       radiation_temperature=w.temperature)
+        else:
+            try:
+                temp = self.positive(to, "temperature", k)
+            except SceneError:
+                names = ", ".join(surfaces) or "none"
+                raise self.err(k, f"expected \"gas\", the name of a wall or body (defined: "
+                                  f"{names}) or a temperature, got {_type_name(to)}") from None
+            out.update(radiation_to="enclosure", radiation_temperature=temp)
+        if "radiation_region" in t:
+            out["radiation_region"] = self.parse_region(t["radiation_region"], f"{key}.radiation_region")
+        for f in fills:
+            mat = self.materials[f.material]
+            if mat.emissivity is None:
+                raise self.err(f"materials.{f.material}.emissivity",
+                               f"required when radiation = true (particles of '{f.material}')")
+        return out
 
     def check_coverage(self, interactions: dict, fills, walls, bodies=()) -> None:
         """Every pair of materials that can meet needs an [[interactions]] entry."""

@@ -58,6 +58,7 @@ class ProcessDevice:
         cap = s.capacity
         self.log_capacity = 0
         self.log_temperature = None
+        self.log_moisture = None
         if self.log_enabled:
             self.log_capacity = cap
             self.log_count = tree.add("log_count", ti.i32, 1)
@@ -68,6 +69,7 @@ class ProcessDevice:
             self.log_t_out = tree.add("log_t_out", ti.f64, cap)
             self.log_mass = tree.add("log_mass", ti.f64, cap)
             self.log_temperature = tree.add("log_temperature", ti.f64, cap) if self.thermal else None
+            self.log_moisture = tree.add("log_moisture", ti.f64, cap) if engine.moisture else None
         n_planes = max(len(self.planes), 1)
         # mass (kg, signed along the normal) and count of crossings since the last sample
         self.plane_mass = tree.add("plane_mass", ti.f64, n_planes)
@@ -85,6 +87,7 @@ class ProcessDevice:
         outlet_tests = [region_test(o.region) for o in self.outlets]
         n_outlets = len(outlet_tests)
         thermal = self.thermal
+        drying = self.log_moisture is not None
         process_fields = s.process
         planes = [(tuple(x.point), tuple(x.normal), x.radius if x.radius is not None else -1.0,
                    tuple(x.box_min) if x.box_min is not None else (0.0, 0.0, 0.0),
@@ -110,6 +113,8 @@ class ProcessDevice:
                     me.log_t_in[slot] = 0.0
                 if ti.static(thermal):
                     me.log_temperature[slot] = ti.cast(s.temperature[i], ti.f64)
+                if ti.static(drying):
+                    me.log_moisture[slot] = ti.cast(s.moisture[i], ti.f64)
                 if slot * 2 > ti.static(me.log_capacity):
                     flags[0] = 1          # rebuild soon: the host drains the log then
 
@@ -167,6 +172,8 @@ class ProcessDevice:
                "t_out": self.log_t_out.to_numpy()[:n], "mass": self.log_mass.to_numpy()[:n]}
         if self.log_temperature is not None:
             out["temperature"] = self.log_temperature.to_numpy()[:n]
+        if self.log_moisture is not None:
+            out["moisture"] = self.log_moisture.to_numpy()[:n]
         self.log_count[0] = 0
         return out
 

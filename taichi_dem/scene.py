@@ -116,6 +116,7 @@ class ParticleFill:
     velocity: Vec3 = (0.0, 0.0, 0.0)
     angular_velocity: Vec3 = (0.0, 0.0, 0.0)
     temperature: Optional[float] = None
+    moisture: Optional[float] = None     # kg water per kg dry solid; None = dry (no drying)
     fixed: bool = False
     file: Optional[str] = None
     positions: Optional[np.ndarray] = None          # (n,3) from file
@@ -152,9 +153,16 @@ class PlaneWall:
 
 @dataclass(frozen=True)
 class GasSettings:
-    """The gas particles exchange heat with by convection (air at 300 K by default)."""
-    model: str = "fixed"                 # "fixed" (| "axial_plug_flow", planned)
-    temperature: float = 300.0           # K
+    """The gas particles exchange heat with by convection (air at 300 K by default).
+
+    ``"fixed"``: uniform ``temperature`` and ``velocity``. ``"axial_plug_flow"``: a 1-D stream
+    along the axis from ``axis_point`` along unit ``axis_direction`` for ``length``, in
+    ``cells`` equal cells, entering at the axis_point end (``flow = "along_axis"``) or at the
+    far end (``"against_axis"``) with ``mass_flow`` kg/s at ``temperature`` (the inlet
+    temperature, K); ``velocity`` is then the stream's, mass_flow / (density flow_area) along
+    the flow (the loader derives it)."""
+    model: str = "fixed"                 # "fixed" | "axial_plug_flow"
+    temperature: float = 300.0           # K (plug flow: the inlet temperature)
     velocity: Vec3 = (0.0, 0.0, 0.0)     # m/s
     correlation: str = "ranz_marshall"   # Nusselt correlation: "ranz_marshall" | "gunn"
     porosity: float = 0.4                # bed voidage for "gunn"
@@ -162,6 +170,18 @@ class GasSettings:
     viscosity: float = 1.846e-5          # Pa s
     conductivity: float = 0.02624        # W/(m K)
     heat_capacity: float = 1007.0        # J/(kg K)
+    # axial_plug_flow only
+    axis_point: Vec3 = (0.0, 0.0, 0.0)   # m
+    axis_direction: Vec3 = (1.0, 0.0, 0.0)   # unit
+    length: float = 0.0                  # m
+    cells: int = 0
+    flow_area: float = 0.0               # m^2, the gas's free cross-section
+    mass_flow: float = 0.0               # kg/s
+    flow: str = "along_axis"             # "along_axis" | "against_axis"
+
+    @property
+    def plug_flow(self) -> bool:
+        return self.model == "axial_plug_flow"
 
 
 @dataclass(frozen=True)
@@ -169,11 +189,23 @@ class ThermalSettings:
     """[thermal]: present = heat transfer compiled and run; each part switchable."""
     conduction: bool = True              # particle-particle, through the contact area
     wall_conduction: bool = True         # to walls and bodies that have a temperature
-    radiation: bool = False              # (planned)
+    radiation: bool = False              # grey-body exchange with ``radiation_to``
     gas: Optional[GasSettings] = None    # None = no convection
     # correction of the contact radius for softened stiffness: "static" a ~ E*^(-1/3)
     # (enduring contacts, the default), "collision" a ~ E*^(-1/5) (Morris et al. 2016), "none"
     contact_radius_correction: str = "static"
+    # radiation: what the particles see - "gas" (the local gas temperature), "surface" (the
+    # wall/body radiation_surface) or "enclosure" (at radiation_temperature); only inside
+    # radiation_region if given
+    radiation_to: str = ""
+    radiation_surface: Optional[str] = None          # wall/body name when "surface"
+    radiation_temperature: Optional[float] = None    # K, for "surface" and "enclosure"
+    radiation_region: Optional[Region] = None
+    # moisture: on when any fill (or factory) gives ``moisture``
+    moisture: bool = False
+    evaporation_temperature: float = 373.15          # K
+    latent_heat: float = 2.26e6                      # J/kg
+    water_heat_capacity: float = 4186.0              # J/(kg K), liquid water
 
 
 @dataclass(frozen=True)
@@ -224,7 +256,7 @@ class Factory:
     sizes: Optional[tuple[tuple[float, float], ...]] = None
     velocity: Vec3 = (0.0, 0.0, 0.0)     # m/s
     temperature: Optional[float] = None  # K
-    moisture: float = 0.0                # kg water per kg dry solid
+    moisture: Optional[float] = None     # kg water per kg dry solid; None = dry
     interval: Optional[float] = None     # s between insertions; None = automatic
 
     @property

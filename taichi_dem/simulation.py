@@ -193,7 +193,15 @@ class Simulation:
             heat_capacity = np.array([self.scene.materials[name].heat_capacity or 0.0
                                       for name in self.tables.names])[placed.material]
             s.temperature.from_numpy(scal(placed.temperature))
-            s.inverse_thermal_mass.from_numpy(scal(1.0 / (mass * heat_capacity)))
+            thermal_mass = mass * heat_capacity
+            if self.engine.moisture:
+                # X per particle from its fill (dry where the fill gives none); the water's heat
+                # capacity counts in the thermal mass m (c + X c_w)
+                x = np.array([f.moisture or 0.0 for f in self.scene.fills])[placed.fill] \
+                    if len(self.scene.fills) else np.zeros(n)
+                s.moisture.from_numpy(scal(x))
+                thermal_mass = mass * (heat_capacity + x * self.scene.thermal.water_heat_capacity)
+            s.inverse_thermal_mass.from_numpy(scal(1.0 / thermal_mass))
 
     def _mark_stale(self, why: str):
         self._stale = why
@@ -260,6 +268,11 @@ class Simulation:
         if self.engine.thermal:
             values_thermal = {"particles/mean_temperature": m["mean_temperature"]}
             self._check_thermal_step(m["thermal_step_ratio"])
+            if self.engine.moisture:
+                values_thermal["particles/mean_moisture"] = m["mean_moisture"]
+                values_thermal["particles/evaporated_mass"] = m["evaporated_mass"]
+            if self.engine.gas_stream is not None:
+                values_thermal.update(self.engine.gas_stream.series())
         else:
             values_thermal = {}
         values = {"time": self.time, "particles/count": self.engine.alive_count,
@@ -423,6 +436,8 @@ class Simulation:
         out["fixed"] = s.inverse_mass.to_numpy()[:n][order] == 0.0
         if self.engine.thermal:
             out["temperature"] = s.temperature.to_numpy()[:n][order].astype(np.float64)
+        if self.engine.moisture:
+            out["moisture"] = s.moisture.to_numpy()[:n][order].astype(np.float64)
         return out
 
     def kinetic_energy(self) -> float:

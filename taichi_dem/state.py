@@ -59,6 +59,11 @@ class ParticleState:
 
     # allocated only when [thermal] is present: temperature K, 1/(m c) 1/(J/K)
     THERMAL = {"temperature": (False, "real"), "inverse_thermal_mass": (False, "real")}
+    # allocated only when the scene dries particles (a fill or factory gives ``moisture``):
+    # X, kg water per kg dry solid. With it, inverse_thermal_mass is 1/(m (c + X c_w)) (m the
+    # dry mass, ``mass``; c_w = [thermal] water_heat_capacity) and changes as the particle
+    # dries; code that inserts particles must set both moisture and that thermal mass
+    MOISTURE = {"moisture": (False, "real")}
 
     # allocated only when the scene has factories or outlets: ``serial`` is the id users see
     # (unique over the whole run), while ``particle_id`` is a slot key < capacity that is
@@ -67,9 +72,10 @@ class ParticleState:
     PROCESS = {"serial": (False, "int"), "origin": (False, "int"), "birth_time": (False, "real")}
 
     def __init__(self, capacity: int, real, n_walls: int, rolling_history: bool,
-                 thermal: bool = False, process: bool = False):
+                 thermal: bool = False, process: bool = False, moisture: bool = False):
         self.capacity = capacity
         self.spec = dict(self.CORE, **(self.THERMAL if thermal else {}),
+                         **(self.MOISTURE if moisture else {}),
                          **(self.PROCESS if process else {}))
         self.process = process
         self.real = real

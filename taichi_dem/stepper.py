@@ -8,8 +8,11 @@ One step (velocity Verlet):
           every enabled pair effect on it (Hertz-Mindlin, rolling friction); the owner sums its
           own share, the partner's share is stored at the entry (only while touching) - no
           atomics
+  gas:    (plug-flow gas only, thermal/plug_flow.py) per-cell sums of the particles' h A and
+          h A T, then the gas marches from its inlet cell by cell
   gather: each particle adds its partners' shares through the mirror index, adds plane walls and gravity, and completes the kick: v += a dt/2; within a
-          run of steps it goes on with the next step's drift (one pass over the particles less)
+          run of steps it goes on with the next step's drift (one pass over the particles less);
+          thermal: adds convection, radiation, then updates T (and dries, thermal/moisture.py)
 Effects not enabled are excluded with ``ti.static`` and so never compiled.
 """
 
@@ -22,6 +25,8 @@ from .effects.hertz_mindlin import contact_force
 from .effects import rolling
 from thermal import convection as gas_convection
 from thermal.conduction import contact_conductance
+from thermal import moisture as drying
+from thermal import radiation as radiative
 from .model import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
 from .state import FieldTree, PairState, ParticleState
 
@@ -43,11 +48,14 @@ class Engine:
         self.conduction = "conduction" in self.effects
         self.wall_conduction = "wall_conduction" in self.effects
         self.convection = "convection" in self.effects
+        self.plug_flow = "plug_flow_gas" in self.effects
+        self.radiation = "radiation" in self.effects
+        self.moisture = "drying" in self.effects
         self.trees: list[FieldTree] = []
         self.walls = scene.walls
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
         self.state = ParticleState(capacity, real, len(scene.walls), self.rolling_epsd,
-                                   thermal=self.thermal,
+                                   thermal=self.thermal, moisture=self.moisture,
                                    process=bool(scene.factories or scene.outlets))
         self.trees.append(self.state.tree)
         self.grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
@@ -64,17 +72,30 @@ class Engine:
         # [rebuild needed, lost count, dead particles still holding a slot]
         self.flags = t.add("flags", ti.i32, 3)
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
-        self.reduction = t.add("reduction", real, 8)
+        self.reduction = t.add("reduction", real, 10)
+        self.gas_stream = None
         if self.thermal:
             self.conductance_factor = t.add("conductance_factor", real, (m, m))
             self.radius_correction = t.add("radius_correction", real, (m, m))
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
+            if self.plug_flow:
+                from thermal.plug_flow import AxialPlugFlowGas
+                self.gas_stream = AxialPlugFlowGas(scene.thermal.gas, self.state, t, real)
+            if self.radiation:
+                self.emissivity = t.add("emissivity", real, m)         # per material
+            if self.moisture:
+                self.evaporated = t.add("evaporated", ti.f64, 1)      # kg since the start
         self.process = None
         if scene.factories or scene.outlets or has_planes:
             from .process import ProcessDevice
             self.process = ProcessDevice(self, t)
         t.finalize()
         self.removed_batches: list = []    # removal-log entries drained at rebuilds
+        if self.radiation:
+            self.emissivity.from_numpy(np.array([scene.materials[k].emissivity or 0.0 for k in tables.names],
+                                                np.float64 if real == ti.f64 else np.float32))
+        if self.gas_stream is not None:
+            self.gas_stream.compile()
         if self.thermal:
             from .model import conduction_tables
             factor, correction = conduction_tables(scene, tables.names)
@@ -193,13 +214,14 @@ class Engine:
                 drift_particle(i, dt, t_new)
 
         thermal = self.thermal
+        moisture = self.moisture
         dt_step = self.dt
 
         @ti.kernel
         def measure(n: ti.i32):
             # kinetic energy (translational + rotational, J), largest speed, non-finite flag,
             # alive count; thermal: sum m c T (J), sum m c (J/K), largest dt sum(h)/(m c)
-            for k in ti.static(range(8)):
+            for k in ti.static(range(10)):
                 red[k] = 0.0
             for i in range(n):
                 if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
@@ -220,6 +242,9 @@ class Engine:
                         ti.atomic_max(red[6], dt_step * s.conductance[i] * s.inverse_thermal_mass[i])
                         if not (s.temperature[i] > 0.0 and s.temperature[i] < 1e30):
                             red[2] = 1.0
+                        if ti.static(moisture):
+                            red[7] += s.mass[i] * s.moisture[i]          # water, kg
+                            red[8] += s.mass[i]                          # dry solid, kg
 
         self._drift, self._measure = drift, measure
 
@@ -244,7 +269,23 @@ class Engine:
                             for w in self.walls]
         wall_heat = self.wall_heat if thermal else None
         gas = self.scene.thermal.gas if (thermal and convection) else None
-        has_gas = gas is not None
+        has_gas = gas is not None and not self.plug_flow       # a uniform ("fixed") gas
+        stream = self.gas_stream
+        plug_flow = stream is not None
+        th = self.scene.thermal
+        radiation, moisture = self.radiation, self.moisture
+        # names the kernel closes over must exist even when their effect is off
+        emissivity = evaporated = radiate_to_gas = radiation_temperature = None
+        in_radiation_region = t_evap = latent = c_water = None
+        if radiation:
+            emissivity = self.emissivity
+            radiate_to_gas = th.radiation_to == "gas"
+            radiation_temperature = (gas.temperature if (radiate_to_gas and not plug_flow)
+                                     else (th.radiation_temperature or 0.0))
+            in_radiation_region = _region_test(th.radiation_region)
+        if moisture:
+            evaporated = self.evaporated
+            t_evap, latent, c_water = th.evaporation_temperature, th.latent_heat, th.water_heat_capacity
         gas_velocity = ti.Vector(list(gas.velocity)) if has_gas else None
         prandtl = gas.heat_capacity * gas.viscosity / gas.conductivity if gas is not None else 0.0
         prandtl_cube_root = prandtl ** (1.0 / 3.0)
@@ -442,10 +483,36 @@ class Engine:
                     h_gas = gas_convection.convective_conductance(ti.static(gas.conductivity), nusselt, diameter)
                     heat += h_gas * (ti.static(gas.temperature) - s.temperature[i])
                     conductance += h_gas
+                # --- plug-flow gas, radiation, drying (thermal/: plug_flow, radiation, moisture)
+                if ti.static(plug_flow):
+                    q_gas, g_gas = stream.particle_heat(i, s.temperature[i])
+                    heat += q_gas
+                    conductance += g_gas
+                if ti.static(radiation):
+                    if in_radiation_region(s.position[i]):
+                        t_surroundings = ti.static(radiation_temperature) + 0.0 * heat
+                        sees = 1
+                        if ti.static(radiate_to_gas and plug_flow):
+                            t_surroundings, sees = stream.local_temperature(i)
+                        if sees != 0:
+                            q_rad, g_rad = radiative.exchange(emissivity[s.material[i]], s.radius[i],
+                                                              t_surroundings, s.temperature[i])
+                            heat += q_rad
+                            conductance += g_rad
                 if ti.static(thermal):
                     if s.alive[i] != 0:
                         # explicit update; stable while dt sum(h) / (m c) < 1 (checked per sample)
-                        s.temperature[i] += dt * heat * s.inverse_thermal_mass[i]
+                        if ti.static(moisture):
+                            t_new, x_new, inv_c, dm = drying.heat_and_dry(
+                                s.temperature[i], s.moisture[i], s.inverse_thermal_mass[i],
+                                s.mass[i], dt * heat, t_evap, latent, c_water)
+                            s.temperature[i] = t_new
+                            if dm > 0.0:
+                                s.moisture[i] = x_new
+                                s.inverse_thermal_mass[i] = inv_c
+                                evaporated[0] += ti.cast(dm, ti.f64)
+                        else:
+                            s.temperature[i] += dt * heat * s.inverse_thermal_mass[i]
                         s.conductance[i] = conductance
                 if inv_m > 0.0 and s.alive[i] != 0:
                     a = force * inv_m + gravity
@@ -467,6 +534,8 @@ class Engine:
             self.mesh.update_frames(self.time)
         self.count = self.broadphase.rebuild(n)
         self._pair_forces(self.count, 0.0)
+        if self.gas_stream is not None:
+            self.gas_stream.exchange(self.count, 0.0)
         self._gather(self.count, 0.0, 0, 0, self.time)
         return self.count
 
@@ -503,6 +572,8 @@ class Engine:
                 if self.thermal:
                     self.wall_heat.fill(0.0)
             self._pair_forces(self.count, dt)
+            if self.gas_stream is not None:
+                self.gas_stream.exchange(self.count, dt)     # the gas sees this step's particles
             # the state is left at a whole step (no pending drift) when advance returns
             self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
 
@@ -513,6 +584,9 @@ class Engine:
         if self.thermal:
             out.update(thermal_energy=float(r[4]), mean_temperature=float(r[4] / r[5]) if r[5] else 0.0,
                        thermal_step_ratio=float(r[6]))
+        if self.moisture:
+            out.update(mean_moisture=float(r[7] / r[8]) if r[8] else 0.0,
+                       evaporated_mass=float(self.evaporated[0]))
         return out
 
     @property
@@ -529,7 +603,8 @@ class Engine:
         """Put new particles into the slots after the last one in use and flag a rebuild.
         ``arrays``: position, velocity (n,3) m, m/s; radius m, mass kg, key (slot keys not in
         use), serial, origin (n,), birth_time s; temperature K and inverse_thermal_mass 1/(J/K)
-        when thermal. The state must be at a whole step (between ``advance`` calls)."""
+        when thermal; moisture kg/kg when drying. The state must be at a whole step (between
+        ``advance`` calls)."""
         k = len(arrays["radius"])
         if k == 0:
             return
@@ -550,7 +625,8 @@ class Engine:
                      np.ascontiguousarray(arrays["birth_time"], npf),  # (residence: f32 is
                      # 4e-6 s at 100 s)
                      np.ascontiguousarray(arrays.get("temperature", zeros), npf),
-                     np.ascontiguousarray(arrays.get("inverse_thermal_mass", zeros), npf))
+                     np.ascontiguousarray(arrays.get("inverse_thermal_mass", zeros), npf),
+                     np.ascontiguousarray(arrays.get("moisture", zeros), npf))
         self.count += k
 
     def _compile_insert(self):
@@ -566,6 +642,7 @@ class Engine:
         n_bodies = mesh.n_bodies if has_mesh else 0
         heat_loads = has_mesh and mesh.particle_load_heat is not None
         flags = self.flags
+        drying = self.moisture
 
         @ti.kernel
         def insert(start: ti.i32, k: ti.i32, position: ti.types.ndarray(),
@@ -573,7 +650,8 @@ class Engine:
                    mass: ti.types.ndarray(), material: ti.types.ndarray(),
                    key: ti.types.ndarray(), serial: ti.types.ndarray(),
                    origin: ti.types.ndarray(), birth_time: ti.types.ndarray(),
-                   temperature: ti.types.ndarray(), inverse_thermal_mass: ti.types.ndarray()):
+                   temperature: ti.types.ndarray(), inverse_thermal_mass: ti.types.ndarray(),
+                   moisture: ti.types.ndarray()):
             for q in range(k):
                 i = start + q
                 x = ti.Vector([position[q, 0], position[q, 1], position[q, 2]])
@@ -600,6 +678,8 @@ class Engine:
                 if ti.static(thermal):
                     s.temperature[i] = temperature[q]
                     s.inverse_thermal_mass[i] = inverse_thermal_mass[q]
+                if ti.static(drying):
+                    s.moisture[i] = moisture[q]
                 # the slot may hold what a removed particle left: no rows, no history, no loads
                 s.row_owned[i] = 0
                 s.row_count[i] = 0
@@ -616,6 +696,31 @@ class Engine:
             flags[0] = 1
 
         self._insert = insert
+
+
+def _region_test(region):
+    """A ti.func position -> bool: inside ``region`` (a scene Region), always True for None."""
+    if region is None:
+        @ti.func
+        def inside(x):
+            return True
+        return inside
+    if region.kind == "box":
+        lo, hi = ti.Vector(list(region.box_min)), ti.Vector(list(region.box_max))
+
+        @ti.func
+        def inside(x):
+            return (x >= lo).all() and (x <= hi).all()
+        return inside
+    p0, axis = ti.Vector(list(region.axis_point)), ti.Vector(list(region.axis_direction))
+    length, r2 = region.length, region.radius ** 2
+
+    @ti.func
+    def inside(x):
+        d = x - p0
+        a = d.dot(axis)
+        return a >= 0.0 and a <= length and (d - a * axis).norm_sqr() <= r2
+    return inside
 
 
 def _pad(a: np.ndarray, n: int) -> np.ndarray:

@@ -34,6 +34,8 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "viscosity": ("Pa s", "a dynamic viscosity"),
     "thermal_conductivity": ("W/(m K)", "a thermal conductivity"),
     "specific_heat": ("J/(kg K)", "a specific heat capacity"),
+    "area": ("m^2", "an area"),
+    "specific_energy": ("J/kg", "a specific energy (e.g. a latent heat)"),
 }
 
 _RPM = 2.0 * math.pi / 60.0
@@ -82,6 +84,8 @@ _add("viscosity", {"Pas": 1.0, "Pa*s": 1.0, "mPas": 1e-3, "mPa*s": 1e-3, "cP": 1
 _add("thermal_conductivity", {"W/(mK)": 1.0, "W/(m*K)": 1.0, "W/m/K": 1.0, "W/mK": 1.0})
 _add("specific_heat", {"J/(kgK)": 1.0, "J/(kg*K)": 1.0, "J/kg/K": 1.0, "J/kgK": 1.0,
                        "kJ/(kgK)": 1e3, "kJ/(kg*K)": 1e3, "kJ/kg/K": 1e3})
+_add("area", {"m2": 1.0, "cm2": 1e-4, "mm2": 1e-6})
+_add("specific_energy", {"J/kg": 1.0, "kJ/kg": 1e3, "MJ/kg": 1e6})
 
 _LOWER: dict[str, list[str]] = {}
 for _u in _UNITS:

@@ -51,10 +51,31 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
         if th.wall_conduction and hot:
             effects.append(Effect("wall_conduction", "particle",
                                   "conduction to isothermal " + ", ".join(hot)))
-        if th.gas is not None:
+        gas = th.gas
+        if gas is not None and not gas.plug_flow:
             effects.append(Effect("convection", "particle",
-                                  f"convection to a {th.gas.model} gas at {th.gas.temperature:g} K "
-                                  f"({th.gas.correlation})"))
+                                  f"convection to a {gas.model} gas at {gas.temperature:g} K "
+                                  f"({gas.correlation})"))
+        if gas is not None and gas.plug_flow:
+            speed = sum(c * c for c in gas.velocity) ** 0.5
+            effects.append(Effect("convection", "particle",
+                                  f"convection to the plug-flow gas of the particle's cell "
+                                  f"({gas.correlation}, u = {speed:.3g} m/s)"))
+            effects.append(Effect("plug_flow_gas", "particle",
+                                  f"axial plug-flow gas: {gas.cells} cells over {gas.length:g} m "
+                                  f"{gas.flow.replace('_', ' ')}, {gas.mass_flow:g} kg/s in at "
+                                  f"{gas.temperature:g} K, energy balance per cell"))
+        if th.radiation:
+            to = {"gas": "the local gas temperature",
+                  "surface": f"'{th.radiation_surface}' at {th.radiation_temperature or 0:g} K",
+                  "enclosure": f"an enclosure at {th.radiation_temperature or 0:g} K"}[th.radiation_to]
+            where = " inside radiation_region" if th.radiation_region is not None else ""
+            effects.append(Effect("radiation", "particle",
+                                  f"grey-body radiation to {to}{where} (no shadowing)"))
+        if th.moisture:
+            effects.append(Effect("drying", "integrate",
+                                  f"moisture: evaporation at {th.evaporation_temperature:g} K, "
+                                  f"latent heat {th.latent_heat:g} J/kg"))
     for f in scene.factories:
         effects.append(Effect("factory", "process",
                               f"factory '{f.name}': {f.material} at "

@@ -101,7 +101,8 @@ class RerunRecorder:
         if flow:
             plots.append(rrb.TimeSeriesView(name="mass flow (kg/s)", origin="/series",
                                             contents=flow))
-        temp = sorted(f"+ /series/{n}" for n in names if n.endswith("mean_temperature"))
+        temp = sorted(f"+ /series/{n}" for n in names
+                      if n.endswith(("mean_temperature", "gas/outlet_temperature")))
         if temp:
             plots.append(rrb.TimeSeriesView(name="temperature (K)", origin="/series",
                                             contents=temp))

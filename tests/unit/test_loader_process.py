@@ -27,7 +27,12 @@ def with_process(**kw):
 
 
 def test_contract_keys_load():
-    s = load(with_process(velocity=[0.0, 0.0, -0.5], temperature="450 C", moisture=0.05))
+    d = with_process(velocity=[0.0, 0.0, -0.5], temperature="450 C", moisture=0.05)
+    d["materials"]["ash"].update(thermal_conductivity=0.3, heat_capacity=800.0)
+    d["particles"][0]["temperature"] = 300.0
+    d["thermal"] = {"conduction": True}
+    s = load(d)
+    assert s.thermal.moisture
     (f,) = s.factories
     assert f.name == "inlet" and f.radius.mean == 0.01 and f.temperature == pytest.approx(723.15)
     assert f.moisture == 0.05 and f.velocity == (0.0, 0.0, -0.5)
@@ -92,6 +97,10 @@ def test_outlet_region_inside_domain():
     d = with_process()
     d["outlets"][0]["region"] = {"box": {"min": [0.0, 0.0, -1.0], "max": [1.0, 0.2, 0.2]}}
     error(d, "outlets[0].region.box", "inside the domain")
+
+
+def test_factory_moisture_needs_thermal():
+    error(with_process(moisture=0.05), "factories[0].moisture", "drying needs heat transfer")
 
 
 def test_factories_need_temperature_when_thermal():

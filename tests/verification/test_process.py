@@ -146,11 +146,12 @@ def test_outlet_series(falling):
 
 
 def test_outlet_temperature_and_hdf5(tmp_path):
-    """Removed particles carry their temperature into the outlet's mean; with no heat exchange
-    (thermal on, nothing enabled to exchange with) it is the factory's 450 K exactly. The
+    """Removed particles carry their temperature and moisture into the outlet's means; with no
+    heat exchange (thermal on, nothing enabled to exchange with) they are the factory's (350 K, below the evaporation temperature). The
     residence records land in /residence/<name>/ as CONTRACT.md names them."""
     h5 = tmp_path / "r.h5"
     text = scene(thermal=True, rate='"0.2 kg/s"').replace("[thermal]", "[thermal]\nconduction = false")
+    text = text.replace("temperature = 450.0", "temperature = 350.0\nmoisture = 0.1")
     sim = td.Simulation.from_text(text, arch="cpu", h5=str(h5))
     sim.run(0.6)
     rec = sim.residence_times("res")
@@ -158,7 +159,11 @@ def test_outlet_temperature_and_hdf5(tmp_path):
     sim.close()
     temps = s["outlets/drain/mean_temperature"]
     assert np.any(np.isfinite(temps))
-    assert np.allclose(temps[np.isfinite(temps)], 450.0, rtol=0, atol=1e-9)
+    assert np.allclose(temps[np.isfinite(temps)], 350.0, rtol=0, atol=1e-9)
+    # wet particles (0.1 kg water per kg solid) below the evaporation temperature keep their
+    # water: the outlet's moisture is the factory's
+    wet = s["outlets/drain/mean_moisture"]
+    assert np.allclose(wet[np.isfinite(wet)], 0.1, rtol=1e-6)
     with h5py.File(h5) as f:
         assert np.array_equal(f["residence/res/id"][:], rec[:, 0].astype(np.int64))
         assert np.allclose(f["residence/res/t_out"][:], rec[:, 2])
