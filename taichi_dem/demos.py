@@ -216,13 +216,15 @@ class AngleOfRepose(Demo):
 
     def summary(self, sim):
         p = sim.particles()
+        moving = ~p["fixed"]               # leave out the rough base
+        p = {"position": p["position"][moving], "radius": p["radius"][moving]}
         tube = [b for b in sim.scene.bodies if b.name == "tube"]
         tube_bottom = (float(tube[0].vertices[:, 2].min()) + tube[0].motion.velocity[2] * sim.time
                        if tube else 0.0)
         angle, height, rings = analysis.heap_angle(p)
         ke = float(sim.series["particles/kinetic_energy"][-1])
-        print(f"summary: {sim.n_initial} fly-ash spheres of 15 mm; {sim.particle_count} left in the "
-              f"domain; heap height {height * 1e3:.0f} mm, kinetic energy {ke:.3g} J "
+        print(f"summary: {len(p['radius'])} fly-ash spheres of 15 mm in the domain (on a rough base of "
+              f"fixed ones); heap height {height * 1e3:.0f} mm, kinetic energy {ke:.3g} J "
               f"(tube bottom at {tube_bottom:.2f} m)")
         print(f"  angle of repose {angle:.1f} deg (flank fitted over {rings} rings, 20 - 80 % of the "
               f"height) vs {self.MEASURED} deg measured and {self.PAPER_DEM} deg DEM in seed 001 "
