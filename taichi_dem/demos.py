@@ -112,8 +112,8 @@ class Hopper(Demo):
     def summary(self, sim):
         d = 2 * float(np.median(sim.placed.radius))
         orifice, _, _ = self.geometry(sim)
-        rho_s = float(np.mean([sim.scene.materials[m].density for m in sim.tables.names]))
         masses = analysis.initial_masses(sim)
+        rho_s = float(masses.sum() / np.sum(4.0 / 3.0 * math.pi * sim.placed.radius ** 3))
         t, out = analysis.discharged_mass(sim, self.SENSOR)
         total = float(masses.sum())
         if out[-1] < 0.6 * total:
