@@ -25,8 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
+import pytest
+
 import taichi_dem
 from taichi_dem import analysis
+
+pytestmark = pytest.mark.slow         # part of the default suite; -m "not slow" skips it
 
 SCENE = Path(__file__).resolve().parent.parent.parent / "demos" / "angle_of_repose.toml"
 PAPER_DEM_SPAN = (35.0, 43.5)       # seed 001, Table 2: its eight DEM heaps

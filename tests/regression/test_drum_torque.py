@@ -32,8 +32,12 @@ import time
 
 import numpy as np
 
+import pytest
+
 import taichi_dem
 from taichi_dem import analysis
+
+pytestmark = pytest.mark.slow         # part of the default suite; -m "not slow" skips it
 
 R, L, R_P, G = 0.1, 0.06, 0.004, 9.81
 COUNT, RPM = 1100, 10.0

@@ -50,8 +50,12 @@ from pathlib import Path
 
 import numpy as np
 
+import pytest
+
 import taichi_dem
 from taichi_dem import analysis
+
+pytestmark = pytest.mark.slow         # part of the default suite; -m "not slow" skips it
 
 D_P = 0.010                    # m, sphere diameter
 BIN_RADIUS = 0.1               # m
