@@ -14,7 +14,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent
 VENV = ROOT / ".venv"
 PY = VENV / ("Scripts/python.exe" if os.name == "nt" else "bin/python")
-MAIN_DEMO = "pile"
+MAIN_DEMO = "paddle_cooler"
 
 
 def run(*cmd):

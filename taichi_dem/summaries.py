@@ -67,7 +67,25 @@ def process_summary(sim, window: float = 0.25) -> dict:
                 mean_t = float(np.sum(temps[ok] * flows[ok]) / np.sum(flows[ok]))
                 out[f"{o.name}/temperature"] = mean_t
                 line += f", leaving at {mean_t:.4g} K ({mean_t - 273.15:.4g} C)"
+        if p + "mean_moisture" in s:
+            wet = _tail(s[p + "mean_moisture"], window)
+            flows = _tail(s[p + "mass_flow"], window)
+            ok = np.isfinite(wet) & (flows > 0)
+            if np.any(ok):
+                x = float(np.sum(wet[ok] * flows[ok]) / np.sum(flows[ok]))
+                out[f"{o.name}/moisture"] = x
+                line += f", moisture {x:.3g} kg/kg"
         print(line)
+    if "gas/outlet_temperature" in s:
+        tg = float(np.mean(_tail(s["gas/outlet_temperature"], window)))
+        q = float(np.mean(_tail(s["gas/heat_flow"], window)))
+        out["gas/outlet_temperature"] = tg
+        print(f"summary: gas leaves at {tg:.4g} K ({tg - 273.15:.4g} C), giving the solids "
+              f"{q / 1e3:.3g} kW (mean of the last {span:.3g} s)")
+    if "particles/evaporated_mass" in s:
+        ev = s["particles/evaporated_mass"]
+        rate = (ev[-1] - _tail(ev, window)[0]) / span if span > 0 else 0.0
+        print(f"summary: water evaporated: {ev[-1]:.4g} kg in all, {rate * 3.6:.3g} t/h lately")
     for f in sim.scene.factories:
         fed = float(s[f"factories/{f.name}/mass"][-1])
         behind = float(s[f"factories/{f.name}/behind"][-1])

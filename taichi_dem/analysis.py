@@ -1,0 +1,153 @@
+"""Measurements for the demos and regression tests: discharge rates, Beverloo's law, the free
+surface of a drum bed and its circular-segment torque estimate, the flank of a heap.
+
+Everything here reads a :class:`~taichi_dem.simulation.Simulation` (its ``series`` and
+``particles()``) or plain numpy arrays; nothing changes the state. Units SI.
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+import numpy as np
+
+# Beverloo, Leniger & van de Velde (1961), Chem. Eng. Sci. 15:260 fitted C = 0.58 and k = 1.4
+# for seeds and sands through flat-bottomed bins. Nedderman, Tuzun, Savage & Houlsby (1982),
+# Chem. Eng. Sci. 37:1597 (review; also Nedderman, "Statics and kinematics of granular
+# materials", 1992, ch. 10) give 0.55 < C < 0.65 and k of about 1.5 for spheres.
+BEVERLOO_C = 0.58
+BEVERLOO_K = 1.5
+BEVERLOO_C_RANGE = (0.55, 0.65)
+
+
+# ------------------------------------------------------------------------------ discharge
+def initial_masses(sim) -> np.ndarray:
+    """Mass of every particle placed at the start, kg (from the placed radii and densities)."""
+    placed = sim.placed
+    density = np.array([sim.scene.materials[name].density for name in sim.tables.names])
+    return 4.0 / 3.0 * math.pi * placed.radius ** 3 * density[placed.material]
+
+
+def discharged_mass(sim, sensor: Optional[str] = None) -> tuple[np.ndarray, np.ndarray]:
+    """(time s, cumulative discharged mass kg) at every output sample.
+
+    With ``sensor`` and a ``sensors/<sensor>/mass_flow`` series (kg/s over each output
+    interval): its running integral. Otherwise the particles that left the domain
+    (``particles/lost``) times the mean particle mass of the initial fill - exact for the
+    monodisperse demos, an estimate for a size distribution."""
+    s = sim.series
+    t = s["time"]
+    key = f"sensors/{sensor}/mass_flow"
+    if sensor is not None and key in s:
+        dt = np.diff(t, prepend=t[0])
+        return t, np.cumsum(s[key] * dt)
+    return t, s["particles/lost"] * float(np.mean(initial_masses(sim)))
+
+
+def linear_rate(t: np.ndarray, m: np.ndarray, t0: float, t1: float) -> float:
+    """Least-squares slope of ``m`` against ``t`` over t0 <= t <= t1 (kg/s for a mass)."""
+    sel = (t >= t0 - 1e-12) & (t <= t1 + 1e-12)
+    if sel.sum() < 2:
+        raise ValueError(f"fewer than two samples between {t0} and {t1} s")
+    return float(np.polyfit(t[sel], m[sel], 1)[0])
+
+
+def steady_window(t: np.ndarray, m: np.ndarray, total: float, lo=0.15, hi=0.6) -> tuple[float, float]:
+    """The time span over which the discharged mass goes from ``lo`` to ``hi`` of ``total``:
+    past the start-up transient, before the head over the orifice runs low."""
+    t0 = float(np.interp(lo * total, m, t))
+    t1 = float(np.interp(hi * total, m, t))
+    return t0, t1
+
+
+def beverloo_rate(orifice: float, diameter: float, bulk_density: float, g: float = 9.81,
+                  C: float = BEVERLOO_C, k: float = BEVERLOO_K) -> float:
+    """Beverloo's discharge rate through a circular orifice, kg/s:
+    W = C rho_b sqrt(g) (D - k d)^(5/2)."""
+    return C * bulk_density * math.sqrt(g) * max(orifice - k * diameter, 0.0) ** 2.5
+
+
+def fit_power_law(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """(exponent n, prefactor a) of the least-squares fit y = a x^n in log-log."""
+    n, ln_a = np.polyfit(np.log(x), np.log(y), 1)
+    return float(n), float(math.exp(ln_a))
+
+
+def solid_fraction_in_cylinder(p: dict, radius: float, z0: float, z1: float) -> float:
+    """Volume fraction of particle centres' spheres inside the vertical cylinder r < radius,
+    z0 < z < z1 (centred on the z axis): sum of sphere volumes / cylinder volume."""
+    x = p["position"]
+    r = np.hypot(x[:, 0], x[:, 1])
+    sel = (r < radius) & (x[:, 2] > z0) & (x[:, 2] < z1)
+    vol = math.pi * radius ** 2 * (z1 - z0)
+    return float(np.sum(4.0 / 3.0 * math.pi * p["radius"][sel] ** 3) / vol) if vol > 0 else 0.0
+
+
+# ------------------------------------------------------------------------------ drum
+def bed_surface(y: np.ndarray, z: np.ndarray, radius: np.ndarray, bin_width: float,
+                keep=(0.2, 0.8)) -> tuple[float, float]:
+    """Free surface of a bed in a drum turning about the x axis, from particle centres (y, z):
+    the highest sphere top (z + r) in each y bin, a straight line fitted through the bins
+    between the ``keep`` quantiles of the chord (the ends bend up and down along the wall).
+    Returns (theta, h): the surface's angle to the horizontal (rad, > 0 when it rises towards
+    +y) and its distance from the axis (m)."""
+    edges = np.arange(y.min(), y.max() + bin_width, bin_width)
+    idx = np.digitize(y, edges)
+    top = z + radius
+    ys, zs = [], []
+    for k in np.unique(idx):
+        sel = np.flatnonzero(idx == k)
+        if len(sel) >= 3:
+            j = sel[np.argmax(top[sel])]
+            ys.append(y[j])
+            zs.append(top[j])
+    ys, zs = np.asarray(ys), np.asarray(zs)
+    lo, hi = np.quantile(ys, keep)
+    m = (ys >= lo) & (ys <= hi)
+    slope, intercept = np.polyfit(ys[m], zs[m], 1)
+    return math.atan(slope), abs(intercept) / math.sqrt(1.0 + slope * slope)
+
+
+def segment_centroid(drum_radius: float, h: float) -> tuple[float, float]:
+    """Circular segment cut from a circle of radius R by a chord at distance h from the centre
+    (the bed below its free surface): (fill fraction of the circle, distance of the segment's
+    centroid from the centre, m). With half-angle a = acos(h/R):
+    area = R^2 (2a - sin 2a)/2, r_cg = 4 R sin^3 a / (3 (2a - sin 2a))."""
+    a = math.acos(min(max(h / drum_radius, -1.0), 1.0))
+    s = 2 * a - math.sin(2 * a)
+    return s / (2 * math.pi), 4 * drum_radius * math.sin(a) ** 3 / (3 * s)
+
+
+def segment_torque(mass: float, g: float, drum_radius: float, h: float, theta: float) -> float:
+    """Torque of a bed held as a rigid circular segment tilted by its dynamic angle of repose
+    theta: M g r_cg sin(theta), N m (the classic drum-power estimate)."""
+    return mass * g * segment_centroid(drum_radius, h)[1] * math.sin(theta)
+
+
+# ------------------------------------------------------------------------------ heap
+def heap_angle(p: dict, centre=(0.0, 0.0), bin_width: Optional[float] = None,
+               keep=(0.2, 0.8)) -> tuple[float, float, int]:
+    """Angle of repose of a heap on the plane z = 0, by fitting its flank: the highest sphere
+    top in each radial ring around ``centre`` (width: one diameter), then a line through the
+    rings whose top lies between ``keep`` fractions of the heap's height (the rounded apex and
+    the scattered toe are left out). Returns (angle deg, heap height m, rings fitted)."""
+    x = p["position"]
+    rad = p["radius"]
+    if bin_width is None:
+        bin_width = 2.0 * float(np.median(rad))
+    r = np.hypot(x[:, 0] - centre[0], x[:, 1] - centre[1])
+    top = x[:, 2] + rad
+    ring = (r / bin_width).astype(int)
+    rs, zs = [], []
+    for k in np.unique(ring):
+        sel = ring == k
+        if sel.sum() >= 3:
+            rs.append((k + 0.5) * bin_width)
+            zs.append(top[sel].max())
+    rs, zs = np.asarray(rs), np.asarray(zs)
+    height = float(zs.max())
+    m = (zs >= keep[0] * height) & (zs <= keep[1] * height) & (rs > rs[np.argmax(zs)])
+    if m.sum() < 2:
+        return float("nan"), height, int(m.sum())
+    slope = np.polyfit(rs[m], zs[m], 1)[0]
+    return math.degrees(math.atan(-slope)), height, int(m.sum())

@@ -1,0 +1,262 @@
+"""Bundled demos (``taichi-dem demo NAME``): each is a scene file in demos/ and a summary that
+prints its key numbers at the end of the run, against the reference it reproduces.
+
+A demo class names its scene file, may ``attach(sim)`` observers before the run (they read the
+state at every output sample) and prints ``summary(sim)`` afterwards. The geometry numbers a
+summary needs (orifice, drum radius, ...) are read back from the scene's own TOML text, so an
+edited scene keeps a consistent summary.
+
+Discharge is measured from the particles that leave the domain (``particles/lost``); a scene
+with a ``[[sensors]] kind = "mass_flow"`` whose name the demo gives in ``SENSOR`` is read from
+``/series/sensors/<name>/mass_flow`` instead (see :func:`analysis.discharged_mass`).
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from . import analysis
+from .units import parse_quantity
+
+DEMOS_DIR = Path(__file__).resolve().parent.parent / "demos"
+
+
+def _scene_toml(sim) -> dict:
+    return tomllib.loads(sim.scene.text)
+
+
+def _length(value) -> float:
+    return parse_quantity(value, "length")
+
+
+def _gravity(sim) -> float:
+    return float(np.linalg.norm(sim.scene.simulation.gravity))
+
+
+class Demo:
+    """One bundled demo: ``scene`` (file name in demos/), ``attach`` and ``summary``."""
+    name = ""
+    scene = ""
+
+    @property
+    def path(self) -> Path:
+        return DEMOS_DIR / self.scene
+
+    @property
+    def description(self) -> str:
+        """The first line of the scene file (a comment saying what it shows)."""
+        if not self.path.exists():
+            return f"(scene file {self.scene} missing)"
+        return self.path.read_text().splitlines()[0].lstrip("# ").strip()
+
+    def attach(self, sim) -> None:
+        """Add observers before the run (default: none)."""
+
+    def summary(self, sim) -> None:
+        raise NotImplementedError
+
+
+# ---------------------------------------------------------------------------------- pile
+class Pile(Demo):
+    name, scene = "pile", "pile.toml"
+
+    def summary(self, sim):
+        p = sim.particles()
+        weight = float(np.sum(p["mass"][~p["fixed"]])) * _gravity(sim)
+        floor = [w for w in sim.scene.walls if w.name == "floor"]
+        if floor:
+            fz = float(sim.series["walls/floor/force"][-1] @ np.asarray(floor[0].normal))
+            print(f"summary: the floor carries {-fz:.4g} N of the pile's {weight:.4g} N weight "
+                  f"({-fz / weight:.1%})")
+
+
+# ---------------------------------------------------------------------------------- hopper
+class Hopper(Demo):
+    """Discharge of a conical hopper against Beverloo's correlation.
+
+    The bulk density in Beverloo's law is measured: the solid fraction of the bed in the
+    cylindrical bin (two diameters clear of the wall, the cone and the free surface) at every
+    sample of the steady window."""
+    name, scene = "hopper", "hopper.toml"
+    SENSOR: Optional[str] = None        # a mass_flow sensor's name, once the scene has one
+
+    def __init__(self):
+        self.samples: list[tuple[float, float]] = []      # (time, solid fraction)
+
+    def geometry(self, sim):
+        body = _scene_toml(sim)["bodies"][0]["mesh"]
+        orifice = 2 * _length(body["orifice_radius"])
+        cone_top = _length(body["height"]) + _length(body.get("spout_length", 0.0))
+        return orifice, _length(body["top_radius"]), cone_top
+
+    def attach(self, sim):
+        d = 2 * float(np.median(sim.placed.radius))
+        _, radius, cone_top = self.geometry(sim)
+
+        def observe(sim, values):
+            p = sim.particles()
+            z = p["position"][:, 2]
+            if len(z) < 10:
+                return
+            surface = float(np.percentile(z[z > cone_top], 98)) if np.any(z > cone_top) else 0.0
+            z0, z1 = cone_top + 2 * d, surface - 2 * d
+            if z1 - z0 > 2 * d:
+                self.samples.append((sim.time, analysis.solid_fraction_in_cylinder(
+                    p, radius - 2 * d, z0, z1)))
+        sim.add_observer(observe)
+
+    def summary(self, sim):
+        d = 2 * float(np.median(sim.placed.radius))
+        orifice, _, _ = self.geometry(sim)
+        masses = analysis.initial_masses(sim)
+        rho_s = float(masses.sum() / np.sum(4.0 / 3.0 * math.pi * sim.placed.radius ** 3))
+        t, out = analysis.discharged_mass(sim, self.SENSOR)
+        total = float(masses.sum())
+        if out[-1] < 0.6 * total:
+            print(f"summary: only {out[-1] / total:.0%} of the fill discharged by t = {t[-1]:.3g} s "
+                  f"(a jam, or too short a run); no steady rate to compare")
+            return
+        t0, t1 = analysis.steady_window(t, out, total)
+        rate = analysis.linear_rate(t, out, t0, t1)
+        phi = [f for (ts, f) in self.samples if t0 <= ts <= t1]
+        phi = float(np.mean(phi)) if phi else 0.6
+        rho_b = phi * rho_s
+        w_bev = analysis.beverloo_rate(orifice, d, rho_b, _gravity(sim))
+        c_fit = analysis.BEVERLOO_C * rate / w_bev
+        print(f"summary: {len(masses)} spheres of d = {d * 1e3:.3g} mm through an orifice of "
+              f"D = {orifice * 1e3:.3g} mm (D/d = {orifice / d:.2f})")
+        print(f"  discharge rate {rate:.4g} kg/s (fit over t = {t0:.2f} - {t1:.2f} s, 15 - 60 % of "
+              f"the fill out; from {'sensor ' + self.SENSOR if self.SENSOR else 'particles leaving the domain'})")
+        print(f"  bulk density {rho_b:.4g} kg/m3 (solid fraction {phi:.3f} measured in the bin)")
+        print(f"  Beverloo W = C rho_b sqrt(g) (D - k d)^(5/2) with C = {analysis.BEVERLOO_C}, "
+              f"k = {analysis.BEVERLOO_K} (Beverloo et al. 1961; Nedderman 1992): {w_bev:.4g} kg/s")
+        print(f"  simulated / Beverloo = {rate / w_bev:.3f}, i.e. C = {c_fit:.3f} "
+              f"(published {analysis.BEVERLOO_C_RANGE[0]} - {analysis.BEVERLOO_C_RANGE[1]})")
+
+
+# ---------------------------------------------------------------------------------- chute
+class Chute(Demo):
+    """Seed 004's chute: the surge's velocities and depth in the measuring section, and the
+    mass flow off the chute's end.
+
+    Frame: x down the slope, z normal to the base (gravity is tilted). At every sample the
+    particles between x0 and x1 (the middle of the chute) are binned by 5 mm along x; the flow
+    depth is the mean over bins of the highest sphere top; the surface velocity the mean
+    down-slope velocity of the spheres within one diameter of their bin's top; the mean
+    velocity that of all spheres in the section. The summary reports these at the sample
+    that held the most particles in the section (the body of the surge)."""
+    name, scene = "chute", "chute.toml"
+    SENSOR: Optional[str] = None
+    SECTION = (0.05, 0.15)             # m down the slope: the paper's developed-flow region
+    BIN = 0.005
+
+    def __init__(self):
+        self.samples: list[dict] = []
+
+    def attach(self, sim):
+        def observe(sim, values):
+            p = sim.particles()
+            x, u = p["position"], p["velocity"]
+            top = x[:, 2] + p["radius"]
+            sel = (x[:, 0] >= self.SECTION[0]) & (x[:, 0] < self.SECTION[1])
+            if sel.sum() < 50:
+                return
+            bins = ((x[sel, 0] - self.SECTION[0]) / self.BIN).astype(int)
+            depth, surf_u = [], []
+            for k in np.unique(bins):
+                b = bins == k
+                if b.sum() < 10:
+                    continue
+                h = top[sel][b].max()
+                depth.append(h)
+                near = b & (top[sel] > h - 2 * p["radius"][sel])
+                surf_u.append(u[sel][near, 0].mean())
+            if not depth:
+                return
+            self.samples.append(dict(time=sim.time, count=int(sel.sum()), depth=float(np.mean(depth)),
+                                     surface=float(np.mean(surf_u)), mean=float(u[sel, 0].mean())))
+        sim.add_observer(observe)
+
+    def summary(self, sim):
+        t, out = analysis.discharged_mass(sim, self.SENSOR)
+        total = float(analysis.initial_masses(sim).sum())
+        print(f"summary: {sim.n_initial} spheres of 1 mm released at 0.5492 m/s on a 38 deg "
+              f"chute (seed 004 had a steady feed of 0.1961 kg/s, h0 = 22 mm, 34,756 particles)")
+        if not self.samples:
+            print("  the flow never reached the measuring section")
+            return
+        best = max(self.samples, key=lambda s: s["count"])
+        print(f"  in x = {self.SECTION[0] * 1e3:.0f} - {self.SECTION[1] * 1e3:.0f} mm at t = "
+              f"{best['time']:.3f} s ({best['count']} spheres): flow depth {best['depth'] * 1e3:.2f} mm, "
+              f"surface velocity {best['surface']:.3f} m/s, mean velocity {best['mean']:.3f} m/s")
+        flowing = out > 0.02 * total
+        if flowing.any() and out[-1] > 0.1 * total:
+            t_front = float(t[np.argmax(flowing)])
+            rate = np.gradient(out, t)
+            t0, t1 = analysis.steady_window(t, out, float(out[-1]), 0.1, 0.9)
+            mean_rate = (0.8 * out[-1]) / max(t1 - t0, 1e-9)
+            print(f"  off the chute's end: front at t = {t_front:.3f} s, peak mass flow "
+                  f"{rate.max():.4g} kg/s, mean {mean_rate:.4g} kg/s while the middle 80 % of the "
+                  f"discharged mass passed; {out[-1] / total:.0%} of the release out by t = {t[-1]:.3g} s")
+        else:
+            print(f"  {out[-1] / total:.0%} of the release left the chute by t = {t[-1]:.3g} s")
+
+
+# ---------------------------------------------------------------------------------- heap
+class AngleOfRepose(Demo):
+    """Seed 001's fly ash: the heap left by a lifted cylinder, its flank's angle against the
+    paper's 38.1 deg (measured) and 38.6 deg (its DEM)."""
+    name, scene = "angle_of_repose", "angle_of_repose.toml"
+    MEASURED, PAPER_DEM = 38.1, 38.6
+    PAPER_DEM_SPREAD = (35.0, 43.5)       # the paper's eight DEM heaps (Table 2)
+
+    def summary(self, sim):
+        p = sim.particles()
+        moving = ~p["fixed"]               # leave out the rough base
+        p = {"position": p["position"][moving], "radius": p["radius"][moving]}
+        tube = [b for b in sim.scene.bodies if b.name == "tube"]
+        tube_bottom = (float(tube[0].vertices[:, 2].min()) + tube[0].motion.velocity[2] * sim.time
+                       if tube else 0.0)
+        angle, height, rings = analysis.heap_angle(p)
+        ke = float(sim.series["particles/kinetic_energy"][-1])
+        print(f"summary: {len(p['radius'])} fly-ash spheres of 15 mm in the domain (on a rough base of "
+              f"fixed ones); heap height {height * 1e3:.0f} mm, kinetic energy {ke:.3g} J "
+              f"(tube bottom at {tube_bottom:.2f} m)")
+        print(f"  angle of repose {angle:.1f} deg (flank fitted over {rings} rings, 20 - 80 % of the "
+              f"height) vs {self.MEASURED} deg measured and {self.PAPER_DEM} deg DEM in seed 001 "
+              f"(its eight DEM heaps: {self.PAPER_DEM_SPREAD[0]} - {self.PAPER_DEM_SPREAD[1]} deg)")
+
+
+# ---------------------------------------------------------------------------------- process
+class Process(Demo):
+    """A process scene (factories, outlets, sensors): the engineer's numbers - shaft torque and
+    power, residence time, outlet temperature (and moisture), mass flows, mass balance."""
+
+    def summary(self, sim):
+        from .summaries import process_summary
+        process_summary(sim)
+
+
+class PaddleCooler(Process):
+    name, scene = "paddle_cooler", "paddle_cooler.toml"
+
+
+class PaddleCoolerOptimised(Process):
+    name, scene = "paddle_cooler_optimised", "paddle_cooler_optimised.toml"
+
+
+class DryerDrum(Process):
+    name, scene = "dryer_drum", "dryer_drum.toml"
+
+
+DEMOS: dict[str, type[Demo]] = {d.name: d for d in (PaddleCooler, PaddleCoolerOptimised,
+                                                     DryerDrum, Pile, Hopper, Chute,
+                                                     AngleOfRepose)}
+
+
+def get(name: str) -> Demo:
+    return DEMOS[name]()
