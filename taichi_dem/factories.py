@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import sys
+import time as time_module
 
 import numpy as np
 
@@ -47,6 +48,7 @@ class FactorySet:
         self.behind = np.zeros(n)                 # kg behind schedule after the last insertion
         self.waiting = [False] * n                # in a "region full" episode (warned)
         self.capacity_warned = False
+        self.wall_seconds = 0.0                   # spent placing and inserting (host)
         self.next_radius = [self._sample_radius(k) for k in range(n)]
         dt = sim.dt
         g = float(np.linalg.norm(scene.simulation.gravity))
@@ -98,6 +100,13 @@ class FactorySet:
         due = self.due(step)
         if not due:
             return
+        t0 = time_module.perf_counter()
+        try:
+            self._insert(due, time)
+        finally:
+            self.wall_seconds += time_module.perf_counter() - t0
+
+    def _insert(self, due: list[int], time: float):
         engine = self.sim.engine
         st = engine.state
         n = engine.count

@@ -92,6 +92,10 @@ def process_summary(sim, window: float = 0.25) -> dict:
         out[f"{f.name}/fed"] = fed
         print(f"summary: factory '{f.name}': {fed:.4g} kg fed"
               + (f", {behind:.4g} kg behind schedule (the inlet chokes)" if behind > 0.01 * max(fed, 1e-30) else ""))
+    if sim.factories is not None and sim.wall_seconds > 0:
+        print(f"summary: factories placed and inserted particles in "
+              f"{sim.factories.wall_seconds:.3g} s wall ({sim.factories.wall_seconds / sim.wall_seconds:.1%} "
+              f"of the stepping time)")
     if sim.scene.factories or sim.scene.outlets:
         b = sim.mass_balance()
         out["mass_balance_error"] = b["error"]

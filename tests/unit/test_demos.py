@@ -23,7 +23,7 @@ def test_demo_scene_loads_and_places(name):
     assert demo.path.exists()
     scene = load_scene(str(demo.path))
     placed = place_fills(scene, np.random.default_rng(scene.simulation.seed))
-    assert len(placed.radius) > 0
+    assert len(placed.radius) > 0 or scene.factories     # process demos start empty
     assert callable(demo.summary) and demo.description
 
 
