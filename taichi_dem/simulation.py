@@ -88,6 +88,9 @@ class Simulation:
         # recorders and sensors that observe every sample: callables (sim, values) -> None,
         # where values maps /series names to this sample's values; they never change the state
         self.observers: list = []
+        # checkpoints, the last good state, divergence checks (checkpoint.py, divergence.py)
+        from . import checkpoint
+        checkpoint.attach(self)
         self._sample()
 
     # ---------------------------------------------------------------- construction
@@ -100,6 +103,12 @@ class Simulation:
     def from_text(cls, text: str, *, base_dir: Optional[str] = None, source: str = "<string>",
                   **kwargs) -> "Simulation":
         return cls(parse_scene(text, source=source, base_dir=base_dir), **kwargs)
+
+    @classmethod
+    def from_checkpoint(cls, path: str, **kwargs) -> "Simulation":
+        """Continue from a checkpoint file (checkpoint.resume: arch, threads, h5, checkpoint)."""
+        from .checkpoint import resume
+        return resume(path, **kwargs)
 
     def _upload(self, placed):
         s = self.engine.state
@@ -152,15 +161,19 @@ class Simulation:
         self._check_alive()
         t0 = _time.perf_counter()
         remaining = int(n)
-        while remaining > 0:
-            to_output = self.output_every - (self.step_count % self.output_every)
-            chunk = min(remaining, to_output)
-            self.engine.advance(chunk, record_last=(chunk == to_output))
-            self.step_count += chunk
-            self.time = self.step_count * self.dt
-            remaining -= chunk
-            if self.step_count % self.output_every == 0:
-                self._sample()
+        try:
+            while remaining > 0:
+                to_output = self.output_every - (self.step_count % self.output_every)
+                chunk = min(remaining, to_output)
+                self.engine.advance(chunk, record_last=(chunk == to_output))
+                self.step_count += chunk
+                self.time = self.step_count * self.dt
+                remaining -= chunk
+                if self.step_count % self.output_every == 0:
+                    self._sample()
+        except DivergenceError as err:
+            # write the last good state and name it in the message (checkpoint.py)
+            raise self.checkpointer.diverged(self, err) from None
         self.wall_seconds += _time.perf_counter() - t0
 
     def run(self, until: Optional[float] = None, *, progress: bool = False):
@@ -173,11 +186,15 @@ class Simulation:
         done = 0
         t0 = _time.perf_counter()
         block = max(self.output_every, 1)
+        shown = -1.0
         while done < steps:
             k = min(block, steps - done)
             self.step(k)
             done += k
             wall = _time.perf_counter() - t0
+            if wall - shown < 0.5 and done < steps:
+                continue            # at most two lines a second
+            shown = wall
             rate = done * self.engine.count / wall if wall > 0 else 0.0
             eta = wall / done * (steps - done)
             print(f"\r  t = {self.time:8.4f} s   wall {wall:7.1f} s   "
@@ -188,6 +205,7 @@ class Simulation:
     # ---------------------------------------------------------------- observing
     def _sample(self):
         m = self.engine.measure()
+        self.divergence.check(self.time)        # NaN, overlap, speed (divergence.py)
         if m["non_finite"]:
             raise DivergenceError(
                 f"the simulation diverged near t = {self.time:.6g} s (non-finite velocity). "
@@ -236,6 +254,7 @@ class Simulation:
                 "id", "position", "velocity", "angular_velocity", "radius", "temperature")
                 if k in arrays})
             self.recorder.flush()
+        self.checkpointer.after_sample(self)    # periodic checkpoint, last good state
 
     def _warn_biot(self):
         """A particle is one temperature (lumped) only while its Biot number h (r/3) / k_p is
