@@ -87,6 +87,7 @@ def main():
                      for k in ("position", "velocity", "angular_velocity", "temperature")},
            "series": {k: float(np.max(np.abs(sa[k] - sb[k]))) if sa[k].shape == sb[k].shape
                       else "shape" for k in sa},
+           "series_scale": {k: float(np.max(np.abs(sa[k]))) for k in sa},
            "speed_after": float(sb["bodies/paddle/angular_speed"][-1]),
            "torque_rms": float(np.sqrt(np.mean(sa["bodies/paddle/axial_torque"] ** 2)))}
     b.close()
