@@ -168,7 +168,7 @@ def _window_problem(args):
 def cmd_run(args, scene_path: str, summary=None) -> int:
     from .checkpoint import default_path
     from .loader import load_scene
-    from .simulation import Simulation
+    from .simulation import DivergenceError, Simulation
 
     problem = _window_problem(args)
     if problem:
@@ -181,8 +181,11 @@ def cmd_run(args, scene_path: str, summary=None) -> int:
     if every_nth < 1:
         return _fail(f"--every-nth: {every_nth} is not a positive whole number")
     t0 = time.perf_counter()
-    sim = Simulation(scene, arch=args.arch, precision=args.precision, threads=args.threads,
-                     h5=h5 or "")
+    try:
+        sim = Simulation(scene, arch=args.arch, precision=args.precision, threads=args.threads,
+                         h5=h5 or "")
+    except DivergenceError as err:       # at the first sample: there is no good state
+        return _fail(f"{err} (at the start: no checkpoint written)", 3)
     # beside the results, or in --out DIR (CONTRACT.md); also where a divergence leaves the
     # last good state
     sim.checkpointer.path = default_path(scene, h5, args.out)

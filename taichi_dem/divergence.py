@@ -109,8 +109,10 @@ class DivergenceGuard:
         from .simulation import DivergenceError
         t0 = _time.perf_counter()
         e = self.sim.engine
-        key = (id(e.pairs), id(getattr(e.mesh, "entries_tree", None)))
-        if key != self._key:        # the pair or mesh entry arrays were reallocated
+        key = (e.pairs, getattr(e.mesh, "entries_tree", None))
+        # the kernel captured the pair and mesh entry arrays: recompile when they were
+        # reallocated (compared by identity; holding them keeps an id from being reused)
+        if self._key is None or any(a is not b for a, b in zip(key, self._key)):
             self._compile()
             self._key = key
         self._scan(e.count)
