@@ -179,6 +179,7 @@ def write(path: str, snap: Snapshot) -> None:
     directory = os.path.dirname(path)
     os.makedirs(directory, exist_ok=True)
     tmp = os.path.join(directory, f".{os.path.basename(path)}.{os.getpid()}.tmp")
+    _remove_stale_temporaries(directory, os.path.basename(path))
     try:
         with h5py.File(tmp, "w") as f:
             for k, v in snap.attrs.items():
@@ -209,6 +210,26 @@ def write(path: str, snap: Snapshot) -> None:
             os.close(fd)
     except OSError:
         pass
+
+
+def _remove_stale_temporaries(directory: str, base: str):
+    """Temporary files of writers that were killed mid-write (their process is gone)."""
+    prefix = f".{base}."
+    for name in os.listdir(directory):
+        if not (name.startswith(prefix) and name.endswith(".tmp")):
+            continue
+        pid = name[len(prefix):-len(".tmp")]
+        if not pid.isdigit() or int(pid) == os.getpid():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            try:
+                os.unlink(os.path.join(directory, name))
+            except OSError:
+                pass
+        except OSError:
+            pass
 
 
 def _write_state_dict(group, name, d: dict):
