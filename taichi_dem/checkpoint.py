@@ -43,6 +43,12 @@ import numpy as np
 
 FORMAT = "taichi_dem checkpoint 1"
 
+# Keep the last good state in memory at every sample (Checkpointer.keep_last_good) by
+# default? The copy itself is cheap (36 ms per sample at 20,000 particles, BENCHMARKS.md),
+# but the first copy of a new simulation compiles one copy kernel per field (1-8 s), which a
+# script or test building many small simulations should not pay. The CLI turns it on.
+KEEP_LAST_GOOD = False
+
 # host attributes saved and restored by name, (owner, attribute); a missing one is skipped
 HOST_ATTRIBUTES = (
     ("sim", "time"), ("sim", "step_count"), ("sim", "_warned_thermal"), ("sim", "_warned_speed"),
@@ -390,12 +396,13 @@ class Checkpointer:
     ``path``: where checkpoints go; ``interval``: s of simulated time between them (None:
     none; the scene's ``[output] checkpoint_interval``); ``keep_last_good``: capture the state
     at every output sample that passed the divergence check (costs a host copy of all fields
-    per sample, measured in BENCHMARKS.md), so a diverged run can write the last good state."""
+    per sample, measured in BENCHMARKS.md), so a diverged run can write the last good state;
+    default ``KEEP_LAST_GOOD``: on in the CLI, off from Python)."""
 
     def __init__(self, sim):
         self.path = default_path(sim.scene, sim.recorder.path if sim.recorder else None)
         self.interval = sim.scene.output.checkpoint_interval
-        self.keep_last_good = True
+        self.keep_last_good = KEEP_LAST_GOOD
         self.last_good: Optional[Snapshot] = None
         self.written = 0
         self.write_seconds = 0.0
@@ -450,9 +457,14 @@ class Checkpointer:
         if getattr(err, "checkpoint", None) is not None:
             return err
         if self.last_good is None:
-            note = (" No checkpoint was written: no earlier sample passed the checks "
-                    "(keep_last_good is off, or the first sample diverged).")
-            err.checkpoint = ""
+            if self.written and os.path.exists(self.path):
+                note = (f" The last good state was not kept (sim.checkpointer.keep_last_good "
+                        f"is off); the latest periodic checkpoint is {self.path}.")
+                err.checkpoint = self.path
+            else:
+                note = (" No checkpoint was written: the last good state was not kept "
+                        "(sim.checkpointer.keep_last_good is off) or no sample passed.")
+                err.checkpoint = ""
         else:
             self.save(self.last_good)
             note = (f" The last good state (t = {self.last_good.time:.6g} s) is in "

@@ -64,6 +64,16 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    from . import checkpoint
+    # a run from the command line keeps its last good state for a divergence (exit 3)
+    saved, checkpoint.KEEP_LAST_GOOD = checkpoint.KEEP_LAST_GOOD, True
+    try:
+        return _main(argv)
+    finally:
+        checkpoint.KEEP_LAST_GOOD = saved
+
+
+def _main(argv=None) -> int:
     args = _parser().parse_args(argv)
     try:
         if args.command == "check":

@@ -38,6 +38,7 @@ def diverge(sim, inject):
 def test_speed_beyond_the_bound_stops_with_the_particle_and_the_last_good_state(small_text, tmp_path):
     sim = td.Simulation.from_text(small_text, h5="")
     sim.checkpointer.path = str(tmp_path / "s.checkpoint.h5")
+    sim.checkpointer.keep_last_good = True           # as the CLI does
     limit = sim.divergence.speed_limit
     assert limit == pytest.approx(10 * sim.timestep.expected_speed)
     pid = None
@@ -73,8 +74,7 @@ def test_speed_beyond_the_bound_stops_with_the_particle_and_the_last_good_state(
 def test_non_finite_velocity_is_named(small_text, tmp_path):
     sim = td.Simulation.from_text(small_text, h5="")
     sim.checkpointer.path = str(tmp_path / "n.checkpoint.h5")
-    sim.checkpointer.keep_last_good = False         # then no checkpoint can be written
-    sim.checkpointer.last_good = None               # (the one taken at t = 0)
+    assert not sim.checkpointer.keep_last_good      # from Python: off by default
     message, _, err = diverge(sim, lambda s: s.velocity.__setitem__(3, [np.nan, 0.0, 0.0]))
     assert "non-finite position or velocity" in message
     assert "No checkpoint was written" in message and err.checkpoint == ""
