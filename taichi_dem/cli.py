@@ -32,6 +32,9 @@ def _common_outputs(p: argparse.ArgumentParser):
     p.add_argument("--precision", choices=["f32", "f64"])
     p.add_argument("--threads", type=int, help="CPU threads (default: all cores)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument("--window", "--gui", action="store_true", dest="window",
+                   help="a live window (Taichi GGUI): space pauses, up/down change the speed "
+                        "of the first rotating body, Esc stops; needs a display")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -58,6 +61,16 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    from . import checkpoint
+    # a run from the command line keeps its last good state for a divergence (exit 3)
+    saved, checkpoint.KEEP_LAST_GOOD = checkpoint.KEEP_LAST_GOOD, True
+    try:
+        return _main(argv)
+    finally:
+        checkpoint.KEEP_LAST_GOOD = saved
+
+
+def _main(argv=None) -> int:
     args = _parser().parse_args(argv)
     try:
         if args.command == "check":
@@ -67,8 +80,7 @@ def main(argv=None) -> int:
         if args.command == "demo":
             return cmd_demo(args)
         if args.command == "resume":
-            return _fail(f"{args.checkpoint}: checkpoints and resume are not supported yet by "
-                         f"this version of taichi_dem (planned)")
+            return cmd_resume(args)
         if args.command == "bench":
             return cmd_bench(args)
     except SceneError as err:
@@ -157,10 +169,22 @@ def _output_path(explicit, configured, out_dir, scene_path, suffix):
     return configured
 
 
+def _window_problem(args):
+    """A one-line reason why --window cannot work here, or None."""
+    if not getattr(args, "window", False):
+        return None
+    from .window import display_problem
+    return display_problem()
+
+
 def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
+    from .checkpoint import default_path
     from .loader import load_scene
     from .simulation import DivergenceError, Simulation
 
+    problem = _window_problem(args)
+    if problem:
+        return _fail(problem, 2)
     scene = load_scene(scene_path)
     h5 = _output_path(args.h5, scene.output.h5, args.out, scene_path, ".h5")
     rrd = args.rrd or (_output_path(None, scene.output.rrd, args.out, scene_path, ".rrd")
@@ -169,8 +193,62 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
     if every_nth < 1:
         return _fail(f"--every-nth: {every_nth} is not a positive whole number")
     t0 = time.perf_counter()
-    sim = Simulation(scene, arch=args.arch, precision=args.precision, threads=args.threads,
-                     h5=h5 or "")
+    try:
+        sim = Simulation(scene, arch=args.arch, precision=args.precision, threads=args.threads,
+                         h5=h5 or "")
+    except DivergenceError as err:       # at the first sample: there is no good state
+        return _fail(f"{err} (at the start: no checkpoint written)", 3)
+    # beside the results, or in --out DIR (CONTRACT.md); also where a divergence leaves the
+    # last good state
+    sim.checkpointer.path = default_path(scene, h5, args.out)
+    return _drive(sim, args, scene_path, rrd, h5, t0, summary, setup)
+
+
+def cmd_resume(args) -> int:
+    """Continue a checkpointed run: results appended to its results file (or --h5/--out)."""
+    from .checkpoint import CheckpointError, resume
+
+    problem = _window_problem(args)
+    if problem:
+        return _fail(problem, 2)
+    path = args.checkpoint
+    if not Path(path).is_file():
+        return _fail(f"{path}: no such checkpoint file")
+    t0 = time.perf_counter()
+    try:
+        import h5py
+        with h5py.File(path, "r") as f:
+            stored_results = str(f.attrs.get("results", ""))
+    except OSError as err:
+        return _fail(f"{path}: cannot open as an HDF5 checkpoint ({err})")
+    if args.h5:
+        h5 = args.h5
+    elif args.out:
+        h5 = str(Path(args.out) / (Path(stored_results).name if stored_results
+                                   else Path(path).name.replace(".checkpoint.h5", ".h5")))
+    else:
+        h5 = stored_results if stored_results and Path(stored_results).exists() else ""
+    checkpoint = str(Path(args.out) / Path(path).name) if args.out else path
+    try:
+        sim = resume(path, arch=args.arch, threads=args.threads, h5=h5, checkpoint=checkpoint)
+    except CheckpointError as err:
+        return _fail(str(err))
+    if args.precision and args.precision != sim.precision:
+        print(f"taichi-dem: note: the checkpoint is {sim.precision}; --precision "
+              f"{args.precision} ignored", file=sys.stderr)
+    rrd = args.rrd
+    if not args.quiet:
+        print(f"{path}: resumed at t = {sim.time:.6g} s (step {sim.step_count:,})", file=sys.stderr)
+    return _drive(sim, args, path, rrd, h5, t0, None)
+
+
+def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> int:
+    """Run ``sim`` to --until (or end_time) with progress, a window or quietly, and print the
+    summary; exit 3 on divergence (the last good state checkpointed)."""
+    from .simulation import DivergenceError
+
+    scene = sim.scene
+    every_nth = getattr(args, "every_nth", 1) or 1
     recorder = None
     if rrd or args.spawn:
         from .recorders.rerun import RerunRecorder
@@ -179,21 +257,40 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
     if setup:
         setup(sim)
     if not args.quiet:
-        print(f"{scene_path}: {sim.particle_count} particles, dt = {sim.dt:.4g} s, "
+        print(f"{label}: {sim.particle_count} particles, dt = {sim.dt:.4g} s, "
               f"{len(sim.effects)} effects: {', '.join(e.name for e in sim.effects)}",
               file=sys.stderr)
+    until = scene.simulation.end_time if args.until is None else args.until
+    steps0, time0 = sim.step_count, sim.time
     try:
-        sim.run(args.until, progress=not args.quiet)
+        if args.window:
+            from .window import WindowError, run_window
+            try:
+                run_window(sim, until)
+            except WindowError as err:
+                sim.close()
+                return _fail(str(err), 2)
+        else:
+            sim.run(until, progress=not args.quiet)
     except DivergenceError as err:
         sim.close()
         return _fail(str(err), 3)
+    except KeyboardInterrupt:
+        if sim.checkpointer.last_good is not None:
+            sim.checkpointer.save(sim.checkpointer.last_good)
+            print(f"taichi-dem: the state at t = {sim.checkpointer.last_good.time:.6g} s is in "
+                  f"{sim.checkpointer.path}", file=sys.stderr)
+        raise
+    if sim.checkpointer.interval:
+        sim.checkpointer.save(sim=sim)       # the final state, to continue with `resume`
     wall = time.perf_counter() - t0
     s = sim.series
+    steps = sim.step_count - steps0
     # particles that leave (outlets, the domain) make the final count too small a measure
     mean_count = float(np.mean(s["particles/count"])) if len(s["particles/count"]) else sim.particle_count
-    print(f"simulated {sim.time:.4g} s in {wall:.1f} s wall ({sim.wall_seconds:.1f} s stepping); "
-          f"{sim.step_count:,} steps, {sim.step_count * mean_count / max(sim.wall_seconds, 1e-9) / 1e6:.2f} "
-          f"M particle-steps/s")
+    print(f"simulated {sim.time - time0:.4g} s (to t = {sim.time:.4g} s) in {wall:.1f} s wall "
+          f"({sim.wall_seconds:.1f} s stepping); {steps:,} steps, "
+          f"{steps * mean_count / max(sim.wall_seconds, 1e-9) / 1e6:.2f} M particle-steps/s")
     print(f"particles: {sim.particle_count} (lost {int(s['particles/lost'][-1])}); "
           f"kinetic energy {s['particles/kinetic_energy'][-1]:.4g} J")
     for w in scene.walls:
@@ -209,6 +306,11 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
         summary(sim)
     if h5:
         print(f"results: {h5}")
+    ck = sim.checkpointer
+    if ck.written:
+        print(f"checkpoint: {ck.path} ({ck.written} written, {ck.write_seconds:.2f} s; "
+              f"state captures {ck.snapshot_seconds:.2f} s, divergence checks "
+              f"{sim.divergence.seconds:.2f} s)")
     if recorder is not None:
         recorder.close()
         print(f"rerun: {recorder.samples} samples in {recorder.wall_seconds:.2f} s wall "

@@ -142,6 +142,9 @@ class Simulation:
         # recorders and sensors that observe every sample: callables (sim, values) -> None,
         # where values maps /series names to this sample's values; they never change the state
         self.observers: list = []
+        # checkpoints, the last good state, divergence checks (checkpoint.py, divergence.py)
+        from . import checkpoint
+        checkpoint.attach(self)
         self._sample()
 
     # ---------------------------------------------------------------- construction
@@ -154,6 +157,12 @@ class Simulation:
     def from_text(cls, text: str, *, base_dir: Optional[str] = None, source: str = "<string>",
                   **kwargs) -> "Simulation":
         return cls(parse_scene(text, source=source, base_dir=base_dir), **kwargs)
+
+    @classmethod
+    def from_checkpoint(cls, path: str, **kwargs) -> "Simulation":
+        """Continue from a checkpoint file (checkpoint.resume: arch, threads, h5, checkpoint)."""
+        from .checkpoint import resume
+        return resume(path, **kwargs)
 
     def _upload(self, placed):
         s = self.engine.state
@@ -218,20 +227,24 @@ class Simulation:
         self._check_alive()
         t0 = _time.perf_counter()
         remaining = int(n)
-        while remaining > 0:
-            to_output = self.output_every - (self.step_count % self.output_every)
-            chunk = min(remaining, to_output)
-            if self.factories is not None:
-                chunk = min(chunk, self.factories.steps_to_next(self.step_count))
-            self.engine.advance(chunk, record_last=(chunk == to_output))
-            self.step_count += chunk
-            self.time = self.step_count * self.dt
-            remaining -= chunk
-            if self.factories is not None:
-                # before the sample, so a sample sees the mass inserted on schedule
-                self.factories.insert_due(self.step_count, self.time)
-            if self.step_count % self.output_every == 0:
-                self._sample()
+        try:
+            while remaining > 0:
+                to_output = self.output_every - (self.step_count % self.output_every)
+                chunk = min(remaining, to_output)
+                if self.factories is not None:
+                    chunk = min(chunk, self.factories.steps_to_next(self.step_count))
+                self.engine.advance(chunk, record_last=(chunk == to_output))
+                self.step_count += chunk
+                self.time = self.step_count * self.dt
+                remaining -= chunk
+                if self.factories is not None:
+                    # before the sample, so a sample sees the mass inserted on schedule
+                    self.factories.insert_due(self.step_count, self.time)
+                if self.step_count % self.output_every == 0:
+                    self._sample()
+        except DivergenceError as err:
+            # write the last good state and name it in the message (checkpoint.py)
+            raise self.checkpointer.diverged(self, err) from None
         self.wall_seconds += _time.perf_counter() - t0
 
     def run(self, until: Optional[float] = None, *, progress: bool = False):
@@ -244,11 +257,15 @@ class Simulation:
         done = 0
         t0 = _time.perf_counter()
         block = max(self.output_every, 1)
+        shown = -1.0
         while done < steps:
             k = min(block, steps - done)
             self.step(k)
             done += k
             wall = _time.perf_counter() - t0
+            if wall - shown < 0.5 and done < steps:
+                continue            # at most two lines a second
+            shown = wall
             rate = done * self.engine.count / wall if wall > 0 else 0.0
             eta = wall / done * (steps - done)
             print(f"\r  t = {self.time:8.4f} s   wall {wall:7.1f} s   "
@@ -259,6 +276,7 @@ class Simulation:
     # ---------------------------------------------------------------- observing
     def _sample(self):
         m = self.engine.measure()
+        self.divergence.check(self.time)        # NaN, overlap, speed (divergence.py)
         if m["non_finite"]:
             raise DivergenceError(
                 f"the simulation diverged near t = {self.time:.6g} s (non-finite velocity). "
@@ -322,6 +340,7 @@ class Simulation:
                 "id", "position", "velocity", "angular_velocity", "radius", "temperature")
                 if k in arrays})
             self.recorder.flush()
+        self.checkpointer.after_sample(self)    # periodic checkpoint, last good state
 
     def _check_pinching(self, deepest: np.ndarray):
         """Say once per body when particles are pinched against it: an overlap beyond

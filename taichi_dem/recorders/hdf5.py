@@ -27,6 +27,34 @@ class HDF5Recorder:
         self.frames = self.file.create_group("frames")
         self.frame_count = 0
 
+    @classmethod
+    def continue_at(cls, path: str, time: float, dt: float, series: dict, *, scene_text: str,
+                    arch: str, precision: str) -> "HDF5Recorder":
+        """Continue the results file ``path`` of a run resumed at ``time`` (s): /series is
+        rewritten from ``series`` (the checkpoint's samples up to ``time``; it replaces rows a
+        killed or longer run wrote after it) and frames later than ``time`` are deleted. A
+        missing file is created, with the series so far and frames from ``time`` on."""
+        if not os.path.exists(path):
+            rec = cls(path, scene_text=scene_text, dt=dt, arch=arch, precision=precision)
+        else:
+            rec = cls.__new__(cls)
+            rec.path = path
+            rec.file = h5py.File(path, "a")
+            rec.frames = rec.file.require_group("frames")
+            if "series" in rec.file:
+                del rec.file["series"]
+            rec.series = rec.file.create_group("series")
+            later = [k for k, g in rec.frames.items() if float(g.attrs.get("time", 0.0)) > time + 0.5 * dt]
+            for k in later:
+                del rec.frames[k]
+            rec.frame_count = max((int(k) + 1 for k in rec.frames), default=0)
+        for name, rows in series.items():
+            data = np.asarray(rows, dtype=np.float64)
+            rec.series.create_dataset(name, data=data, maxshape=(None,) + data.shape[1:],
+                                      chunks=(256,) + data.shape[1:])
+        rec.flush()
+        return rec
+
     def append_series(self, values: dict[str, np.ndarray | float]):
         """Append one sample of each series (name relative to /series, e.g. "time")."""
         for name, value in values.items():
