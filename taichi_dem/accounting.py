@@ -152,7 +152,7 @@ class ProcessAccounts:
         d = {"outlet_mass": self.outlet_mass.copy(), "outlet_count": self.outlet_count.copy(),
              "lost_mass": self.lost_mass, "lost_count": self.lost_count}
         for name in self.residence_all:
-            d[f"residence/{name}"] = self.residence_times(name)
+            d[f"residence:{name}"] = self.residence_times(name)
         return d
 
     def load_state_dict(self, d: dict):
@@ -161,7 +161,7 @@ class ProcessAccounts:
         self.lost_mass = float(d["lost_mass"])
         self.lost_count = int(d["lost_count"])
         for name in self.residence_all:
-            rec = np.asarray(d.get(f"residence/{name}", np.empty((0, 3))), float).reshape(-1, 3)
+            rec = np.asarray(d.get(f"residence:{name}", np.empty((0, 3))), float).reshape(-1, 3)
             self.residence_all[name] = [rec] if len(rec) else []
             self.residence_new[name] = []
             self.residence_interval[name] = []
