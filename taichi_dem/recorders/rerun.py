@@ -97,10 +97,15 @@ class RerunRecorder:
         if torque:
             plots.append(rrb.TimeSeriesView(name="axial torque (N m)", origin="/series",
                                             contents=torque))
-        flow = sorted(f"+ /series/{n}" for n in names if n.startswith("sensors/"))
+        flow = sorted(f"+ /series/{n}" for n in names if n.endswith("/mass_flow"))
         if flow:
             plots.append(rrb.TimeSeriesView(name="mass flow (kg/s)", origin="/series",
                                             contents=flow))
+        residence = sorted(f"+ /series/sensors/{x.name}/{k}" for x in sim.scene.sensors
+                           if x.kind == "residence_time" for k in ("median", "p10", "p90"))
+        if residence:
+            plots.append(rrb.TimeSeriesView(name="residence time (s)", origin="/series",
+                                            contents=residence))
         temp = sorted(f"+ /series/{n}" for n in names
                       if n.endswith(("mean_temperature", "gas/outlet_temperature")))
         if temp:
