@@ -101,7 +101,8 @@ class RerunRecorder:
         if flow:
             plots.append(rrb.TimeSeriesView(name="mass flow (kg/s)", origin="/series",
                                             contents=flow))
-        residence = sorted(f"+ /series/sensors/{x.name}/{k}" for x in sim.scene.sensors
+        sensors = getattr(sim.scene, "sensors", ())
+        residence = sorted(f"+ /series/sensors/{x.name}/{k}" for x in sensors
                            if x.kind == "residence_time" for k in ("median", "p10", "p90"))
         if residence:
             plots.append(rrb.TimeSeriesView(name="residence time (s)", origin="/series",
