@@ -7,8 +7,8 @@ A removed particle (outlet or left the domain) is written to the log with what t
 needs (id, factory, exit, times, mass, temperature), marked dead and moved to a far-away
 ``PARKED`` position, so it touches nothing until the next neighbour rebuild drops it (no
 rebuild is forced per removal). The log has one entry per particle slot, so it cannot overflow
-between two rebuilds; the host drains it (accounting.py) whenever it is more than half full at
-a rebuild and at every output sample.
+between two rebuilds; the host drains it at every rebuild and every output sample
+(Engine.rebuild, accounting.py), and a log more than half full asks for a rebuild.
 """
 
 import numpy as np
