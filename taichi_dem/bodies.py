@@ -139,6 +139,52 @@ from .broadphase import exclusive_scan, previous_contact  # noqa: E402
 
 
 @ti.data_oriented
+def make_triangle_image(grid, reach: float):
+    """ti.func (x, a, b, c) -> the periodic image of point x (m) nearest to the triangle abc
+    (world frame, m); x itself without periodic axes.
+
+    The image nearest one vertex is right only while the triangle's extent along a periodic
+    axis plus the reach is under half the period. A longer triangle (a floor plate or drum
+    shell spanning a periodic slice) is tested against the neighbouring images as well, as
+    many as its extent needs, and the image closest to the triangle wins. ``reach``: the
+    largest contact search distance (largest radius + skin), m."""
+    periodic, span = grid.periodic, grid.span
+    minimum_image = grid.make_minimum_image()
+    any_periodic = any(periodic)
+    span_v = ti.Vector([s if p else 1.0 for s, p in zip(span, periodic)])
+
+    @ti.func
+    def triangle_image(x, a, b, c):
+        best = x
+        if ti.static(any_periodic):
+            lo_t = ti.min(a, b, c)
+            hi_t = ti.max(a, b, c)
+            mid = 0.5 * (lo_t + hi_t)
+            base = mid + minimum_image(x - mid)   # the image nearest the triangle's box centre
+            best = base
+            # images on each side worth testing: those within half the extent + reach of mid
+            n_side = ti.Vector([0, 0, 0])
+            for k in ti.static(range(3)):
+                if ti.static(periodic[k]):
+                    n_side[k] = ti.max(ti.cast(ti.ceil((0.5 * (hi_t[k] - lo_t[k]) + reach)
+                                                       / span_v[k] - 0.5), ti.i32), 0)
+            if n_side.sum() > 0:
+                q, region = closest_point_on_triangle(base, a, b, c)
+                best_sq = (base - q).norm_sqr()
+                for sx in range(-n_side[0], n_side[0] + 1):
+                    for sy in range(-n_side[1], n_side[1] + 1):
+                        for sz in range(-n_side[2], n_side[2] + 1):
+                            if sx != 0 or sy != 0 or sz != 0:
+                                trial = base + ti.Vector([sx, sy, sz]) * span_v
+                                q2, region2 = closest_point_on_triangle(trial, a, b, c)
+                                d_sq = (trial - q2).norm_sqr()
+                                if d_sq < best_sq:
+                                    best = trial
+                                    best_sq = d_sq
+        return best
+    return triangle_image
+
+
 class MeshContacts:
     """Device state and kernels of the particle-triangle contacts of one simulation."""
 
@@ -223,6 +269,7 @@ class MeshContacts:
         self._alloc_entries(max(2 * s.capacity // 8, 1024))
         self.expand = engine.max_radius + engine.skin
         self.minimum_image = engine.grid.make_minimum_image()
+        self.triangle_image = make_triangle_image(engine.grid, engine.max_radius + engine.skin)
         self.binned_time = 0.0
         self.interval_steps = 0
         self._compile_static_kernels()
@@ -337,9 +384,6 @@ class MeshContacts:
         self._compile_rows()
 
     @ti.func
-    def image_near(self, x, a):
-        """The periodic image of point x nearest to point a (x itself without periodic axes)."""
-        return a + self.minimum_image(x - a)
 
     @ti.func
     def world_triangle(self, t):
@@ -443,7 +487,7 @@ class MeshContacts:
                 for slot in range(m.tri_cell_start[c], m.tri_cell_start[c + 1]):
                     t = m.tri_cell_items[slot]
                     a, b, cc = m.world_triangle(t)
-                    x_image = m.image_near(xi, a)
+                    x_image = m.triangle_image(xi, a, b, cc)
                     q, region = closest_point_on_triangle(x_image, a, b, cc)
                     d = x_image - q
                     if d.dot(d) < reach * reach:
@@ -523,7 +567,10 @@ class MeshContacts:
                 pivot = m.axis_point[body]
                 x_world = xi
                 if ti.static(periodic):
-                    x_world = m.image_near(xi, rot @ (m.tri_a[t] - pivot) + pivot + m.offset[body])
+                    # the particle's image nearest the whole triangle: a triangle longer than
+                    # half the period is nearer another image than the one near its vertex
+                    wa, wb, wc = m.world_triangle(t)
+                    x_world = m.triangle_image(xi, wa, wb, wc)
                 x_ref = rot.transpose() @ (x_world - pivot - m.offset[body]) + pivot
                 m.mesh_status[k] = ti.u8(2)
                 # a triangle whose plane is farther than r cannot touch (most candidates)

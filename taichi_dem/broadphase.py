@@ -95,8 +95,10 @@ class GridSpec:
             return d
         return minimum_image
 
-    def too_small_periodic_axes(self) -> list[str]:
-        return [a for k, a in enumerate("xyz") if self.periodic[k] and self.dims[k] < 3]
+    def too_small_periodic_axes(self, cutoff: float) -> list[str]:
+        """Periodic axes shorter than two pair cutoffs (m): there a particle could meet two
+        images of one partner, and the minimum image is no longer the only one in reach."""
+        return [a for k, a in enumerate("xyz") if self.periodic[k] and self.span[k] < 2.0 * cutoff]
 
 
 class Broadphase:
@@ -221,10 +223,19 @@ class Broadphase:
                 xi, ri, movable_i = s.position[i], s.radius[i], s.inverse_mass[i] > 0.0
                 count = 0
                 for offset in range(27):
-                    nb = ti.Vector([cx + offset // 9 - 1, cy + (offset // 3) % 3 - 1, cz + offset % 3 - 1])
+                    step = ti.Vector([offset // 9 - 1, (offset // 3) % 3 - 1, offset % 3 - 1])
+                    nb = ti.Vector([cx, cy, cz]) + step
                     inside = True
                     for k in ti.static(range(3)):
                         if ti.static(g.periodic[k]):
+                            # a thin periodic axis of one or two cells: -1 and +1 (and 0) wrap
+                            # onto the same cell, which must be searched only once
+                            if ti.static(g.dims[k] == 2):
+                                if step[k] < 0:
+                                    inside = False
+                            elif ti.static(g.dims[k] == 1):
+                                if step[k] != 0:
+                                    inside = False
                             nb[k] = (nb[k] + dims[k]) % dims[k]
                         elif nb[k] < 0 or nb[k] >= dims[k]:
                             inside = False

@@ -100,12 +100,13 @@ def describe_scene(scene) -> str:
 
     placed = place_fills(scene, np.random.default_rng(scene.simulation.seed))
     tables = build_pair_tables(scene)
-    from .simulation import _factory_capacity, _sizes_to_expect
+    from .simulation import _factory_capacity, _fit_skin_to_periodic_axes, _sizes_to_expect
     n = len(placed.radius)
     if n == 0 and not scene.factories:
         raise SceneError(scene.source, "particles", "the scene has no particles")
     radii, mats, speeds, fixed = _sizes_to_expect(scene, placed, tables.names)
     ts, skin = choose_step_and_skin(scene, radii, mats, tables.names, speeds, fixed)
+    skin = _fit_skin_to_periodic_axes(scene, float(np.max(radii)), skin, ts.notes, say=False)
     n_initial = n
     n = n + _factory_capacity(scene)
     real_bytes = 8 if scene.simulation.precision == "f64" else 4
