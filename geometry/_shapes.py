@@ -10,12 +10,65 @@ import math
 
 import numpy as np
 
-from .mesh import TriMesh
+from .mesh import GeometryError, TriMesh
+
+# A built mesh may have at most this many triangles (and profile points): more is a unit
+# mistake or an absurd ratio of sizes (a 1 km drum of 1 mm chords). Builder.build opens a
+# budget; the makers below spend it *before* they allocate, so an absurd scene fails at once
+# instead of exhausting memory.
+MAX_TRIANGLES = 5_000_000
+_budget: dict = {"left": None}
+
+
+class triangle_budget:
+    """``with triangle_budget(): ...`` - the makers may spend MAX_TRIANGLES in the block."""
+
+    def __enter__(self):
+        self.saved = _budget["left"]
+        _budget["left"] = MAX_TRIANGLES
+
+    def __exit__(self, *exc):
+        _budget["left"] = self.saved
+        return False
+
+
+def _too_many(n: float, what: str) -> GeometryError:
+    return GeometryError("", f"the mesh would need {n:.3g} {what}, more than "
+                             f"{MAX_TRIANGLES:,}: a length or count is absurd next to the "
+                             "others (wrong units?)")
+
+
+def spend(n: float, what: str = "triangles") -> None:
+    """Count ``n`` against the open budget (none open: no limit)."""
+    left = _budget["left"]
+    if left is None:
+        return
+    if not n <= left:                      # also NaN
+        raise _too_many(n, what)
+    _budget["left"] = left - n
+
+
+def afford(n: float, what: str = "triangles") -> None:
+    """Refuse ``n`` more than the open budget holds, without spending it (call before
+    allocating what a later maker spends)."""
+    left = _budget["left"]
+    if left is not None and not n <= left:
+        raise _too_many(n, what)
+
+
+def pieces(length: float, target: float, what: str = "pieces along an edge") -> int:
+    """``max(1, ceil(length / target))``, refused (before any allocation) beyond
+    MAX_TRIANGLES: the number of segments that split ``length`` into pieces <= ``target``."""
+    n = length / target if target > 0 else math.inf
+    if not n <= MAX_TRIANGLES:
+        raise _too_many(n, what)
+    return max(1, math.ceil(n - 1e-9))
 
 
 def grid_faces(m: int, n: int, *, wrap_j: bool = False) -> np.ndarray:
     """Faces of an ``m x n`` point grid (index ``i * n + j``)."""
     jn = n if wrap_j else n - 1
+    spend(2.0 * max(m - 1, 0) * max(jn, 0))
     i, j = np.meshgrid(np.arange(m - 1), np.arange(jn), indexing="ij")
     i, j = i.ravel(), j.ravel()
     j1 = (j + 1) % n
@@ -82,15 +135,15 @@ def slab(points: np.ndarray, offsets: np.ndarray) -> TriMesh:
 def subdivide_polyline(points, target: float) -> np.ndarray:
     """Insert points so no segment of the polyline is longer than ``target``."""
     pts = np.asarray(points, dtype=np.float64)
-    out = [pts[0]]
+    out = [pts[:1]]
     for a, b in zip(pts[:-1], pts[1:]):
         length = float(np.linalg.norm(b - a))
         if length == 0.0:
             continue
-        n = max(1, math.ceil(length / target - 1e-9))
-        for s in range(1, n + 1):
-            out.append(a + (b - a) * (s / n))
-    return np.asarray(out)
+        n = pieces(length, target, "points along a profile")
+        spend(n, "points along profiles")
+        out.append(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
+    return np.concatenate(out)
 
 
 def revolve(profile, n: int, *, phase: float = 0.0, normals: str = "right",
@@ -106,6 +159,7 @@ def revolve(profile, n: int, *, phase: float = 0.0, normals: str = "right",
     prof = np.asarray(profile, dtype=np.float64)
     if target is not None:
         prof = subdivide_polyline(prof, target)
+    afford(2.0 * len(prof) * n)
     theta = phase + 2.0 * np.pi * np.arange(n) / n
     x = np.repeat(prof[:, 0], n)
     r = np.repeat(prof[:, 1], n)

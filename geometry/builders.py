@@ -125,7 +125,10 @@ def _quantity(value, units: dict, what: str, param: str) -> float:
         if unit not in units:
             raise _Bad(param, f"unknown or wrong unit {unit!r} in {value!r} for {what}; "
                               f"use one of: {', '.join(units)}")
-        return float(m.group(1)) * units[unit]
+        x = float(m.group(1)) * units[unit]
+        if not math.isfinite(x):
+            raise _Bad(param, f"expected {what}, got {value!r}: not a finite number")
+        return x
     return _number(value, what, param)
 
 
@@ -143,11 +146,14 @@ def _parse(p: Param, value):
         return _quantity(value, _ANGLE_UNITS_DEG, "an angle (a number of degrees or a "
                                                   "string such as \"0.5 rad\")", name)
     if p.kind in ("count", "count0"):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value) or value != int(value):
             raise _Bad(name, f"expected {what}, got {value!r}")
         lo = 1 if p.kind == "count" else 0
         if int(value) < lo:
             raise _Bad(name, f"must be {'>= 1' if lo else '>= 0'}, got {int(value)}")
+        if int(value) > MAX_COUNT:
+            raise _Bad(name, f"{int(value):,} is absurd for a mesh (at most {MAX_COUNT:,})")
         return int(value)
     if p.kind == "bool":
         if not isinstance(value, bool):
@@ -195,6 +201,8 @@ COMMON = (
                                       "default: the builder's own resolution"),
 )
 _COMMON_NAMES = {p.name for p in COMMON}
+# the most a count parameter (segments, rows, flights, ...) may be
+MAX_COUNT = 10_000
 
 
 @dataclass(frozen=True)
@@ -217,12 +225,14 @@ class Builder:
         key = key or self.name
         given = dict(params)
         aliases = dict(self.aliases)
+        written: dict[str, str] = {}          # parameter -> the alias the scene used
         for alias, target in self.aliases:
             if alias in given:
                 if target in given:
                     raise GeometryError(f"{key}.{alias}", f"{alias!r} and {target!r} are the "
                                                           "same parameter; give one")
                 given[target] = given.pop(alias)
+                written[target] = alias
         known = {p.name: p for p in self.params + COMMON}
         for name in given:
             if name not in known:
@@ -244,11 +254,16 @@ class Builder:
             common = {n: values.pop(n) for n in _COMMON_NAMES}
             if self.name == "file":
                 values["base_dir"] = base_dir
-            mesh = self.function(**values)
-            # a builder's incline is applied here, after roll_deg and before axis_direction
-            mesh = place(mesh, incline_deg=values.get("incline_deg", 0.0), **common)
+            with sh.triangle_budget():
+                mesh = self.function(**values)
+                # a builder's incline is applied here, after roll_deg and before axis_direction
+                mesh = place(mesh, incline_deg=values.get("incline_deg", 0.0), **common)
         except _Bad as e:
-            raise GeometryError(f"{key}.{e.key}", e.reason) from None
+            raise GeometryError(f"{key}.{written.get(e.key, e.key)}", e.reason) from None
+        except GeometryError as e:
+            if e.key:
+                raise
+            raise GeometryError(key, e.reason) from None
         return mesh.validate(key)
 
     def __call__(self, **params) -> TriMesh:
@@ -300,6 +315,10 @@ def subdivided(mesh: TriMesh, max_edge: float) -> TriMesh:
     if extent / max_edge > 1e4:
         raise _Bad("max_edge", f"{max_edge:g} m is too small for a mesh {extent:.3g} m across "
                                "(it would make more than 1e8 triangles)")
+    tri = mesh.vertices[mesh.faces]
+    longest = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+    splits = np.ceil(np.log2(np.maximum(longest / max_edge, 1.0)))
+    sh.afford(float(np.sum(4.0 ** splits)), "triangles after subdivision to max_edge")
     iters = max(10, int(math.ceil(math.log2(max(1.0, extent / max_edge)))) + 4)
     v, f, idx = subdivide_to_size(mesh.vertices, mesh.faces, max_edge, max_iter=iters,
                                   return_index=True)
@@ -540,7 +559,9 @@ def _drum_flights(R, L, count, height, shape, lip, lip_angle_deg, lip_side, thic
     if thickness > 0 and count > 1 and thickness >= _chord(R - height, count):
         raise _Bad("flight_thickness", f"{thickness:g} m: thicker than the flight spacing")
     sec = sh.subdivide_polyline(np.asarray(section), target)
-    xs = np.linspace(x0, x1, max(1, math.ceil((x1 - x0) / target - 1e-9)) + 1)
+    nx = sh.pieces(x1 - x0, target)
+    sh.afford(2.0 * count * nx * len(sec), "triangles in the flights")
+    xs = np.linspace(x0, x1, nx + 1)
     # 2-D normals of the section polyline (for thick flights), mitred at corners
     seg = np.diff(sec, axis=0)
     seg /= np.linalg.norm(seg, axis=1, keepdims=True)
@@ -642,7 +663,12 @@ def paddle_shaft(*, length, shaft_radius, rows, paddles_per_row, paddle_length=N
                                     f"{shell_radius - rs:.4g} m)")
     n = segments if segments is not None else default_segments(max(4, paddles_per_row))
     parts = [_closed_shaft(L, rs, n)] if include_shaft else []
+    if rows * paddles_per_row > MAX_COUNT:
+        raise _Bad("rows", f"{rows} rows of {paddles_per_row} paddles: more than "
+                           f"{MAX_COUNT:,} paddles is absurd for a mesh")
+    sh.pieces(paddle_length, W, "pieces along a paddle")     # refuses an absurd ratio
     na = max(1, round(paddle_length / W))
+    sh.afford(4.0 * na * rows * paddles_per_row, "triangles in the paddles")
     a = np.linspace(0.0, paddle_length, na + 1)
     b = np.array([-0.5 * W, 0.5 * W])
     ex = np.array([1.0, 0.0, 0.0])
@@ -714,10 +740,11 @@ def screw(*, length=None, shaft_radius, outer_radius, pitch, turns=None,
         raise _Bad("shaft_length", f"{shaft_length:g} m is shorter than the flighted part, "
                                    f"which ends at x = {start + length:g} m")
     spt = segments_per_turn if segments_per_turn is not None else default_segments(4)
-    n_theta = max(2, math.ceil(turns * spt - 1e-9))
+    n_theta = max(2, sh.pieces(turns * spt, 1.0, "steps along the helix"))
     arc = 2.0 * math.pi * ro / spt
     nr = radial_segments if radial_segments is not None else \
-        max(1, math.ceil((ro - rs) / math.hypot(arc, p / spt) - 1e-9))
+        sh.pieces(ro - rs, math.hypot(arc, p / spt), "steps across the flight")
+    sh.afford(2.0 * n_theta * nr * starts, "triangles in the flight")
     s = 1.0 if turns_direction == "right" else -1.0
     u = np.linspace(0.0, 2.0 * math.pi * turns, n_theta + 1)        # helix parameter
     r = np.linspace(rs, ro, nr + 1)
@@ -799,7 +826,9 @@ def hopper(*, kind="conical", height, top_radius=None, orifice_radius=None, top_
     target = min(depth, 2 * top) / 2
     pts = sh.subdivide_polyline(prof, target)
     xs, ws = pts[:, 0], pts[:, 1]
-    nz = max(1, math.ceil(depth / target - 1e-9))
+    nz = sh.pieces(depth, target)
+    ny = sh.pieces(2 * top, target)
+    sh.afford(4.0 * len(xs) * (nz + ny), "triangles in the hopper")
     zs = np.linspace(-0.5 * depth, 0.5 * depth, nz + 1)
     parts = []
     for side in (-1.0, 1.0):
@@ -807,7 +836,6 @@ def hopper(*, kind="conical", height, top_radius=None, orifice_radius=None, top_
                          side * np.broadcast_to(ws[:, None], (len(xs), len(zs))),
                          np.broadcast_to(zs[None, :], (len(xs), len(zs)))], axis=2)
         parts.append(sh.sheet_facing(grid, [0.0, -side, 0.0]))
-    ny = max(1, math.ceil(2 * top / target - 1e-9))
     frac = np.linspace(-1.0, 1.0, ny + 1)
     for side in (-1.0, 1.0):
         grid = np.stack([np.broadcast_to(xs[:, None], (len(xs), len(frac))),
@@ -835,9 +863,8 @@ def chute(*, length, width, incline_deg=0.0, side_walls=True, wall_height=None,
     if not (side_walls or back_wall) and wall_height is not None:
         raise _Bad("wall_height", "there are no walls (side_walls = false)")
     target = width / 2
-    nx = max(1, math.ceil(length / target - 1e-9))
-    ny = max(1, math.ceil(width / target - 1e-9))
-    nz = max(1, math.ceil(h / target - 1e-9))
+    nx, ny, nz = sh.pieces(length, target), sh.pieces(width, target), sh.pieces(h, target)
+    sh.afford(2.0 * (nx * ny + 2 * nx * nz + ny * nz), "triangles in the chute")
     xs = np.linspace(0.0, length, nx + 1)
     ys = np.linspace(-0.5 * width, 0.5 * width, ny + 1)
     zs = np.linspace(0.0, h, nz + 1)

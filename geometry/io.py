@@ -38,10 +38,19 @@ def read_mesh(file: str, *, scale: float, units: str, repair: bool, flip_normals
     path = Path(file).expanduser()
     if not path.is_absolute() and base_dir is not None:
         path = Path(base_dir) / path
+    if path.is_dir():
+        raise _Bad("file", f"{path} is a directory, not a mesh file")
     if not path.is_file():
         raise _Bad("file", f"no such file: {path}")
     try:
-        loaded = trimesh.load(str(path), force="mesh", process=False)
+        with np.errstate(all="ignore"):
+            loaded = trimesh.load(str(path), force="mesh", process=False)
+    except ImportError:         # trimesh guessing the text encoding of binary junk
+        raise _Bad("file", f"cannot read {path} as a mesh: the file is corrupt or not a "
+                           f"{path.suffix or 'mesh'} file") from None
+    except IndexError as e:
+        raise _Bad("file", f"cannot read {path} as a mesh: a face refers to a vertex the "
+                           f"file does not have ({e})") from None
     except Exception as e:      # trimesh raises many types for unreadable files
         raise _Bad("file", f"cannot read {path} as a mesh: {e}") from None
     vertices = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
@@ -56,8 +65,9 @@ def read_mesh(file: str, *, scale: float, units: str, repair: bool, flip_normals
         ok = np.all(np.isfinite(vertices), axis=1)
         faces = faces[np.all(ok[faces], axis=1)]
     factor = UNITS[units] * scale
-    mesh = trimesh.Trimesh(vertices * factor, faces, process=False)
-    mesh.merge_vertices()            # STL stores each triangle's corners separately
+    with np.errstate(all="ignore"):  # absurd coordinates are refused below, without warnings
+        mesh = trimesh.Trimesh(vertices * factor, faces, process=False)
+        mesh.merge_vertices()        # STL stores each triangle's corners separately
     if repair:
         extent = float(np.linalg.norm(mesh.extents)) if len(mesh.faces) else 1.0
         mesh.update_faces(mesh.nondegenerate_faces(height=1e-9 * extent))

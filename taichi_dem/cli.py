@@ -106,6 +106,11 @@ def describe_scene(scene) -> str:
         raise SceneError(scene.source, "particles", "the scene has no particles")
     radii, mats, speeds, fixed = _sizes_to_expect(scene, placed, tables.names)
     ts, skin = choose_step_and_skin(scene, radii, mats, tables.names, speeds, fixed)
+    if not (ts.dt > 0.0 and math.isfinite(ts.dt)) or not ts.rayleigh_time > 0.0:
+        raise SceneError(scene.source, "simulation.dt",
+                         f"the time step comes out as {ts.dt:g} s (set by {ts.limited_by}; "
+                         f"Rayleigh time {ts.rayleigh_time:g} s): the scene's sizes, speeds "
+                         "and material properties are absurd together")
     skin = _fit_skin_to_periodic_axes(scene, float(np.max(radii)), skin, ts.notes, say=False)
     n_initial = n
     n = n + _factory_capacity(scene)

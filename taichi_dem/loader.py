@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import io
 import math
 import re
 import tomllib
@@ -21,7 +22,7 @@ from .scene import (Body, Domain, Factory, Interaction, Material, Motion, Outlet
                     ParticleFill, PlaneWall, RadiusDistribution, RateSchedule, Region, Scene,
                     SceneError, Sensor, SimulationSettings, SpeedSchedule, GasSettings,
                     ThermalSettings)
-from .units import parse_quantity, parse_vec3
+from .units import MAX_MAGNITUDE, MIN_MAGNITUDE, parse_quantity, parse_vec3
 
 SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "bodies",
             "factories", "outlets", "sensors", "thermal", "output")
@@ -64,6 +65,10 @@ BODY_KEYS = ("name", "material", "mesh", "motion", "temperature")
 MOTION_KEYS = ("rotate", "translate")
 ROTATE_KEYS = ("axis_point", "axis_direction", "speed")
 TRANSLATE_KEYS = ("velocity",)
+# particle slots are indexed with 32-bit integers (Taichi fields)
+MAX_PARTICLES = 2 ** 31 - 1
+# a domain narrower than this on any axis is a unit mistake (as for meshes, geometry.mesh)
+MIN_DOMAIN_SIZE = 1e-6     # m
 # a body's mesh may reach this fraction of the domain's size beyond each face of the domain
 BODY_DOMAIN_MARGIN = 0.1
 OUTPUT_KEYS = ("interval", "rrd", "h5", "checkpoint_interval")
@@ -75,16 +80,29 @@ def load_scene(path) -> Scene:
     """Read and validate a scene file. A missing file or a TOML syntax error is a SceneError."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        data = p.read_bytes()
     except FileNotFoundError:
         raise SceneError(str(p), "", "scene file not found") from None
     except IsADirectoryError:
         raise SceneError(str(p), "", "is a directory, expected a scene TOML file") from None
-    except UnicodeDecodeError as e:
-        raise SceneError(str(p), "", f"not a UTF-8 text file ({e.reason})") from None
     except OSError as e:
         raise SceneError(str(p), "", f"cannot read the scene file: {e.strerror or e}") from None
+    text = _decode_utf8(data, str(p), "")
     return parse_scene(text, source=str(p), base_dir=p.parent)
+
+
+def _decode_utf8(data: bytes, file: str, key: str) -> str:
+    """``data`` as text (a UTF-8 byte-order mark dropped, newlines as ``\n``); bytes that are
+    not UTF-8 are a SceneError saying where."""
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        column = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+        raise SceneError(file, key, f"not a UTF-8 text file ({e.reason}: byte "
+                                    f"0x{data[e.start]:02x} at line {line}, column {column}); "
+                                    "save it as UTF-8") from None
+    return text.replace("\r\n", "\n").replace("\r", "\n")
 
 
 def parse_scene(text: str, source: str = "<string>", base_dir=None) -> Scene:
@@ -245,6 +263,7 @@ class _Parser:
                         for i, x in enumerate(self.array_of_tables(doc, "sensors")))
         self.unique_names(sensors, "sensors")
         output = self.parse_output(doc.get("output", {}))
+        self.check_particle_total(simulation, fills, factories)
         sources = tuple(fills) + factories
         self.check_coverage(interactions, sources, walls, bodies)
         thermal = self.parse_thermal(doc["thermal"], sources, walls, bodies) if "thermal" in doc else None
@@ -257,6 +276,29 @@ class _Parser:
                      materials=self.materials, interactions=interactions, fills=fills,
                      walls=walls, bodies=bodies, output=output, thermal=thermal,
                      factories=factories, outlets=outlets, sensors=sensors)
+
+    def check_particle_total(self, simulation: SimulationSettings, fills, factories) -> None:
+        """The fills, and the factories' schedules until end_time (unless max_particles caps
+        them), must stay within what the engine can index."""
+        total = 0
+        for f in fills:
+            total += f.expected_count
+            if total > MAX_PARTICLES:
+                raise self.err(f"{f.key}.count" if f.file is None else f"{f.key}.file",
+                               f"the fills hold {total:,} particles, more than the "
+                               f"{MAX_PARTICLES:,} the engine can index (32-bit fields)")
+        if simulation.max_particles is not None:
+            return
+        expected = float(total)
+        for f in factories:
+            mass = f.mass_rate.mass_until(simulation.end_time)
+            expected += mass / (self.materials[f.material].density * f.mean_particle_volume())
+            if not 1.1 * expected + 64 <= MAX_PARTICLES:
+                raise self.err(f"{f.key}.mass_rate",
+                               f"the schedules insert about {expected:.3g} particles by "
+                               f"end_time = {simulation.end_time:g} s, more than the "
+                               f"{MAX_PARTICLES:,} the engine can index; lower the rate, "
+                               "shorten end_time or cap them with [simulation] max_particles")
 
     def unique_names(self, items, section: str) -> None:
         seen: dict[str, int] = {}
@@ -429,12 +471,19 @@ class _Parser:
             kw["precision"] = p
         if "seed" in t:
             kw["seed"] = self.integer(t["seed"], f"{key}.seed")
+            if kw["seed"] < 0:
+                raise self.err(f"{key}.seed", f"must be >= 0 (it seeds numpy's generator), got "
+                                              f"{kw['seed']}")
         if "skin" in t:
             kw["skin"] = self.positive(t["skin"], "length", f"{key}.skin")
         if "max_particles" in t:
             kw["max_particles"] = self.integer(t["max_particles"], f"{key}.max_particles")
             if kw["max_particles"] < 1:
                 raise self.err(f"{key}.max_particles", f"must be >= 1, got {kw['max_particles']}")
+            if kw["max_particles"] > MAX_PARTICLES:
+                raise self.err(f"{key}.max_particles", f"{kw['max_particles']:,} is more than the "
+                                                       f"{MAX_PARTICLES:,} particles the engine "
+                                                       "can index (32-bit fields)")
         return SimulationSettings(**kw)
 
     def parse_domain(self, value: Any) -> Domain:
@@ -447,6 +496,10 @@ class _Parser:
             if not lo[i] < hi[i]:
                 raise self.err(f"{key}.max", f"max must exceed min on every axis; on {ax}: "
                                              f"min = {lo[i]:g}, max = {hi[i]:g}")
+            if hi[i] - lo[i] < MIN_DOMAIN_SIZE:
+                raise self.err(f"{key}.max", f"the domain is {hi[i] - lo[i]:.3g} m across on "
+                                             f"{ax}: absurd for a DEM scene (wrong units? "
+                                             "lengths are in metres: write 0.2 or \"200 mm\")")
         periodic = t.get("periodic", [])
         if not isinstance(periodic, list):
             raise self.err(f"{key}.periodic", f"expected an array of axis names (\"x\", \"y\", "
@@ -793,21 +846,47 @@ class _Parser:
         if count < 0:
             raise self.err(f"{key}.count", f"must be >= 0, got {count}")
         region = self.parse_region(t["region"], f"{key}.region")
+        if count > 0:
+            self.check_fill_fits(key, radius, count, region)
         return ParticleFill(key=key, material=material, radius=radius, count=count,
                             region=region, **kw)
+
+    def check_fill_fits(self, key: str, radius: RadiusDistribution, count: int,
+                        region: Region) -> None:
+        """Refuse, before any placement, a fill that cannot fit its region: a sphere wider
+        than the region, or more spheres than the region's volume holds (a count of 1e15 would
+        otherwise be allocated by the placement)."""
+        width = _region_width(region)
+        r = radius.largest
+        if 2.0 * r > width:
+            raise self.err(f"{key}.radius", f"a sphere of radius {r:g} m does not fit in the "
+                                            f"region, which is {width:g} m across at its "
+                                            "narrowest (each sphere must lie wholly inside "
+                                            "it); check the units or enlarge the region")
+        volume = _region_volume(region)
+        solid = count * 4.0 / 3.0 * math.pi * radius.smallest ** 3
+        if solid > volume:
+            raise self.err(f"{key}.count", f"{count:,} spheres of radius {radius.smallest:g} m "
+                                           f"or more are {solid:.4g} m^3 of solid, more than "
+                                           f"the region's whole volume ({volume:.4g} m^3); "
+                                           "reduce count or enlarge the region")
 
     def read_csv(self, fname: str, key: str) -> dict[str, Optional[np.ndarray]]:
         path = Path(fname)
         if not path.is_absolute():
             path = self.base_dir / path
         try:
-            with open(path, newline="", encoding="utf-8") as fh:
-                rows = list(csv.reader(fh))
+            data = path.read_bytes()
         except FileNotFoundError:
             raise self.err(key, f"particle file '{fname}' not found (looked for {path})") from None
-        except (OSError, UnicodeDecodeError) as e:
-            raise self.err(key, f"cannot read particle file '{fname}' ({path}): {e}") from None
+        except OSError as e:
+            raise self.err(key, f"cannot read particle file '{fname}' ({path}): "
+                                f"{e.strerror or e}") from None
         csv_file = str(path)
+        try:
+            rows = list(csv.reader(io.StringIO(_decode_utf8(data, csv_file, key), newline="")))
+        except csv.Error as e:
+            raise SceneError(csv_file, key, f"cannot read as CSV: {e}") from None
 
         def bad(reason: str) -> SceneError:
             return SceneError(csv_file, key, reason)
@@ -847,6 +926,10 @@ class _Parser:
                               f"as a number") from None
                 if not math.isfinite(v):
                     raise bad(f"line {lineno}, column '{names[c]}': {cell.strip()} is not finite")
+                if v != 0.0 and not MIN_MAGNITUDE <= abs(v) <= MAX_MAGNITUDE:
+                    raise bad(f"line {lineno}, column '{names[c]}': {cell.strip()} is absurd "
+                              f"(SI magnitudes {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g} are "
+                              "accepted; wrong units?)")
                 data[r, c] = v
         col = {n: data[:, i] for i, n in enumerate(names)}
         positions = np.stack([col["x"], col["y"], col["z"]], axis=1)
@@ -1080,6 +1163,19 @@ def region_bounds(region: Region) -> tuple[np.ndarray, np.ndarray]:
     p1 = p0 + d * region.length
     ext = region.radius * np.sqrt(np.clip(1.0 - d * d, 0.0, 1.0))
     return np.minimum(p0, p1) - ext, np.maximum(p0, p1) + ext
+
+
+def _region_width(region: Region) -> float:
+    """The region's narrowest extent, m: the widest sphere that fits is half of it."""
+    if region.kind == "box":
+        return float(np.min(np.array(region.box_max, float) - np.array(region.box_min, float)))
+    return min(2.0 * region.radius, region.length)
+
+
+def _region_volume(region: Region) -> float:
+    if region.kind == "box":
+        return float(np.prod(np.array(region.box_max, float) - np.array(region.box_min, float)))
+    return math.pi * region.radius ** 2 * region.length
 
 
 def _fmt(v) -> str:

@@ -38,6 +38,12 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "specific_energy": ("J/kg", "a specific energy (e.g. a latent heat)"),
 }
 
+# Nonzero SI values outside this range are refused: no DEM quantity comes near them, and the
+# derived figures (a Hertz contact time is (m^2 / (R E^2 v))^(1/5)) would overflow or underflow
+# to a time step of 0 s.
+MIN_MAGNITUDE = 1e-30
+MAX_MAGNITUDE = 1e30
+
 _RPM = 2.0 * math.pi / 60.0
 _DEG = math.pi / 180.0
 
@@ -140,7 +146,8 @@ def parse_quantity(value: Any, dimension: str, *, file: str = "<string>", key: s
     """Convert a TOML number (already SI) or a quantity string to an SI float.
 
     Raises :class:`SceneError` for a wrong type, an unparseable string, an unknown unit, a unit
-    of another dimension, a non-finite number or a temperature below absolute zero.
+    of another dimension, a non-finite number, a nonzero magnitude outside MIN_MAGNITUDE to
+    MAX_MAGNITUDE or a temperature below absolute zero.
     """
     if dimension not in DIMENSIONS:
         raise ValueError(f"unknown dimension {dimension!r}; known: {', '.join(DIMENSIONS)}")
@@ -171,6 +178,12 @@ def parse_quantity(value: Any, dimension: str, *, file: str = "<string>", key: s
         result = float(value)
     if not math.isfinite(result):
         raise SceneError(file, key, f"{value!r} is not a finite number")
+    if result != 0.0 and not MIN_MAGNITUDE <= abs(result) <= MAX_MAGNITUDE:
+        si = DIMENSIONS[dimension][0]
+        size = f"{abs(result):.3g}" + (f" {si}" if si != "1" else "")
+        raise SceneError(file, key, f"{value!r} is absurd for {_phrase(dimension)}: {size} "
+                                    f"in SI, outside {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g} "
+                                    "(wrong units?)")
     if dimension == "temperature" and result < 0.0:
         raise SceneError(file, key, f"{value!r} is below absolute zero ({result:g} K)")
     return result

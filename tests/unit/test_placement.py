@@ -108,7 +108,9 @@ def test_dense_box_fill_near_capacity():
 
 
 def test_overfull_region_is_a_scene_error():
-    s = scene(fill(count=2000, radius="0.01",
+    # solid fraction 0.79: within the region's volume (the loader's bound) but beyond the
+    # densest packing (0.74), so the placement refuses it
+    s = scene(fill(count=1500, radius="0.01",
                    region='box = { min = [0, 0, 0], max = [0.2, 0.2, 0.2] }'))
     with pytest.raises(SceneError) as e:
         place_fills(s, np.random.default_rng(1))
@@ -118,11 +120,13 @@ def test_overfull_region_is_a_scene_error():
 
 
 def test_region_too_small_for_one_sphere():
-    s = scene(fill(count=1, radius="0.1",
-                   region='box = { min = [0, 0, 0], max = [0.15, 1, 1] }'))
+    # refused on load, before any placement (and a count beyond the region's volume too)
     with pytest.raises(SceneError) as e:
-        place_fills(s, np.random.default_rng(1))
-    assert "holds at most 0" in e.value.reason
+        scene(fill(count=1, radius="0.1", region='box = { min = [0, 0, 0], max = [0.15, 1, 1] }'))
+    assert e.value.key == "particles[0].radius" and "does not fit" in e.value.reason
+    with pytest.raises(SceneError) as e:
+        scene(fill(count=10 ** 15, radius="0.01"))
+    assert e.value.key == "particles[0].count" and "whole volume" in e.value.reason
 
 
 def test_cylinder_fill_inside():
