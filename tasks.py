@@ -39,7 +39,11 @@ def main(argv):
             run(PY, "-m", "taichi_dem", "demo", MAIN_DEMO, *argv[2:])
         elif task == "test":
             setup()
-            run(PY, "-m", "pytest", "-q", *argv[2:])
+            # one pytest worker per core, each test file kept on one worker (module fixtures
+            # run once): the suite is bound by Taichi's single-threaded JIT compilation
+            # (~4 s per new simulation with a cold kernel cache), which one worker leaves
+            # on one core
+            run(PY, "-m", "pytest", "-q", "-n", "auto", "--dist", "loadfile", *argv[2:])
         else:
             print(__doc__)
             return 2
