@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .scene import SceneError
+from ..scene.model import SceneError
 
 def _fail(message: str, code: int = 2) -> int:
     print(f"taichi-dem: {message}", file=sys.stderr)
@@ -61,7 +61,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    from . import checkpoint
+    from ..run import checkpoint
     # a run from the command line keeps its last good state for a divergence (exit 3)
     saved, checkpoint.KEEP_LAST_GOOD = checkpoint.KEEP_LAST_GOOD, True
     try:
@@ -93,14 +93,14 @@ def _main(argv=None) -> int:
 # ---------------------------------------------------------------------------------- check
 def describe_scene(scene) -> str:
     """The effect list and derived figures of a scene, without compiling anything."""
-    from .effects import enabled_effects
-    from .model import build_pair_tables
-    from .placement import place_fills
-    from .timestep import choose_step_and_skin
+    from ..effects import enabled_effects
+    from ..setup.pair_tables import build_pair_tables
+    from ..setup.placement import place_fills
+    from ..setup.timestep import choose_step_and_skin
 
     placed = place_fills(scene, np.random.default_rng(scene.simulation.seed))
     tables = build_pair_tables(scene)
-    from .simulation import _factory_capacity, _fit_skin_to_periodic_axes, _sizes_to_expect
+    from ..run.simulation import _factory_capacity, _fit_skin_to_periodic_axes, _sizes_to_expect
     n = len(placed.radius)
     if n == 0 and not scene.factories:
         raise SceneError(scene.source, "particles", "the scene has no particles")
@@ -138,7 +138,7 @@ def describe_scene(scene) -> str:
         f"precision: {scene.simulation.precision}; estimated device memory: {memory / 2**20:.1f} MiB",
     ]
     if scene.bodies:
-        from .timestep import body_surface_speed
+        from ..setup.timestep import body_surface_speed
         for b in scene.bodies:
             w = max((abs(p[1]) for p in b.motion.speed.points), default=0.0) if b.motion.speed else 0.0
             lines.append(f"body {b.name}: {len(b.faces)} triangles, material {b.material}, "
@@ -158,7 +158,7 @@ def cmd_check(args) -> int:
             return 0
     if not args.scene:
         return _fail("check: give a scene file (or --builders)")
-    from .loader import load_scene
+    from ..scene.loader import load_scene
     scene = load_scene(args.scene)
     print(describe_scene(scene))
     print("scene OK")
@@ -184,9 +184,9 @@ def _window_problem(args):
 
 
 def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
-    from .checkpoint import default_path
-    from .loader import load_scene
-    from .simulation import DivergenceError, Simulation
+    from ..run.checkpoint import default_path
+    from ..scene.loader import load_scene
+    from ..run.simulation import DivergenceError, Simulation
 
     problem = _window_problem(args)
     if problem:
@@ -212,7 +212,7 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
 
 def cmd_resume(args) -> int:
     """Continue a checkpointed run: results appended to its results file (or --h5/--out)."""
-    from .checkpoint import CheckpointError, resume
+    from ..run.checkpoint import CheckpointError, resume
 
     problem = _window_problem(args)
     if problem:
@@ -251,13 +251,13 @@ def cmd_resume(args) -> int:
 def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> int:
     """Run ``sim`` to --until (or end_time) with progress, a window or quietly, and print the
     summary; exit 3 on divergence (the last good state checkpointed)."""
-    from .simulation import DivergenceError
+    from ..run.simulation import DivergenceError
 
     scene = sim.scene
     every_nth = getattr(args, "every_nth", 1) or 1
     recorder = None
     if rrd or args.spawn:
-        from .recorders.rerun import RerunRecorder
+        from ..recorders.rerun import RerunRecorder
         recorder = RerunRecorder(rrd, spawn=args.spawn, every_nth=every_nth)
         sim.add_observer(recorder)
     if setup:
@@ -347,7 +347,7 @@ def cmd_demo(args) -> int:
 
 # ---------------------------------------------------------------------------------- bench
 def cmd_bench(args) -> int:
-    bench = Path(__file__).resolve().parent.parent / "bench" / "chute.py"
+    bench = Path(__file__).resolve().parents[2] / "bench" / "chute.py"
     if not bench.exists():
         return _fail("bench/chute.py not found (run from a source checkout)")
     import runpy

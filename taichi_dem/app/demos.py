@@ -20,9 +20,9 @@ from typing import Optional
 import numpy as np
 
 from . import analysis
-from .units import parse_quantity
+from ..scene.units import parse_quantity
 
-DEMOS_DIR = Path(__file__).resolve().parent.parent / "demos"
+DEMOS_DIR = Path(__file__).resolve().parents[2] / "demos"
 
 
 def _scene_toml(sim) -> dict:

@@ -44,7 +44,7 @@ def run_window(sim, until: float) -> None:
     if problem:
         raise WindowError(problem)
     import taichi as ti
-    from .bodies import rotation_matrix
+    from ..bodies.kinematics import rotation_matrix
 
     try:
         window = ti.ui.Window("taichi-dem", (1280, 800), vsync=True)

@@ -1,14 +1,12 @@
-"""Rigid triangle-mesh bodies: prescribed motion, triangle binning, particle-triangle contact
-lists with history, and the loads (force, torque about the axis point) summed from contacts.
+"""Rigid triangle-mesh bodies, device side: triangle binning, particle-triangle contact lists
+with history, and the loads (force, torque about the axis point) summed from contacts.
 
-Host side (plain numpy): :class:`BodyKinematics` knows each body's rotation angle and offset at
-any time from its speed schedule, and bounds how far any vertex has moved since the triangles
-were last binned. Device side (:class:`MeshContacts`): reference triangles (their vertices at
-t = 0) and one frame (rotation, offset) per body, computed on the device from the schedules
-each step, so the triangles themselves never need rewriting; triangles binned into the cell
-grid (re-binned when a body has moved half the skin); per particle a list of candidate
-triangles within r + skin (rebuilt with the particle neighbour list), carrying the tangential
-history by triangle id.
+The bodies' motion comes from the host (kinematics.py: :class:`BodyKinematics`). Here
+(:class:`MeshContacts`): reference triangles (their vertices at t = 0) and one frame (rotation,
+offset) per body, computed on the device from the schedules each step, so the triangles
+themselves never need rewriting; triangles binned into the cell grid (re-binned when a body has
+moved half the skin); per particle a list of candidate triangles within r + skin (rebuilt with
+the particle neighbour list), carrying the tangential history by triangle id.
 
 De-duplication (PHYSICS.md: one contact per flat or convex surface): a particle's overlapping
 triangles of one body are taken deepest first; a further one is dropped when its normal is
@@ -22,120 +20,16 @@ of the contact it replaces.
 import math
 
 import numpy as np
+import taichi as ti
 
-MAX_SCHEDULE = 64      # speed schedule points per body on the device
+from thermal.conduction import contact_conductance
+
+from ..effects.hertz_mindlin import contact_force
+from ..effects.mesh_contact import closest_point_on_triangle
+from ..engine.broadphase import exclusive_scan, previous_contact
+from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
+
 SAME_SURFACE_COS = math.cos(math.radians(30.0))
-
-
-def rotation_matrix(axis, angle: float) -> np.ndarray:
-    """Rodrigues rotation by ``angle`` rad about the unit ``axis``."""
-    x, y, z = axis
-    c, s = math.cos(angle), math.sin(angle)
-    k = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]], float)
-    return np.eye(3) + s * k + (1 - c) * (k @ k)
-
-
-class BodyKinematics:
-    """Angles and offsets of every body over time (host side, float64)."""
-
-    def __init__(self, bodies):
-        self.bodies = bodies
-        self.names = [b.name for b in bodies]
-        # schedule rows: (start time s, speed rad/s, angle at start rad)
-        self.schedules: list[list[tuple[float, float, float]]] = []
-        self.reach = np.zeros(len(bodies))
-        for k, b in enumerate(bodies):
-            rows = []
-            angle = 0.0
-            points = b.motion.speed.points if b.motion.speed else ((0.0, 0.0),)
-            for n, (t, w) in enumerate(points):
-                if n:
-                    t_prev, w_prev, a_prev = rows[-1]
-                    angle = a_prev + w_prev * (t - t_prev)
-                rows.append((float(t), float(w), angle))
-            self.schedules.append(rows)
-            axis_point = np.asarray(b.motion.axis_point, float)
-            axis = np.asarray(b.motion.axis_direction, float)
-            rel = b.vertices - axis_point
-            radial = rel - np.outer(rel @ axis, axis)
-            self.reach[k] = float(np.max(np.linalg.norm(radial, axis=1))) if len(rel) else 0.0
-
-    def speed(self, k: int, time: float) -> float:
-        """Angular speed of body k at ``time``, rad/s."""
-        w = self.schedules[k][0][1]
-        for t, speed, _ in self.schedules[k]:
-            if time >= t:
-                w = speed
-        return w
-
-    def angle(self, k: int, time: float) -> float:
-        """Rotation angle of body k at ``time``, rad."""
-        row = self.schedules[k][0]
-        for r in self.schedules[k]:
-            if time >= r[0]:
-                row = r
-        return row[2] + row[1] * (time - row[0])
-
-    def set_speed(self, k: int, time: float, speed: float):
-        """From ``time`` on, body k turns at ``speed`` rad/s (later scheduled points dropped)."""
-        rows = [r for r in self.schedules[k] if r[0] < time]
-        rows.append((time, float(speed), self.angle(k, time)))
-        if len(rows) > MAX_SCHEDULE:
-            rows = rows[-MAX_SCHEDULE:]
-        self.schedules[k] = rows
-
-    def surface_speed(self, k: int, time: float) -> float:
-        """Largest speed of any point of body k at ``time``, m/s."""
-        v = np.linalg.norm(self.bodies[k].motion.velocity)
-        return abs(self.speed(k, time)) * self.reach[k] + float(v)
-
-    def max_surface_speed(self) -> float:
-        """Largest surface speed of any body over its whole schedule, m/s."""
-        best = 0.0
-        for k, rows in enumerate(self.schedules):
-            w = max(abs(r[1]) for r in rows)
-            best = max(best, w * self.reach[k] + float(np.linalg.norm(self.bodies[k].motion.velocity)))
-        return best
-
-    def displacement(self, k: int, t0: float, t1: float) -> float:
-        """Upper bound of how far any vertex of body k moved between t0 and t1, m."""
-        turned = abs(self.angle(k, t1) - self.angle(k, t0))
-        chord = 2.0 * self.reach[k] * math.sin(min(turned, math.pi) / 2.0)
-        return chord + float(np.linalg.norm(self.bodies[k].motion.velocity)) * abs(t1 - t0)
-
-    def schedule_arrays(self):  # noqa: D102
-        """(time, speed, angle, count) arrays of shape (B, MAX_SCHEDULE) for the device."""
-        b = max(len(self.bodies), 1)
-        times = np.zeros((b, MAX_SCHEDULE))
-        speeds = np.zeros((b, MAX_SCHEDULE))
-        angles = np.zeros((b, MAX_SCHEDULE))
-        counts = np.zeros(b, np.int32)
-        for k, rows in enumerate(self.schedules):
-            counts[k] = len(rows)
-            for n, (t, w, a) in enumerate(rows):
-                times[k, n], speeds[k, n], angles[k, n] = t, w, a
-        return times, speeds, angles, counts
-
-
-def triangle_arrays(bodies):
-    """Reference triangles of all bodies: (T, 3, 3) vertices at t = 0 and (T,) body index."""
-    tris, owner = [], []
-    for k, b in enumerate(bodies):
-        tris.append(b.vertices[b.faces])
-        owner.append(np.full(len(b.faces), k, np.int32))
-    if not tris:
-        return np.zeros((0, 3, 3)), np.zeros(0, np.int32)
-    return np.concatenate(tris), np.concatenate(owner)
-
-
-# ---------------------------------------------------------------------------- device side
-import taichi as ti  # noqa: E402  (the host part above does not need Taichi)
-
-from .effects.hertz_mindlin import contact_force  # noqa: E402
-from .effects.mesh_contact import closest_point_on_triangle  # noqa: E402
-from thermal.conduction import contact_conductance  # noqa: E402
-
-from .broadphase import exclusive_scan, previous_contact  # noqa: E402
 
 
 @ti.data_oriented
@@ -326,7 +220,7 @@ class MeshContacts:
             self.old_rolling_history = t.add("old_mesh_rolling_history", real, capacity, vector=True)
         t.finalize()
         if old is not None:
-            from .stepper import _pad
+            from ..engine.stepper import _pad
             self.old_tri.from_numpy(_pad(old[0], capacity))
             self.old_history.from_numpy(_pad(old[1], capacity))
             self.old_contact.from_numpy(_pad(old[2], capacity))
@@ -548,7 +442,7 @@ class MeshContacts:
         RC = e.radius_correction if e.thermal else None
         s = e.state
         same_surface_cos = SAME_SURFACE_COS
-        from .effects import rolling
+        from ..effects import rolling
 
         @ti.func
         def particle_contacts(i, xi, vi, wi, ri, mass_i, inverse_inertia_i, ai, mi, dt):

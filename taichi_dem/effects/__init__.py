@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..scene import Scene
+from ..scene.model import Scene
 
 
 @dataclass(frozen=True)

@@ -20,14 +20,14 @@ import numpy as np
 import taichi as ti
 
 from .broadphase import Broadphase, GridSpec
-from .effects import effect_names
-from .effects.hertz_mindlin import contact_force
-from .effects import rolling
+from ..effects import effect_names
+from ..effects.hertz_mindlin import contact_force
+from ..effects import rolling
 from thermal import convection as gas_convection
 from thermal.conduction import contact_conductance
 from thermal import moisture as drying
 from thermal import radiation as radiative
-from .model import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
+from ..setup.pair_tables import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
 from .state import FieldTree, PairState, ParticleState
 
 
@@ -87,7 +87,7 @@ class Engine:
                 self.evaporated = t.add("evaporated", ti.f64, 1)      # kg since the start
         self.process = None
         if scene.factories or scene.outlets or has_planes:
-            from .process import ProcessDevice
+            from ..process.outlets import ProcessDevice
             self.process = ProcessDevice(self, t)
         t.finalize()
         self.removed_batches: list = []    # removal-log entries drained at rebuilds
@@ -97,7 +97,7 @@ class Engine:
         if self.gas_stream is not None:
             self.gas_stream.compile()
         if self.thermal:
-            from .model import conduction_tables
+            from ..setup.pair_tables import conduction_tables
             factor, correction = conduction_tables(scene, tables.names)
             npf = np.float64 if real == ti.f64 else np.float32
             self.conductance_factor.from_numpy(factor.astype(npf))
@@ -112,7 +112,8 @@ class Engine:
         self.broadphase = Broadphase(self)
         self.mesh = None
         if scene.bodies:
-            from .bodies import BodyKinematics, MeshContacts
+            from ..bodies.kinematics import BodyKinematics
+            from ..bodies.mesh_contacts import MeshContacts
             self.kinematics = BodyKinematics(scene.bodies)
             self.mesh = MeshContacts(self, self.kinematics)
         self._compile_particle_kernels()
@@ -166,7 +167,7 @@ class Engine:
 
         has_process = self.process is not None
         after_drift = self.process.make_funcs(self) if has_process else None
-        from .process import PARKED
+        from ..process.outlets import PARKED
 
         @ti.func
         def drift_particle(i, dt, t_new):

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .process import EXIT_LOST
+from .outlets import EXIT_LOST
 
 
 class ProcessAccounts:

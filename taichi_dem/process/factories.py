@@ -21,8 +21,8 @@ import time as time_module
 
 import numpy as np
 
-from .bodies import rotation_matrix
-from .placement import _Grid, _Triangles, _frame, _local_bounds, _valid, sample_radii
+from ..bodies.kinematics import rotation_matrix
+from ..setup.placement import _Grid, _Triangles, _frame, _local_bounds, _valid, sample_radii
 
 # automatic interval: the time the particles need to clear their own diameter, within
 # [MIN_INTERVAL_STEPS steps, MAX_INTERVAL]; one batch is then at most 0.5 % of a second's feed
@@ -266,7 +266,7 @@ class FactorySet:
         return out, ok
 
     def _world_bounds(self, region, pad: float):
-        from .loader import region_bounds
+        from ..scene.loader import region_bounds
         lo, hi = region_bounds(region)
         return lo - pad, hi + pad
 

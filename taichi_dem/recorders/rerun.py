@@ -30,7 +30,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from ..bodies import rotation_matrix
+from ..bodies.kinematics import rotation_matrix
 
 # viridis at eleven evenly spaced points (matplotlib's values, rounded); interpolated linearly
 _VIRIDIS = np.array([

@@ -338,7 +338,7 @@ def resume(path: str, *, arch: Optional[str] = None, threads: Optional[int] = No
     Further checkpoints go to ``checkpoint`` (default ``path`` itself). ``configure(sim)``,
     if given, runs after the simulation is built and before the state is loaded (to register
     checkpointables that a script adds)."""
-    from .loader import parse_scene
+    from ..scene.loader import parse_scene
     from .simulation import Simulation
 
     snap = load(path)
@@ -357,7 +357,7 @@ def resume(path: str, *, arch: Optional[str] = None, threads: Optional[int] = No
         if h5 and not os.path.exists(h5):
             h5 = ""
     if h5:
-        from .recorders.hdf5 import HDF5Recorder
+        from ..recorders.hdf5 import HDF5Recorder
         sim.recorder = HDF5Recorder.continue_at(h5, sim.time, sim.dt, sim._series,
                                                 scene_text=scene.text, arch=sim.arch,
                                                 precision=sim.precision)
@@ -369,7 +369,7 @@ def _abs_source(source: str) -> str:
 
 
 def _version() -> str:
-    from . import __version__
+    from .. import __version__
     return __version__
 
 

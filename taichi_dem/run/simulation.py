@@ -16,13 +16,13 @@ from typing import Optional
 
 import numpy as np
 
-from . import backend
-from .effects import enabled_effects
-from .loader import load_scene, parse_scene
-from .model import build_pair_tables
-from .placement import place_fills
-from .scene import Scene, SceneError
-from .timestep import choose_step_and_skin
+from ..engine import backend
+from ..effects import enabled_effects
+from ..scene.loader import load_scene, parse_scene
+from ..setup.pair_tables import build_pair_tables
+from ..setup.placement import place_fills
+from ..scene.model import Scene, SceneError
+from ..setup.timestep import choose_step_and_skin
 
 
 def _sizes_to_expect(scene: Scene, placed, names):
@@ -111,7 +111,7 @@ class Simulation:
 
     def __init__(self, scene: Scene, *, arch: str = "cpu", precision: Optional[str] = None,
                  threads: Optional[int] = None, h5: Optional[str] = None):
-        from .stepper import Engine
+        from ..engine.stepper import Engine
 
         self.scene = scene
         self.arch = arch
@@ -157,10 +157,10 @@ class Simulation:
         self.factories = None
         self.accounts = None
         if scene.factories:
-            from .factories import FactorySet
+            from ..process.factories import FactorySet
             self.factories = FactorySet(self, first_serial=self.n_initial)
         if scene.factories or scene.outlets or scene.sensors:
-            from .accounting import ProcessAccounts
+            from ..process.accounting import ProcessAccounts
             self.accounts = ProcessAccounts(self)
         # host-side parts whose state a checkpoint must keep: name -> object with
         # state_dict() / load_state_dict(d)
@@ -170,7 +170,7 @@ class Simulation:
         self.recorder = None
         h5 = h5 if h5 is not None else scene.output.h5
         if h5:
-            from .recorders.hdf5 import HDF5Recorder
+            from ..recorders.hdf5 import HDF5Recorder
             self.recorder = HDF5Recorder(h5, scene_text=scene.text, dt=self.dt, arch=arch,
                                          precision=self.precision)
         self.wall_seconds = 0.0
@@ -435,7 +435,7 @@ class Simulation:
     def _check_contact_resolution(self, max_speed: float):
         """The Hertz contact time shrinks as v^(-1/5): warn once if the fastest particle now
         present would be resolved in too few steps by the current dt."""
-        from .timestep import ERROR_STEPS_PER_CONTACT
+        from ..setup.timestep import ERROR_STEPS_PER_CONTACT
         ts = self.timestep
         if getattr(self, "_warned_speed", False) or max_speed <= ts.expected_speed:
             return
@@ -451,8 +451,8 @@ class Simulation:
     def set_speed(self, body: str, speed) -> None:
         """From now on, turn ``body`` at ``speed`` (rad/s, or a quantity string such as
         "20 rpm") about its axis. Warns when the new speed is too fast for the time step."""
-        from .units import parse_quantity
-        from .timestep import BODY_STEP_ERROR
+        from ..scene.units import parse_quantity
+        from ..setup.timestep import BODY_STEP_ERROR
         self._check_alive()
         names = [b.name for b in self.scene.bodies]
         if body not in names:

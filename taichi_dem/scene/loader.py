@@ -18,7 +18,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from .scene import (Body, Domain, Factory, Interaction, Material, Motion, Outlet, Output,
+from .model import (Body, Domain, Factory, Interaction, Material, Motion, Outlet, Output,
                     ParticleFill, PlaneWall, RadiusDistribution, RateSchedule, Region, Scene,
                     SceneError, Sensor, SimulationSettings, SpeedSchedule, GasSettings,
                     ThermalSettings)

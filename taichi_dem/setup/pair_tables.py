@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .restitution import damping_ratio
-from .scene import Material, Scene
+from ..scene.model import Material, Scene
 
 ROLLING_NONE, ROLLING_CONSTANT_TORQUE, ROLLING_EPSD = 0, 1, 2
 _ROLLING_CODES = {"constant_torque": ROLLING_CONSTANT_TORQUE, "epsd": ROLLING_EPSD}

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import ParticleFill, RadiusDistribution, Region, Scene, SceneError
+from ..scene.model import ParticleFill, RadiusDistribution, Region, Scene, SceneError
 
 GAP = 0.05                 # lattice spacing = 2 r_max (1 + GAP)
 _CLEAR = 1e-9              # relative clearance required between spheres

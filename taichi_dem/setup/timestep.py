@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import effective_youngs_modulus, hertz_contact_time, rayleigh_time
-from .scene import Scene, SceneError
+from .pair_tables import effective_youngs_modulus, hertz_contact_time, rayleigh_time
+from ..scene.model import Scene, SceneError
 
 MIN_STEPS_PER_CONTACT = 20      # below this an impact is poorly resolved (auto dt avoids it)
 ERROR_STEPS_PER_CONTACT = 8     # an explicit dt giving fewer is refused: restitution and

@@ -40,7 +40,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from geometry.builders import BUILDERS, COMMON, REQUIRED  # noqa: E402
-from taichi_dem import loader as _loader  # noqa: E402
+from taichi_dem.scene import loader as _loader  # noqa: E402
 
 CATEGORIES = ("wrong_type", "missing_key", "bad_number", "wrong_unit", "unknown_key",
               "bad_choice", "bad_name", "empty_region", "absurd_size", "overfull", "broken_mesh",
@@ -1313,7 +1313,7 @@ def _region_extent(region):
 
 
 def _smallest_radius(radius):
-    from taichi_dem.units import parse_quantity
+    from taichi_dem.scene.units import parse_quantity
     try:
         if isinstance(radius, dict):
             return parse_quantity(radius.get("min", radius["mean"]), "length")
@@ -1595,7 +1595,7 @@ def run_case(case: Case, folder: Path, command: str = "check", limit: float = 5.
     import threading
     import time
 
-    from taichi_dem import cli
+    from taichi_dem.app import cli
 
     scene = write_case(case, folder)
     argv = [command, str(scene)]

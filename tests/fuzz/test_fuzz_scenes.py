@@ -33,7 +33,7 @@ class RuntimeStarted(BaseException):
 
 @pytest.fixture
 def no_taichi_runtime(monkeypatch):
-    from taichi_dem import backend
+    from taichi_dem.engine import backend
 
     def refuse(*args, **kwargs):
         raise RuntimeStarted("the Taichi runtime was started (ti.init): kernels would compile")
@@ -50,7 +50,7 @@ def _report(case, outcome) -> str:
 def test_base_scenes_are_valid(base, tmp_path):
     """The corpus starts from valid scenes: as written, and as the fuzzer's TOML writer
     writes them back."""
-    from taichi_dem.loader import load_scene
+    from taichi_dem.scene.loader import load_scene
     for name, text in (("original", base.text), ("rewritten", sf.dumps(base.doc))):
         case = sf.Case("valid", "valid", base.name, text.encode(), files=base.files)
         load_scene(sf.write_case(case, tmp_path / name))
@@ -160,8 +160,8 @@ def test_found_bugs_stay_fixed(what, edit, key, tmp_path, no_taichi_runtime):
 def test_non_utf8_names_the_line_and_a_bom_is_accepted(tmp_path):
     """A Latin-1 degree sign is refused with its line; a UTF-8 byte-order mark and CRLF line
     ends (Windows editors) load."""
-    from taichi_dem.loader import load_scene
-    from taichi_dem.scene import SceneError
+    from taichi_dem.scene.loader import load_scene
+    from taichi_dem.scene.model import SceneError
     lines = DRUM.split("\n")
     i = next(k for k, ln in enumerate(lines) if '"20 rpm"' in ln)
     bad = "\n".join(lines).replace('"20 rpm"', '"20 rpm" # 120\u00b0/s').encode("latin-1")

@@ -7,7 +7,7 @@ measured, 38.6 deg in its DEM (Table 2), the DEM's eight repeats spanning 35.0 -
 
 This runs the bundled demo scene itself (demos/angle_of_repose.toml: 2,500 spheres poured into
 a tube on a rough base, the tube lifted at 0.1 m/s, 5 s) and fits the heap's flank
-(taichi_dem.analysis.heap_angle: the highest sphere top per one-diameter ring, a line through
+(taichi_dem.app.analysis.heap_angle: the highest sphere top per one-diameter ring, a line through
 the rings between 20 and 80 % of the heap's height).
 
 MEASURED (f32): 38.8, 39.5, 37.1 deg for seeds 1, 2, 3 (mean 38.5, sd 1.2); the angle moves by
@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 import taichi_dem
-from taichi_dem import analysis
+from taichi_dem.app import analysis
 
 pytestmark = pytest.mark.slow         # part of the default suite; -m "not slow" skips it
 

@@ -7,7 +7,7 @@ body, gives the classic estimate of a rotary drum's drive torque from its bed:
     T = M g r_cg sin(theta),   r_cg = 4 R sin^3(a) / (3 (2a - sin 2a)),   cos(a) = h / R
 
 with M the bed's mass, R the drum radius and h the distance of the free surface from the axis.
-Both theta and h are measured from the simulated surface (taichi_dem.analysis.bed_surface: the
+Both theta and h are measured from the simulated surface (taichi_dem.app.analysis.bed_surface: the
 highest sphere top per 2 r_p bin, a line fitted over the middle 60 % of the chord) at every
 output sample of the window; the torque is the recorded axial torque on the drum.
 
@@ -35,7 +35,7 @@ import numpy as np
 import pytest
 
 import taichi_dem
-from taichi_dem import analysis
+from taichi_dem.app import analysis
 
 pytestmark = pytest.mark.slow         # part of the default suite; -m "not slow" skips it
 

@@ -53,7 +53,7 @@ import numpy as np
 import pytest
 
 import taichi_dem
-from taichi_dem import analysis
+from taichi_dem.app import analysis
 
 pytestmark = pytest.mark.slow         # part of the default suite; -m "not slow" skips it
 

@@ -45,7 +45,7 @@ its peak: the peak overlap within 1 - cos(k pi / (2 N)) of the true one, 0.3 % f
 import numpy as np
 import taichi as ti
 
-from taichi_dem.state import FieldTree
+from taichi_dem.engine.state import FieldTree
 
 
 class Monitor:

@@ -69,7 +69,7 @@ import numpy as np
 import pytest
 
 import taichi_dem as td
-from taichi_dem import analysis
+from taichi_dem.app import analysis
 
 R, L, R_P = 0.06, 0.024, 0.004
 COUNT = 200
@@ -95,8 +95,8 @@ def write_fill(tmp_path, offset, seed=1):
     """The fill the loader places in the drum at the origin, moved by ``offset``: both drums
     start from the same bed (to f64 rounding; f32 rounds the far one's positions by up to
     2.4e-7 m when they are uploaded)."""
-    from taichi_dem.loader import parse_scene
-    from taichi_dem.placement import place_fills
+    from taichi_dem.scene.loader import parse_scene
+    from taichi_dem.setup.placement import place_fills
     near = parse_scene(scene((0.0, 0.0, 0.0), seed, fill=FILL))
     x = place_fills(near, np.random.default_rng(seed)).position + np.asarray(offset, float)
     lines = ["x,y,z,radius,vx,vy,vz,wx,wy,wz"]

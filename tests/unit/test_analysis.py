@@ -1,4 +1,4 @@
-"""The measuring helpers of taichi_dem.analysis on synthetic data with known answers."""
+"""The measuring helpers of taichi_dem.app.analysis on synthetic data with known answers."""
 from __future__ import annotations
 
 import math
@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from taichi_dem import analysis
+from taichi_dem.app import analysis
 
 
 def test_segment_centroid_limits_and_half_fill():

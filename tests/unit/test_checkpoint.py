@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import taichi_dem as td
-from taichi_dem import checkpoint
-from taichi_dem.simulation import DivergenceError
+from taichi_dem.run import checkpoint
+from taichi_dem.run.simulation import DivergenceError
 
 
 @pytest.fixture(scope="module")

@@ -148,7 +148,7 @@ def test_sigkill_mid_run_leaves_readable_results_and_checkpoint(tmp_path):
             assert pos.shape[1] == 3 and 250 <= pos.shape[0] <= 300 and np.all(np.isfinite(pos))
         assert np.all(np.diff(times) > 0)
         assert len(f["series/particles/kinetic_energy"]) >= len(frames)
-    from taichi_dem import checkpoint
+    from taichi_dem.run import checkpoint
     snap = checkpoint.load(str(out / "drum.checkpoint.h5"))
     assert 0.0 < snap.time <= times[-1] + 1e-9
     assert len(snap.series["time"]) == int(np.searchsorted(times, snap.time + 1e-9))

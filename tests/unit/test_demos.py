@@ -10,9 +10,9 @@ import sys
 import numpy as np
 import pytest
 
-from taichi_dem import demos
-from taichi_dem.loader import load_scene
-from taichi_dem.placement import place_fills
+from taichi_dem.app import demos
+from taichi_dem.scene.loader import load_scene
+from taichi_dem.setup.placement import place_fills
 
 from conftest import ROOT
 

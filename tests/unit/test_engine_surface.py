@@ -10,7 +10,7 @@ import pytest
 
 import taichi_dem as td
 from taichi_dem.effects import effect_names
-from taichi_dem.loader import parse_scene
+from taichi_dem.scene.loader import parse_scene
 
 from conftest import PLATE_SCENE, ROOT
 

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from taichi_dem.loader import parse_scene
-from taichi_dem.scene import Body, SceneError, SpeedSchedule
+from taichi_dem.scene.loader import parse_scene
+from taichi_dem.scene.model import Body, SceneError, SpeedSchedule
 
 ROOT = Path(__file__).resolve().parents[2]
 RPM = 2.0 * math.pi / 60.0

@@ -5,9 +5,9 @@ import time
 import numpy as np
 import pytest
 
-from taichi_dem.loader import parse_scene
-from taichi_dem.placement import PlacedParticles, place_fills, sample_radii
-from taichi_dem.scene import Body, RadiusDistribution, SceneError
+from taichi_dem.scene.loader import parse_scene
+from taichi_dem.setup.placement import PlacedParticles, place_fills, sample_radii
+from taichi_dem.scene.model import Body, RadiusDistribution, SceneError
 
 HEADER = """
 [simulation]
@@ -413,7 +413,7 @@ def nearest_to_body(p: PlacedParticles, scene_, k):
 
 
 def test_checks_agree_with_brute_force_distance():
-    from taichi_dem.placement import _closest_sq_dist, _segment_sq_dist
+    from taichi_dem.setup.placement import _closest_sq_dist, _segment_sq_dist
     rng = np.random.default_rng(0)
     tri = rng.normal(size=(400, 3, 3))
     tri[:20, 2] = tri[:20, 0] + 0.3 * (tri[:20, 1] - tri[:20, 0])   # degenerate: collinear
@@ -529,7 +529,7 @@ def test_body_check_is_fast():
 
 
 def test_body_query_many_sites_many_triangles_is_fast():
-    from taichi_dem.placement import _Triangles
+    from taichi_dem.setup.placement import _Triangles
     s = scene(fill(count=10, radius="0.005", region=AROUND_SHAFT) + SHAFT.format(rows=10),
               **SHAFT_DOMAIN)
     tris = _Triangles(s, 0.01)

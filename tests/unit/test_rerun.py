@@ -11,7 +11,7 @@ rr = pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
 
 import taichi_dem as td  # noqa: E402
-from taichi_dem.bodies import rotation_matrix  # noqa: E402
+from taichi_dem.bodies.kinematics import rotation_matrix  # noqa: E402
 from taichi_dem.recorders.rerun import RerunRecorder, colormap  # noqa: E402
 
 from conftest import PLATE_SCENE  # noqa: E402

@@ -2,8 +2,8 @@ import math
 
 import pytest
 
-from taichi_dem.scene import SceneError
-from taichi_dem.units import DIMENSIONS, parse_quantity, parse_vec3, units_for
+from taichi_dem.scene.model import SceneError
+from taichi_dem.scene.units import DIMENSIONS, parse_quantity, parse_vec3, units_for
 
 
 @pytest.mark.parametrize("text, dimension, expected", [

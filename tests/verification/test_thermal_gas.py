@@ -32,8 +32,8 @@ import numpy as np
 import pytest
 
 import taichi_dem
-from taichi_dem.loader import parse_scene
-from taichi_dem.scene import SceneError
+from taichi_dem.scene.loader import parse_scene
+from taichi_dem.scene.model import SceneError
 import dem_helpers as h
 
 R = 0.01

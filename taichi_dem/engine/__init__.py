@@ -1,0 +1,2 @@
+"""The device side that advances a simulation: the Taichi runtime (backend.py), the particle and
+pair fields (state.py), neighbour search (broadphase.py) and the step itself (stepper.py)."""
