@@ -1,0 +1,170 @@
+"""Conduction through the gas gap near a contact (PHYSICS.md "Gas-gap conduction"): the models.
+
+Isothermal-surface fluid-lens model (Rong & Horio 1999 as extended by Musser 2011 for two
+spheres; Morris, Pannala, Ma & Hrenya 2015 for a sphere and a plane): the gas conducts along
+lines parallel to the line of centres, across the local gap between the two surfaces, within a
+lens of radius R (1 + lens) around the particle (the larger one of a pair),
+
+    G = k_g Int_{r_in}^{r_out} 2 pi r dr / max(S, gap(r))                               [W/K]
+
+    sphere-plane:  gap(r) = h - sqrt(R^2 - r^2),                h the centre-plane distance
+    sphere-sphere: gap(r) = d - sqrt(Ri^2 - r^2) - sqrt(Rj^2 - r^2), d the centre distance
+
+r_in is the contact radius when the surfaces overlap (the spot itself conducts through the
+solid, thermal/conduction.py) and 0 otherwise; r_out where the lens meets the other surface
+(at most the smaller radius); S the minimum gap (surface roughness, the gas's mean free path).
+The surfaces are taken isothermal: an upper bound where the solid's own resistance matters
+(ash: k = 0.3 W/(m K), Biot ~0.5).
+
+Sphere-plane has a closed form: with u = sqrt(R^2 - r^2), 2 pi r dr = -2 pi u du and
+
+    Int 2 pi u du / (h - u) = 2 pi [u_out - u_S + h ln((h - u_out) / (h - u_S))]
+
+over the part where the gap exceeds S (u_S = min(R, h - S)), plus pi (r_S^2 - r_in^2) / S
+where it is clamped to S. Sphere-sphere is integrated numerically: in w = r^2 the gap is nearly
+linear, g(w) ~ S + g'(w_S) (w - w_S), so with q = ln of that line the integrand is smooth
+(the ratio of the line to the true gap) and NODES-point Gauss-Legendre reaches 1e-4 of the
+integral for the gaps and overlaps of a DEM contact (tests/verification/test_gas_gap.py).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import taichi as ti
+
+NODES = 12
+_X, _W = np.polynomial.legendre.leggauss(NODES)
+GAUSS_X = tuple(float(x) for x in _X)
+GAUSS_W = tuple(float(w) for w in _W)
+
+
+@ti.func
+def plane_gap_integral(radius, distance, lens, min_gap):
+    """Int 2 pi r dr / max(S, gap) for a sphere of ``radius`` (m) whose centre is ``distance``
+    (m) from a plane, the fluid lens ``lens`` radii thick, the minimum gap ``min_gap`` (m).
+    Returns m (multiply by the gas conductivity for W/K); 0 beyond the lens."""
+    r2 = radius * radius
+    lens_radius = radius * (1.0 + lens)
+    result = 0.0 * radius
+    if distance < lens_radius:
+        out2 = ti.min(lens_radius * lens_radius - distance * distance, r2)
+        in2 = ti.max(r2 - distance * distance, 0.0)
+        u_gap = ti.max(ti.min(radius, distance - min_gap), 0.0)
+        gap2 = r2 - u_gap * u_gap                    # r^2 where the gap reaches min_gap
+        if out2 <= gap2:
+            result = math.pi * ti.max(out2 - in2, 0.0) / min_gap
+        else:
+            u_out = ti.sqrt(r2 - out2)
+            result = (math.pi * ti.max(gap2 - in2, 0.0) / min_gap
+                      + 2.0 * math.pi * (u_out - u_gap
+                                         + distance * ti.log((distance - u_out) / (distance - u_gap))))
+    return result
+
+
+@ti.func
+def _pair_gap(w, distance, ri2, rj2):
+    return distance - ti.sqrt(ri2 - w) - ti.sqrt(rj2 - w)
+
+
+@ti.func
+def pair_gap_integral(radius_i, radius_j, distance, lens, min_gap):
+    """Int 2 pi r dr / max(S, gap) between two spheres of radii ``radius_i``, ``radius_j`` (m)
+    whose centres are ``distance`` (m) apart, in the fluid lens (``lens`` radii of the larger
+    sphere) with the minimum gap ``min_gap`` (m). Returns m; 0 when the lens does not reach
+    the smaller sphere."""
+    big = ti.max(radius_i, radius_j)
+    small = ti.min(radius_i, radius_j)
+    ri2 = big * big
+    rj2 = small * small
+    lens_radius = big * (1.0 + lens)
+    result = 0.0 * distance
+    # where the lens sphere (about the larger centre) meets the smaller sphere: law of cosines;
+    # a smaller sphere wholly inside the lens (a large size ratio) faces it with its whole disk
+    # (MFiX's des_thermo_cond counts nothing there)
+    cos_out = (lens_radius * lens_radius - rj2 + distance * distance) / (2.0 * lens_radius * distance)
+    engulfed = distance + small <= lens_radius
+    if cos_out < 1.0 or engulfed:
+        out2 = rj2
+        if not engulfed:
+            out2 = ti.min(lens_radius * lens_radius * (1.0 - cos_out * cos_out), rj2)
+        in2 = 0.0 * distance
+        if distance < big + small:
+            cos_in = (ri2 - rj2 + distance * distance) / (2.0 * big * distance)
+            in2 = ri2 * ti.max(1.0 - cos_in * cos_in, 0.0)
+        # w_gap: r^2 where the gap reaches min_gap (the gap grows with r); Newton from the
+        # parabolic estimate, clamped to [in2, out2]
+        r_eff = big * small / (big + small)
+        w_gap = ti.max(2.0 * r_eff * (min_gap - (distance - big - small)), in2)
+        for _ in range(8):
+            g = _pair_gap(w_gap, distance, ri2, rj2) - min_gap
+            slope = 0.5 / ti.sqrt(ri2 - w_gap) + 0.5 / ti.sqrt(rj2 - w_gap)
+            w_gap = ti.min(ti.max(w_gap - g / slope, in2), out2)
+        if _pair_gap(in2, distance, ri2, rj2) >= min_gap:
+            w_gap = in2                              # nowhere closer than min_gap
+        result = math.pi * ti.max(w_gap - in2, 0.0) / min_gap
+        if out2 > w_gap:
+            # Int_{w_gap}^{out2} pi dw / g(w) with q = ln(line(w)), line = S + slope (w - w_gap):
+            # dw = line dq / slope, so the integrand pi line / (slope g) is smooth in q
+            slope = 0.5 / ti.sqrt(ri2 - w_gap) + 0.5 / ti.sqrt(rj2 - w_gap)
+            base = ti.max(_pair_gap(w_gap, distance, ri2, rj2), min_gap)
+            q0 = ti.log(base)
+            q1 = ti.log(base + slope * (out2 - w_gap))
+            half = 0.5 * (q1 - q0)
+            total = 0.0 * distance
+            for k in ti.static(range(NODES)):
+                q = q0 + half * (ti.static(GAUSS_X[k]) + 1.0)
+                line = ti.exp(q)
+                w = ti.min(w_gap + (line - base) / slope, out2)
+                total += ti.static(GAUSS_W[k]) * line / ti.max(_pair_gap(w, distance, ri2, rj2), min_gap)
+            result += math.pi * half * total / slope
+    return result
+
+
+# ---------------------------------------------------------------- references (numpy, slow)
+def plane_gap_integral_reference(radius, distance, lens, min_gap, panels=4000):
+    """The sphere-plane integral by brute-force quadrature in r (m); for the tests."""
+    lens_radius = radius * (1.0 + lens)
+    if distance >= lens_radius:
+        return 0.0
+    r_out = math.sqrt(min(lens_radius ** 2 - distance ** 2, radius ** 2))
+    r_in = math.sqrt(max(radius ** 2 - distance ** 2, 0.0))
+
+    def gap(r):
+        return np.maximum(distance - np.sqrt(np.maximum(radius ** 2 - r ** 2, 0.0)), min_gap)
+    return _integrate(gap, r_in, r_out, panels)
+
+
+def pair_gap_integral_reference(radius_i, radius_j, distance, lens, min_gap, panels=4000):
+    """The sphere-sphere integral by brute-force quadrature in r (m); for the tests."""
+    big, small = max(radius_i, radius_j), min(radius_i, radius_j)
+    lens_radius = big * (1.0 + lens)
+    cos_out = (lens_radius ** 2 - small ** 2 + distance ** 2) / (2 * lens_radius * distance)
+    if distance + small <= lens_radius:
+        r_out = small                          # the smaller sphere wholly inside the lens
+    elif cos_out >= 1.0:
+        return 0.0
+    else:
+        r_out = min(lens_radius * math.sqrt(1 - cos_out ** 2), small)
+    r_in = 0.0
+    if distance < big + small:
+        cos_in = (big ** 2 - small ** 2 + distance ** 2) / (2 * big * distance)
+        r_in = big * math.sqrt(max(1 - cos_in ** 2, 0.0))
+
+    def gap(r):
+        return np.maximum(distance - np.sqrt(np.maximum(big ** 2 - r ** 2, 0.0))
+                          - np.sqrt(np.maximum(small ** 2 - r ** 2, 0.0)), min_gap)
+    return _integrate(gap, r_in, r_out, panels)
+
+
+def _integrate(gap, a, b, panels):
+    """Int_a^b 2 pi r / gap(r) dr: Gauss-Legendre on panels graded towards a (where the gap is
+    smallest and the integrand peaks)."""
+    if b <= a:
+        return 0.0
+    x, w = np.polynomial.legendre.leggauss(8)
+    edges = a + (b - a) * np.linspace(0.0, 1.0, panels + 1) ** 3
+    lo, hi = edges[:-1, None], edges[1:, None]
+    r = 0.5 * (hi - lo) * x[None, :] + 0.5 * (hi + lo)
+    f = 2.0 * math.pi * r / gap(r)
+    return float(np.sum(0.5 * (hi - lo) * w[None, :] * f))
