@@ -9,8 +9,7 @@ single-layer and two-sided) are in :mod:`geometry.mesh`.
 """
 from .mesh import GeometryError, TriMesh
 from .builders import (BUILDERS, Builder, Param, body_axis, build, build_mesh, default_segments,
-                       describe_builders, helicoid_area)
-from .io import load_mesh
+                       describe_builders, helicoid_area, load_mesh)
 
 __all__ = ["TriMesh", "GeometryError", "build", "build_mesh", "BUILDERS", "Builder", "Param",
            "describe_builders", "load_mesh", "body_axis", "helicoid_area", "default_segments"]

@@ -41,7 +41,8 @@ from typing import Any, Callable, Optional
 import numpy as np
 
 from . import _shapes as sh
-from .mesh import GeometryError, TriMesh
+from .io import read_mesh
+from .mesh import GeometryError, ParameterError, TriMesh
 
 REQUIRED = inspect.Parameter.empty
 
@@ -95,11 +96,7 @@ class Param:
         return f"{self.default:g}"
 
 
-class _Bad(GeometryError):
-    """Raised inside a builder about one of its parameters; build() prefixes the key."""
-
-    def __init__(self, param: str, reason: str):
-        super().__init__(param, reason)
+_Bad = ParameterError        # the builders' short name for it
 
 
 def _number(value, what: str, param: str) -> float:
@@ -356,6 +353,23 @@ def build(name: str, params: dict, *, key: str = "", base_dir=None) -> TriMesh:
                             f"unknown builder {name!r}{_suggest(str(name), BUILDERS)}; "
                             f"known: {', '.join(BUILDERS)}")
     return BUILDERS[name].build(params, key=key or name, base_dir=base_dir)
+
+
+def load_mesh(path, *, scale: float = 1.0, units: str = "m", repair: bool = False,
+              flip_normals: bool = False, two_sided: Optional[bool] = None,
+              base_dir=None, key: str = "mesh", origin=(0.0, 0.0, 0.0),
+              axis_direction=(1.0, 0.0, 0.0), roll_deg: float = 0.0,
+              max_edge: Optional[float] = None) -> TriMesh:
+    """Read a mesh file into a validated :class:`TriMesh` in metres (the ``file`` builder).
+
+    Coordinates are multiplied by the ``units`` factor and by ``scale``. A relative ``path``
+    is taken from ``base_dir`` (the scene file's folder) when given. Errors are
+    :class:`~geometry.mesh.GeometryError` naming ``key.file``, ``key.units`` ... .
+    """
+    params = {"file": str(path), "scale": scale, "units": units, "repair": repair,
+              "flip_normals": flip_normals, "two_sided": two_sided, "origin": origin,
+              "axis_direction": axis_direction, "roll_deg": roll_deg, "max_edge": max_edge}
+    return build("file", params, key=key, base_dir=base_dir)
 
 
 def build_mesh(spec, *, key: str = "mesh", base_dir=None) -> TriMesh:
@@ -896,6 +910,5 @@ def chute(*, length, width, incline_deg=0.0, side_walls=True, wall_height=None,
 })
 def file(*, file, scale=1.0, units="m", repair=False, flip_normals=False, two_sided=None,
          base_dir=None) -> TriMesh:
-    from .io import read_mesh
     return read_mesh(file, scale=scale, units=units, repair=repair, flip_normals=flip_normals,
                      two_sided=two_sided, base_dir=base_dir)

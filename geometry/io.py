@@ -1,4 +1,6 @@
-"""Mesh import through trimesh (STL, OBJ, PLY, OFF, glTF), with units, scale and checks."""
+"""Mesh import through trimesh (STL, OBJ, PLY, OFF, glTF), with units, scale and checks.
+
+The ``file`` builder and ``load_mesh`` (builders.py) call ``read_mesh``; it calls nothing back."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -7,26 +9,9 @@ from typing import Optional
 import numpy as np
 
 from .mesh import MAX_EXTENT, MIN_EXTENT, TriMesh
+from .mesh import ParameterError as _Bad
 
 UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048, "um": 1e-6}
-
-
-def load_mesh(path, *, scale: float = 1.0, units: str = "m", repair: bool = False,
-              flip_normals: bool = False, two_sided: Optional[bool] = None,
-              base_dir=None, key: str = "mesh", origin=(0.0, 0.0, 0.0),
-              axis_direction=(1.0, 0.0, 0.0), roll_deg: float = 0.0,
-              max_edge: Optional[float] = None) -> TriMesh:
-    """Read a mesh file into a validated :class:`TriMesh` in metres.
-
-    Coordinates are multiplied by the ``units`` factor and by ``scale``. A relative ``path``
-    is taken from ``base_dir`` (the scene file's folder) when given. Errors are
-    :class:`~geometry.mesh.GeometryError` naming ``key.file``, ``key.units`` ... .
-    """
-    from .builders import build
-    params = {"file": str(path), "scale": scale, "units": units, "repair": repair,
-              "flip_normals": flip_normals, "two_sided": two_sided, "origin": origin,
-              "axis_direction": axis_direction, "roll_deg": roll_deg, "max_edge": max_edge}
-    return build("file", params, key=key, base_dir=base_dir)
 
 
 def read_mesh(file: str, *, scale: float, units: str, repair: bool, flip_normals: bool,
@@ -34,7 +19,6 @@ def read_mesh(file: str, *, scale: float, units: str, repair: bool, flip_normals
     """The ``file`` builder's body: errors are raised about the parameter at fault."""
     import trimesh
 
-    from .builders import _Bad
     path = Path(file).expanduser()
     if not path.is_absolute() and base_dir is not None:
         path = Path(base_dir) / path

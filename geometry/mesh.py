@@ -47,6 +47,14 @@ class GeometryError(ValueError):
         super().__init__(f"{key}: {reason}" if key else reason)
 
 
+class ParameterError(GeometryError):
+    """Raised inside a builder or the importer about one of its parameters (``param``, e.g.
+    ``"file"``); ``build()`` prefixes the scene key (``bodies[0].mesh.file``)."""
+
+    def __init__(self, param: str, reason: str):
+        super().__init__(param, reason)
+
+
 @dataclass(frozen=True, eq=False)
 class TriMesh:
     """An immutable triangle mesh in metres; see the module docstring for the conventions.

@@ -1,5 +1,8 @@
 """taichi_dem: discrete element method with Taichi, for drums, dryers and coolers."""
-__version__ = "0.1.0"
+from ._version import __version__
+
+_ERRORS = ("SceneError", "GeometryError", "BackendError", "DivergenceError",
+           "StaleSimulationError", "CheckpointError", "WindowError")
 
 
 def __getattr__(name):
@@ -7,7 +10,7 @@ def __getattr__(name):
     if name == "Simulation":
         from .run.simulation import Simulation
         return Simulation
-    if name in ("SceneError",):
-        from .scene.model import SceneError
-        return SceneError
+    if name in _ERRORS:
+        from . import errors
+        return getattr(errors, name)
     raise AttributeError(name)

@@ -1,7 +1,7 @@
 """Measurements for the demos and regression tests: discharge rates, Beverloo's law, the free
 surface of a drum bed and its circular-segment torque estimate, the flank of a heap.
 
-Everything here reads a :class:`~taichi_dem.simulation.Simulation` (its ``series`` and
+Everything here reads a :class:`~taichi_dem.run.simulation.Simulation` (its ``series`` and
 ``particles()``) or plain numpy arrays; nothing changes the state. Units SI.
 """
 from __future__ import annotations

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene.model import SceneError
+from ..errors import CheckpointError, DivergenceError, SceneError, WindowError
 
 def _fail(message: str, code: int = 2) -> int:
     print(f"taichi-dem: {message}", file=sys.stderr)
@@ -185,8 +185,8 @@ def _window_problem(args):
 
 def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
     from ..run.checkpoint import default_path
+    from ..run.simulation import Simulation
     from ..scene.loader import load_scene
-    from ..run.simulation import DivergenceError, Simulation
 
     problem = _window_problem(args)
     if problem:
@@ -212,7 +212,7 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
 
 def cmd_resume(args) -> int:
     """Continue a checkpointed run: results appended to its results file (or --h5/--out)."""
-    from ..run.checkpoint import CheckpointError, resume
+    from ..run.simulation import Simulation
 
     problem = _window_problem(args)
     if problem:
@@ -236,7 +236,8 @@ def cmd_resume(args) -> int:
         h5 = stored_results if stored_results and Path(stored_results).exists() else ""
     checkpoint = str(Path(args.out) / Path(path).name) if args.out else path
     try:
-        sim = resume(path, arch=args.arch, threads=args.threads, h5=h5, checkpoint=checkpoint)
+        sim = Simulation.from_checkpoint(path, arch=args.arch, threads=args.threads, h5=h5,
+                                         checkpoint=checkpoint)
     except CheckpointError as err:
         return _fail(str(err))
     if args.precision and args.precision != sim.precision:
@@ -251,8 +252,6 @@ def cmd_resume(args) -> int:
 def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> int:
     """Run ``sim`` to --until (or end_time) with progress, a window or quietly, and print the
     summary; exit 3 on divergence (the last good state checkpointed)."""
-    from ..run.simulation import DivergenceError
-
     scene = sim.scene
     every_nth = getattr(args, "every_nth", 1) or 1
     recorder = None
@@ -270,7 +269,7 @@ def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> in
     steps0, time0 = sim.step_count, sim.time
     try:
         if args.window:
-            from .window import WindowError, run_window
+            from .window import run_window
             try:
                 run_window(sim, until)
             except WindowError as err:

@@ -16,9 +16,7 @@ from typing import Optional
 
 import numpy as np
 
-
-class WindowError(RuntimeError):
-    """The window cannot be opened here (no display, no Vulkan)."""
+from ..errors import WindowError
 
 
 def display_problem() -> Optional[str]:

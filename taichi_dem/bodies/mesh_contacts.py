@@ -27,6 +27,7 @@ from thermal.conduction import contact_conductance
 from ..effects.hertz_mindlin import contact_force
 from ..effects.mesh_contact import closest_point_on_triangle
 from ..engine.broadphase import exclusive_scan, previous_contact
+from ..engine.state import fit_rows
 from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
 
 SAME_SURFACE_COS = math.cos(math.radians(30.0))
@@ -220,12 +221,11 @@ class MeshContacts:
             self.old_rolling_history = t.add("old_mesh_rolling_history", real, capacity, vector=True)
         t.finalize()
         if old is not None:
-            from ..engine.stepper import _pad
-            self.old_tri.from_numpy(_pad(old[0], capacity))
-            self.old_history.from_numpy(_pad(old[1], capacity))
-            self.old_contact.from_numpy(_pad(old[2], capacity))
+            self.old_tri.from_numpy(fit_rows(old[0], capacity))
+            self.old_history.from_numpy(fit_rows(old[1], capacity))
+            self.old_contact.from_numpy(fit_rows(old[2], capacity))
             if old[3] is not None:
-                self.old_rolling_history.from_numpy(_pad(old[3], capacity))
+                self.old_rolling_history.from_numpy(fit_rows(old[3], capacity))
 
     # --------------------------------------------------------------- kernels
     def _compile_static_kernels(self):

@@ -14,6 +14,8 @@ import weakref
 
 import taichi as ti
 
+from ..errors import BackendError
+
 _ARCHES = {
     "cpu": lambda: ti.cpu,
     "gpu": lambda: ti.gpu,
@@ -23,10 +25,6 @@ _ARCHES = {
 }
 _current: dict = {"arch": None, "precision": None, "generation": 0}
 _live: "weakref.WeakSet" = weakref.WeakSet()
-
-
-class BackendError(RuntimeError):
-    pass
 
 
 def real_type(precision: str):

@@ -7,6 +7,7 @@ without plane walls has no wall history, one without EPSD rolling no rolling his
 """
 from __future__ import annotations
 
+import numpy as np
 import taichi as ti
 
 VEC = 3
@@ -36,6 +37,15 @@ class FieldTree:
             self._tree.destroy()
             self._tree = None
         self.fields.clear()
+
+
+def fit_rows(a: np.ndarray, n: int) -> np.ndarray:
+    """The first ``n`` rows of ``a``, zero-padded to ``n`` rows: a host copy of an array being
+    reallocated with ``n`` entries (pair and mesh-entry arrays that grow)."""
+    out = np.zeros((n,) + a.shape[1:], dtype=a.dtype)
+    m = min(n, a.shape[0])
+    out[:m] = a[:m]
+    return out
 
 
 class ParticleState:

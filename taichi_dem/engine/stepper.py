@@ -28,7 +28,7 @@ from thermal.conduction import contact_conductance
 from thermal import moisture as drying
 from thermal import radiation as radiative
 from ..setup.pair_tables import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
-from .state import FieldTree, PairState, ParticleState
+from .state import FieldTree, PairState, ParticleState, fit_rows
 
 
 class Engine:
@@ -135,10 +135,10 @@ class Engine:
         old = self.pairs
         new = PairState(capacity, self.real, self.rolling_epsd, self.conduction)
         if old is not None:
-            new.old_partner_id.from_numpy(_pad(old.old_partner_id.to_numpy(), capacity))
-            new.old_tangential_history.from_numpy(_pad(old.old_tangential_history.to_numpy(), capacity))
+            new.old_partner_id.from_numpy(fit_rows(old.old_partner_id.to_numpy(), capacity))
+            new.old_tangential_history.from_numpy(fit_rows(old.old_tangential_history.to_numpy(), capacity))
             if old.old_rolling_history is not None:
-                new.old_rolling_history.from_numpy(_pad(old.old_rolling_history.to_numpy(), capacity))
+                new.old_rolling_history.from_numpy(fit_rows(old.old_rolling_history.to_numpy(), capacity))
             old.destroy()
         self.pairs = new
         self.broadphase.compile_pair_kernels(new)
@@ -722,10 +722,3 @@ def _region_test(region):
         a = d.dot(axis)
         return a >= 0.0 and a <= length and (d - a * axis).norm_sqr() <= r2
     return inside
-
-
-def _pad(a: np.ndarray, n: int) -> np.ndarray:
-    out = np.zeros((n,) + a.shape[1:], dtype=a.dtype)
-    m = min(n, a.shape[0])
-    out[:m] = a[:m]
-    return out

@@ -7,7 +7,7 @@ import os
 import h5py
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 
 
 class HDF5Recorder:

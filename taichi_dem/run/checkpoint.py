@@ -41,6 +41,9 @@ from typing import Optional
 import h5py
 import numpy as np
 
+from .._version import __version__
+from ..errors import CheckpointError
+
 FORMAT = "taichi_dem checkpoint 1"
 
 # Keep the last good state in memory at every sample (Checkpointer.keep_last_good) by
@@ -57,10 +60,6 @@ HOST_ATTRIBUTES = (
     ("broadphase", "rebuilds"), ("broadphase", "entries"),
     ("mesh", "binned_time"), ("mesh", "interval_steps"),
 )
-
-
-class CheckpointError(RuntimeError):
-    """A checkpoint file that cannot be read or does not fit this version of the engine."""
 
 
 @dataclass
@@ -330,24 +329,26 @@ def restore(sim, snap: Snapshot) -> None:
                   f"afresh", file=sys.stderr)
 
 
-def resume(path: str, *, arch: Optional[str] = None, threads: Optional[int] = None,
+def resume(path: str, *, build, arch: Optional[str] = None, threads: Optional[int] = None,
            h5: Optional[str] = None, checkpoint: Optional[str] = None, configure=None):
-    """A Simulation continuing from checkpoint ``path``. Results: ``h5`` (default the results
-    file the checkpointed run wrote, when it still exists; "" for none) is continued: its
-    series and frames after the checkpoint time are dropped and the run appends from there.
-    Further checkpoints go to ``checkpoint`` (default ``path`` itself). ``configure(sim)``,
-    if given, runs after the simulation is built and before the state is loaded (to register
-    checkpointables that a script adds)."""
+    """A Simulation continuing from checkpoint ``path`` (``Simulation.from_checkpoint``).
+
+    ``build`` makes the simulation, called as ``build(scene, arch=, precision=, threads=,
+    h5="")``: the Simulation class, passed in because this module does not import the run
+    driver (which attaches the checkpoint writer as one of its observers). Results: ``h5``
+    (default the results file the checkpointed run wrote, when it still exists; "" for none)
+    is continued: its series and frames after the checkpoint time are dropped and the run
+    appends from there. Further checkpoints go to ``checkpoint`` (default ``path`` itself).
+    ``configure(sim)``, if given, runs after the simulation is built and before the state is
+    loaded (to register checkpointables that a script adds)."""
     from ..scene.loader import parse_scene
-    from .simulation import Simulation
 
     snap = load(path)
     a = snap.attrs
     source = a["source"]
     base_dir = None if source.startswith("<") else str(Path(source).parent)
     scene = parse_scene(a["scene"], source=source, base_dir=base_dir)
-    sim = Simulation(scene, arch=arch or a["arch"], precision=a["precision"], threads=threads,
-                     h5="")
+    sim = build(scene, arch=arch or a["arch"], precision=a["precision"], threads=threads, h5="")
     if configure is not None:
         configure(sim)
     restore(sim, snap)
@@ -369,7 +370,6 @@ def _abs_source(source: str) -> str:
 
 
 def _version() -> str:
-    from .. import __version__
     return __version__
 
 
@@ -392,7 +392,9 @@ def default_path(scene, h5: Optional[str] = None, out_dir: Optional[str] = None)
 # ------------------------------------------------------------------------------ the hook
 class Checkpointer:
     """Writes the periodic checkpoints of one simulation (``sim.checkpointer``) and keeps the
-    last good state in memory for a divergence.
+    last good state in memory for a divergence. An observer of the run: the Simulation calls
+    ``after_sample(sim)`` once a sample is recorded and ``diverged(sim, err)`` when a step
+    raised DivergenceError (``sim.after_sample``, ``sim.on_divergence``).
 
     ``path``: where checkpoints go; ``interval``: s of simulated time between them (None:
     none; the scene's ``[output] checkpoint_interval``); ``keep_last_good``: capture the state
@@ -474,11 +476,3 @@ class Checkpointer:
         err.args = (str(err.args[0]) + note,) + tuple(err.args[1:])
         return err
 
-
-def attach(sim):
-    """Give a new Simulation its checkpoint and divergence hooks (called by its __init__)."""
-    from .divergence import DivergenceGuard
-    if not hasattr(sim, "checkpointables"):      # factories and accounts may be there already
-        sim.checkpointables = {}
-    sim.checkpointer = Checkpointer(sim)
-    sim.divergence = DivergenceGuard(sim)

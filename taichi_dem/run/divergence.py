@@ -23,8 +23,12 @@ Three criteria (README "Divergence"):
 Both limits are attributes of ``sim.divergence`` and may be changed from Python.
 """
 
+import time as _time
+
 import numpy as np
 import taichi as ti
+
+from ..errors import DivergenceError
 
 OVERLAP_LIMIT = 0.6          # of the smaller radius
 BODY_OVERLAP_LIMIT = 1.0     # of the radius: the centre reaches a body's surface
@@ -33,7 +37,8 @@ _NONE = 2 ** 30              # "no particle" in the index reductions
 
 
 class DivergenceGuard:
-    """The per-sample check of one simulation (``sim.divergence``)."""
+    """The per-sample check of one simulation (``sim.divergence``): one of its ``checks``,
+    called as ``guard(measured)`` before the sample's series are taken."""
 
     def __init__(self, sim):
         self.sim = sim
@@ -113,10 +118,11 @@ class DivergenceGuard:
 
         self._scan = scan
 
+    def __call__(self, measured: dict) -> None:
+        self.check(self.sim.time)
+
     def check(self, time: float) -> None:
         """Raise DivergenceError when the state at ``time`` is no longer physical."""
-        import time as _time
-        from .simulation import DivergenceError
         t0 = _time.perf_counter()
         e = self.sim.engine
         key = (e.pairs, getattr(e.mesh, "entries_tree", None))

@@ -16,12 +16,13 @@ from typing import Optional
 
 import numpy as np
 
-from ..engine import backend
 from ..effects import enabled_effects
+from ..engine import backend
+from ..errors import DivergenceError, SceneError, StaleSimulationError
 from ..scene.loader import load_scene, parse_scene
+from ..scene.model import Scene
 from ..setup.pair_tables import build_pair_tables
 from ..setup.placement import place_fills
-from ..scene.model import Scene, SceneError
 from ..setup.timestep import choose_step_and_skin
 
 
@@ -98,14 +99,6 @@ def _factory_capacity(scene: Scene) -> int:
 PINCH_WARNING = 0.2
 
 
-class DivergenceError(RuntimeError):
-    """The simulation blew up (non-finite state); the message says when and the likely fix."""
-
-
-class StaleSimulationError(RuntimeError):
-    pass
-
-
 class Simulation:
     """One DEM simulation. Units SI throughout (m, kg, s, K, N)."""
 
@@ -174,13 +167,30 @@ class Simulation:
             self.recorder = HDF5Recorder(h5, scene_text=scene.text, dt=self.dt, arch=arch,
                                          precision=self.precision)
         self.wall_seconds = 0.0
-        # recorders and sensors that observe every sample: callables (sim, values) -> None,
-        # where values maps /series names to this sample's values; they never change the state
+        # What runs at every output sample besides the series, in order (_sample): ``checks``,
+        # check(measured) before anything is taken from the state (may raise DivergenceError);
+        # ``observers``, observe(sim, values) with the sample's /series values (recorders,
+        # scripts; they never change the state); ``after_sample``, hook(sim) once the sample
+        # is recorded. ``on_divergence``: handler(sim, err) -> err when a step diverged.
+        self.checks: list = []
         self.observers: list = []
-        # checkpoints, the last good state, divergence checks (checkpoint.py, divergence.py)
-        from . import checkpoint
-        checkpoint.attach(self)
+        self.after_sample: list = []
+        self.on_divergence: list = []
+        self._attach_run_observers()
         self._sample()
+
+    def _attach_run_observers(self):
+        """The observers every simulation runs with: the divergence guard (run/divergence.py)
+        and the checkpoint writer (periodic checkpoints, the last good state for a divergence;
+        run/checkpoint.py). Imported here, not at module top: they are observers of the run,
+        and checkpoint.py builds simulations when it resumes one."""
+        from .checkpoint import Checkpointer
+        from .divergence import DivergenceGuard
+        self.divergence = DivergenceGuard(self)
+        self.checkpointer = Checkpointer(self)
+        self.checks += [self.divergence, self._check_state]
+        self.after_sample.append(self.checkpointer.after_sample)
+        self.on_divergence.append(self.checkpointer.diverged)
 
     # ---------------------------------------------------------------- construction
     @classmethod
@@ -195,9 +205,10 @@ class Simulation:
 
     @classmethod
     def from_checkpoint(cls, path: str, **kwargs) -> "Simulation":
-        """Continue from a checkpoint file (checkpoint.resume: arch, threads, h5, checkpoint)."""
+        """Continue from a checkpoint file (checkpoint.resume: arch, threads, h5, checkpoint,
+        configure)."""
         from .checkpoint import resume
-        return resume(path, **kwargs)
+        return resume(path, build=cls, **kwargs)
 
     def _upload(self, placed):
         s = self.engine.state
@@ -278,8 +289,10 @@ class Simulation:
                 if self.step_count % self.output_every == 0:
                     self._sample()
         except DivergenceError as err:
-            # write the last good state and name it in the message (checkpoint.py)
-            raise self.checkpointer.diverged(self, err) from None
+            # the checkpoint writer writes the last good state and names it in the message
+            for handle in self.on_divergence:
+                err = handle(self, err)
+            raise err from None
         self.wall_seconds += _time.perf_counter() - t0
 
     def run(self, until: Optional[float] = None, *, progress: bool = False):
@@ -311,16 +324,10 @@ class Simulation:
     # ---------------------------------------------------------------- observing
     def _sample(self):
         m = self.engine.measure()
-        self.divergence.check(self.time)        # NaN, overlap, speed (divergence.py)
-        if m["non_finite"]:
-            raise DivergenceError(
-                f"the simulation diverged near t = {self.time:.6g} s (non-finite velocity). "
-                f"Likely cause: a time step too large for the stiffest contact; reduce "
-                f"simulation.dt or rayleigh_fraction")
-        self._check_contact_resolution(m["max_speed"])
+        for check in self.checks:       # NaN, overlap, speed (divergence.py); _check_state
+            check(m)
         if self.engine.thermal:
             values_thermal = {"particles/mean_temperature": m["mean_temperature"]}
-            self._check_thermal_step(m["thermal_step_ratio"])
             if self.engine.moisture:
                 values_thermal["particles/mean_moisture"] = m["mean_moisture"]
                 values_thermal["particles/evaporated_mass"] = m["evaporated_mass"]
@@ -339,7 +346,6 @@ class Simulation:
         self._last_sample_time = self.time
         mesh = self.engine.mesh
         if mesh is not None:
-            self._check_pinching(mesh.deepest_overlaps(self.engine.count))
             forces, torques, heats = mesh.take_loads(self.engine.count)
             for k, body in enumerate(self.scene.bodies):
                 axis = np.asarray(body.motion.axis_direction, float)
@@ -375,7 +381,23 @@ class Simulation:
                 "id", "position", "velocity", "angular_velocity", "radius", "temperature")
                 if k in arrays})
             self.recorder.flush()
-        self.checkpointer.after_sample(self)    # periodic checkpoint, last good state
+        for hook in self.after_sample:          # the periodic checkpoint, the last good state
+            hook(self)
+
+    def _check_state(self, measured: dict):
+        """The checks of the sample's measurements (after the divergence guard): non-finite
+        velocities stop the run, a thermal step past its limit too; contacts resolved in too
+        few steps and pinched particles are warned about once."""
+        if measured["non_finite"]:
+            raise DivergenceError(
+                f"the simulation diverged near t = {self.time:.6g} s (non-finite velocity). "
+                f"Likely cause: a time step too large for the stiffest contact; reduce "
+                f"simulation.dt or rayleigh_fraction")
+        self._check_contact_resolution(measured["max_speed"])
+        if self.engine.thermal:
+            self._check_thermal_step(measured["thermal_step_ratio"])
+        if self.engine.mesh is not None:
+            self._check_pinching(self.engine.mesh.deepest_overlaps(self.engine.count))
 
     def _check_pinching(self, deepest: np.ndarray):
         """Say once per body when particles are pinched against it: an overlap beyond

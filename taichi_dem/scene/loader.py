@@ -18,10 +18,10 @@ from typing import Any, Optional
 
 import numpy as np
 
+from ..errors import SceneError
 from .model import (Body, Domain, Factory, Interaction, Material, Motion, Outlet, Output,
                     ParticleFill, PlaneWall, RadiusDistribution, RateSchedule, Region, Scene,
-                    SceneError, Sensor, SimulationSettings, SpeedSchedule, GasSettings,
-                    ThermalSettings)
+                    Sensor, SimulationSettings, SpeedSchedule, GasSettings, ThermalSettings)
 from .units import MAX_MAGNITUDE, MIN_MAGNITUDE, parse_quantity, parse_vec3
 
 SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "bodies",

@@ -1,7 +1,7 @@
 """What a scene *is*: frozen, validated plain data in SI units (no Taichi).
 
-The loader (:mod:`taichi_dem.loader`) turns a TOML file into a :class:`Scene`; the engine
-(:mod:`taichi_dem.simulation`) turns a Scene into device state. Nothing here allocates or
+The loader (:mod:`taichi_dem.scene.loader`) turns a TOML file into a :class:`Scene`; the engine
+(:mod:`taichi_dem.run.simulation`) turns a Scene into device state. Nothing here allocates or
 compiles anything, so a Scene can be built, inspected and validated cheaply (``taichi-dem check``).
 """
 from __future__ import annotations
@@ -13,17 +13,6 @@ from typing import Optional
 import numpy as np
 
 Vec3 = tuple[float, float, float]
-
-
-class SceneError(Exception):
-    """Bad input: names the file, the key (dotted TOML path) and the reason.
-
-    The CLI prints ``str(err)`` as one paragraph and exits with status 2.
-    """
-
-    def __init__(self, file: str, key: str, reason: str):
-        self.file, self.key, self.reason = str(file), key, reason
-        super().__init__(f"{self.file}: {key}: {reason}" if key else f"{self.file}: {reason}")
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ import math
 import re
 from typing import Any
 
-from .model import SceneError
+from ..errors import SceneError
 
 # dimension -> (SI unit, phrase used in messages)
 DIMENSIONS: dict[str, tuple[str, str]] = {

@@ -20,7 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene.model import ParticleFill, RadiusDistribution, Region, Scene, SceneError
+from ..errors import SceneError
+from ..scene.model import ParticleFill, RadiusDistribution, Region, Scene
 
 GAP = 0.05                 # lattice spacing = 2 r_max (1 + GAP)
 _CLEAR = 1e-9              # relative clearance required between spheres

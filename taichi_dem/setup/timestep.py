@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .pair_tables import effective_youngs_modulus, hertz_contact_time, rayleigh_time
-from ..scene.model import Scene, SceneError
+from ..errors import SceneError
+from ..scene.model import Scene
 
 MIN_STEPS_PER_CONTACT = 20      # below this an impact is poorly resolved (auto dt avoids it)
 ERROR_STEPS_PER_CONTACT = 8     # an explicit dt giving fewer is refused: restitution and

@@ -161,7 +161,7 @@ def test_non_utf8_names_the_line_and_a_bom_is_accepted(tmp_path):
     """A Latin-1 degree sign is refused with its line; a UTF-8 byte-order mark and CRLF line
     ends (Windows editors) load."""
     from taichi_dem.scene.loader import load_scene
-    from taichi_dem.scene.model import SceneError
+    from taichi_dem.errors import SceneError
     lines = DRUM.split("\n")
     i = next(k for k, ln in enumerate(lines) if '"20 rpm"' in ln)
     bad = "\n".join(lines).replace('"20 rpm"', '"20 rpm" # 120\u00b0/s').encode("latin-1")

@@ -9,7 +9,7 @@ import pytest
 
 import taichi_dem as td
 from taichi_dem.run import checkpoint
-from taichi_dem.run.simulation import DivergenceError
+from taichi_dem.errors import DivergenceError
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from taichi_dem.scene.loader import load_scene, parse_scene
-from taichi_dem.scene.model import SceneError
+from taichi_dem.errors import SceneError
 
 # A full scene written from the keys of CONTRACT.md (sections planned for later versions left out).
 CONTRACT_SCENE = """

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from taichi_dem.scene.loader import parse_scene
-from taichi_dem.scene.model import Body, SceneError, SpeedSchedule
+from taichi_dem.errors import SceneError
+from taichi_dem.scene.model import Body, SpeedSchedule
 
 ROOT = Path(__file__).resolve().parents[2]
 RPM = 2.0 * math.pi / 60.0

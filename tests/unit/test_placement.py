@@ -7,7 +7,8 @@ import pytest
 
 from taichi_dem.scene.loader import parse_scene
 from taichi_dem.setup.placement import PlacedParticles, place_fills, sample_radii
-from taichi_dem.scene.model import Body, RadiusDistribution, SceneError
+from taichi_dem.errors import SceneError
+from taichi_dem.scene.model import Body, RadiusDistribution
 
 HEADER = """
 [simulation]

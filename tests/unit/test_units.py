@@ -2,7 +2,7 @@ import math
 
 import pytest
 
-from taichi_dem.scene.model import SceneError
+from taichi_dem.errors import SceneError
 from taichi_dem.scene.units import DIMENSIONS, parse_quantity, parse_vec3, units_for
 
 

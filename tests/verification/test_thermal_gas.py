@@ -33,7 +33,7 @@ import pytest
 
 import taichi_dem
 from taichi_dem.scene.loader import parse_scene
-from taichi_dem.scene.model import SceneError
+from taichi_dem.errors import SceneError
 import dem_helpers as h
 
 R = 0.01
