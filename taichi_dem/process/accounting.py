@@ -1,9 +1,11 @@
-"""Outlets, lost particles, sensors and residence times: the host-side accounting that turns
-the device's removal log and sensor sums into /series values (and /residence records).
+"""Outlets and lost particles: the host-side accounting that turns the device's removal log
+(process/outlets.py) into /series values.
 
 Mass balance: every particle's mass as the device stores it is summed in float64 here, so
     initial + fed by factories = inside + removed at outlets + lost
-closes to float64 round-off (``mass_balance``). Sensors only read; they never change the state.
+closes to float64 round-off (``Simulation.mass_balance``). Each drained batch of the log is
+also handed to the ``listeners`` (the residence-time sensor, sensors/residence.py). Accounting
+only reads; it never changes the state.
 """
 from __future__ import annotations
 
@@ -15,28 +17,20 @@ from .outlets import EXIT_LOST
 
 
 class ProcessAccounts:
-    """Per-outlet, per-sensor totals of one simulation."""
+    """Per-outlet totals and the lost particles of one simulation."""
 
     def __init__(self, sim):
         self.sim = sim
         scene = sim.scene
         self.outlets = scene.outlets
-        self.factory_names = [f.name for f in scene.factories]
-        self.outlet_names = [o.name for o in scene.outlets]
         no = len(self.outlets)
         self.outlet_mass = np.zeros(no)          # kg removed so far
         self.outlet_count = np.zeros(no, np.int64)
         self.lost_mass = 0.0
         self.lost_count = 0
         self._reset_interval()
-        self.planes = [x for x in scene.sensors if x.kind == "mass_flow"]
-        self.residence = [x for x in scene.sensors if x.kind == "residence_time"]
-        self.contacts = [x for x in scene.sensors if x.kind == "contact_count"]
-        self.body_names = [b.name for b in scene.bodies]
-        # residence records not yet written to the results file, and all of them
-        self.residence_new = {x.name: [] for x in self.residence}
-        self.residence_interval = {x.name: [] for x in self.residence}
-        self.residence_all = {x.name: [] for x in self.residence}
+        # callables batch -> None, given every drained batch of the removal log
+        self.listeners: list = []
         self.thermal = sim.engine.thermal
         self.drying = sim.engine.moisture
 
@@ -68,16 +62,8 @@ class ProcessAccounts:
                 self.i_heat[o] += float(np.sum(mass[sel] * batch["temperature"][sel]))
             if "moisture" in batch:
                 self.i_water[o] += float(np.sum(mass[sel] * batch["moisture"][sel]))
-        for x in self.residence:
-            src = self.factory_names.index(x.source)
-            dst = self.outlet_names.index(x.target)
-            sel = (batch["origin"] == src) & (exit_ == dst)
-            if np.any(sel):
-                rec = np.stack([batch["id"][sel].astype(np.float64), batch["t_in"][sel],
-                                batch["t_out"][sel]], axis=1)
-                self.residence_new[x.name].append(rec)
-                self.residence_interval[x.name].append(rec)
-                self.residence_all[x.name].append(rec)
+        for listen in self.listeners:
+            listen(batch)
 
     def collect(self):
         """Account everything the device's removal log holds now."""
@@ -91,10 +77,12 @@ class ProcessAccounts:
         engine.removed_batches.clear()
 
     # ------------------------------------------------------------------ samples
-    def sample(self, values: dict, interval: float):
-        """Add this sample's process series to ``values`` (interval: s since the last)."""
-        engine = self.sim.engine
+    def sample(self, values: dict, now):
+        """Add this sample's outlet series to ``values`` (``now.interval``: s since the last
+        sample). Drains the removal log first, so the sensors after it see this interval's
+        removals."""
         self.collect()
+        interval = now.interval
         for o, out in enumerate(self.outlets):
             p = f"outlets/{out.name}/"
             values[p + "mass"] = self.outlet_mass[o]
@@ -110,58 +98,13 @@ class ProcessAccounts:
         if self.outlets or self.sim.scene.factories:
             values["particles/lost_mass"] = self.lost_mass
         self._reset_interval()
-        if self.planes:
-            mass, count = engine.process.take_plane_flows()
-            for k, x in enumerate(self.planes):
-                values[f"sensors/{x.name}/mass_flow"] = mass[k] / interval if interval > 0 else 0.0
-                values[f"sensors/{x.name}/crossings"] = float(count[k])
-        for x in self.residence:
-            new = self.residence_interval[x.name]
-            recs = np.concatenate(new) if new else np.empty((0, 3))
-            self.residence_interval[x.name] = []
-            t = recs[:, 2] - recs[:, 1]
-            p = f"sensors/{x.name}/"
-            values[p + "count"] = float(len(t))
-            if len(t):
-                values[p + "mean"] = float(np.mean(t))
-                values[p + "median"], values[p + "p10"], values[p + "p90"] = (
-                    float(v) for v in np.percentile(t, [50, 10, 90]))
-            else:
-                for k in ("mean", "median", "p10", "p90"):
-                    values[p + k] = math.nan
-        if self.contacts:
-            counts = engine.mesh.contact_counts(engine.count)
-            for x in self.contacts:
-                values[f"sensors/{x.name}/contact_count"] = float(counts[self.body_names.index(x.body)])
-
-    def pop_residence(self) -> dict[str, np.ndarray]:
-        """Residence records (id, t_in, t_out) completed since the last call, per sensor."""
-        out = {}
-        for name, parts in self.residence_new.items():
-            if parts:
-                out[name] = np.concatenate(parts)
-            self.residence_new[name] = []
-        return out
-
-    def residence_times(self, name: str) -> np.ndarray:
-        """(id, t_in, t_out) of every particle that completed the sensor's path so far."""
-        parts = self.residence_all[name]
-        return np.concatenate(parts) if parts else np.empty((0, 3))
 
     def state_dict(self) -> dict:
-        d = {"outlet_mass": self.outlet_mass.copy(), "outlet_count": self.outlet_count.copy(),
-             "lost_mass": self.lost_mass, "lost_count": self.lost_count}
-        for name in self.residence_all:
-            d[f"residence:{name}"] = self.residence_times(name)
-        return d
+        return {"outlet_mass": self.outlet_mass.copy(), "outlet_count": self.outlet_count.copy(),
+                "lost_mass": self.lost_mass, "lost_count": self.lost_count}
 
     def load_state_dict(self, d: dict):
         self.outlet_mass = np.asarray(d["outlet_mass"], float).copy()
         self.outlet_count = np.asarray(d["outlet_count"], np.int64).copy()
         self.lost_mass = float(d["lost_mass"])
         self.lost_count = int(d["lost_count"])
-        for name in self.residence_all:
-            rec = np.asarray(d.get(f"residence:{name}", np.empty((0, 3))), float).reshape(-1, 3)
-            self.residence_all[name] = [rec] if len(rec) else []
-            self.residence_new[name] = []
-            self.residence_interval[name] = []

@@ -289,7 +289,8 @@ class FactorySet:
         return _Triangles(fake, 2.0 * r_max)
 
     # ------------------------------------------------------------------ series
-    def sample(self, time: float, values: dict):
+    def sample(self, values: dict, now):
+        """/series factories/<name>/mass (kg inserted), count and behind (kg behind schedule)."""
         for k, f in enumerate(self.factories):
             values[f"factories/{f.name}/mass"] = self.inserted_mass[k]
             values[f"factories/{f.name}/count"] = float(self.inserted_count[k])

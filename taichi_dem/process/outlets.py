@@ -1,7 +1,7 @@
-"""Process tooling on the device: outlets that remove particles, the removal log they write,
-and the mass-flow planes that count crossings. The engine's drift calls ``after_drift`` once
-per moving particle and step; nothing here is compiled when a scene has no factories, outlets
-or mass-flow sensors.
+"""Process tooling on the device: outlets that remove particles and the removal log they
+write; the drift's hook ``after_drift`` also counts the mass-flow planes' crossings
+(sensors/mass_flow.py). The engine's drift calls ``after_drift`` once per moving particle and
+step; nothing here is compiled when a scene has no factories, outlets or mass-flow sensors.
 
 A removed particle (outlet or left the domain) is written to the log with what the accounting
 needs (id, factory, exit, times, mass, temperature), marked dead and moved to a far-away
@@ -11,8 +11,9 @@ between two rebuilds; the host drains it at every rebuild and every output sampl
 (Engine.rebuild, accounting.py), and a log more than half full asks for a rebuild.
 """
 
-import numpy as np
 import taichi as ti
+
+from ..sensors.mass_flow import PlaneCrossings
 
 EXIT_LOST = -1          # the particle left the domain
 
@@ -46,13 +47,13 @@ def region_test(region):
 
 
 class ProcessDevice:
-    """Fields and ti.funcs of outlets, the removal log and mass-flow planes of one engine."""
+    """Fields and ti.funcs of outlets and the removal log of one engine, and the device
+    counters of its mass-flow planes (``planes``, sensors/mass_flow.py)."""
 
     def __init__(self, engine, tree):
         scene = engine.scene
         s = engine.state
         self.outlets = scene.outlets
-        self.planes = [x for x in scene.sensors if x.kind == "mass_flow"]
         self.log_enabled = bool(scene.factories or scene.outlets)
         self.thermal = engine.thermal
         cap = s.capacity
@@ -70,10 +71,7 @@ class ProcessDevice:
             self.log_mass = tree.add("log_mass", ti.f64, cap)
             self.log_temperature = tree.add("log_temperature", ti.f64, cap) if self.thermal else None
             self.log_moisture = tree.add("log_moisture", ti.f64, cap) if engine.moisture else None
-        n_planes = max(len(self.planes), 1)
-        # mass (kg, signed along the normal) and count of crossings since the last sample
-        self.plane_mass = tree.add("plane_mass", ti.f64, n_planes)
-        self.plane_count = tree.add("plane_count", ti.i32, n_planes)
+        self.planes = PlaneCrossings(scene, tree)
 
     def make_funcs(self, engine):
         """Compile-time construction of ``after_drift(i, x_old, x_new, x_wrapped, inside, t)``:
@@ -89,11 +87,7 @@ class ProcessDevice:
         thermal = self.thermal
         drying = self.log_moisture is not None
         process_fields = s.process
-        planes = [(tuple(x.point), tuple(x.normal), x.radius if x.radius is not None else -1.0,
-                   tuple(x.box_min) if x.box_min is not None else (0.0, 0.0, 0.0),
-                   tuple(x.box_max) if x.box_max is not None else (0.0, 0.0, 0.0),
-                   x.box_min is not None) for x in self.planes]
-        n_planes = len(planes)
+        count_crossings = self.planes.make_func(s)
         me = self
 
         @ti.func
@@ -120,27 +114,7 @@ class ProcessDevice:
 
         @ti.func
         def after_drift(i, x_old, x_new, x_wrapped, inside, t):
-            for k in ti.static(range(n_planes)):
-                point = ti.Vector(planes[k][0])
-                normal = ti.Vector(planes[k][1])
-                before = (x_old - point).dot(normal)
-                after = (x_new - point).dot(normal)
-                if (before < 0.0) != (after < 0.0):
-                    crossing = x_old + (x_new - x_old) * (before / (before - after))
-                    within = True
-                    if ti.static(planes[k][2] > 0.0):
-                        off = crossing - point
-                        within = off.dot(off) <= ti.static(planes[k][2] ** 2)
-                    if ti.static(planes[k][5]):
-                        lo = ti.Vector(planes[k][3])
-                        hi = ti.Vector(planes[k][4])
-                        for a in ti.static(range(3)):
-                            if crossing[a] < lo[a] or crossing[a] > hi[a]:
-                                within = False
-                    if within:
-                        sign = 1.0 if after >= 0.0 else -1.0
-                        ti.atomic_add(me.plane_mass[k], sign * ti.cast(s.mass[i], ti.f64))
-                        ti.atomic_add(me.plane_count[k], 1)
+            count_crossings(i, x_old, x_new)
             exit_index = -2
             if not inside:
                 exit_index = EXIT_LOST
@@ -176,11 +150,3 @@ class ProcessDevice:
             out["moisture"] = self.log_moisture.to_numpy()[:n]
         self.log_count[0] = 0
         return out
-
-    def take_plane_flows(self):
-        """(mass kg signed, count) crossed per mass-flow plane since the last call; reset."""
-        m = self.plane_mass.to_numpy()[: len(self.planes)].astype(np.float64)
-        c = self.plane_count.to_numpy()[: len(self.planes)].astype(np.int64)
-        self.plane_mass.fill(0.0)
-        self.plane_count.fill(0)
-        return m, c

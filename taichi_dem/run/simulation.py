@@ -21,6 +21,8 @@ from ..engine import backend
 from ..errors import DivergenceError, SceneError, StaleSimulationError
 from ..scene.loader import load_scene, parse_scene
 from ..scene.model import Scene
+from ..sensors import Now, build_sensors
+from ..sensors.particles import mass_inside
 from ..setup.pair_tables import build_pair_tables
 from ..setup.placement import place_fills
 from ..setup.timestep import choose_step_and_skin
@@ -155,10 +157,14 @@ class Simulation:
         if scene.factories or scene.outlets or scene.sensors:
             from ..process.accounting import ProcessAccounts
             self.accounts = ProcessAccounts(self)
+        # what turns the state into /series values at each sample, by name, in the order
+        # their series are written (sensors/; the outlet accounts and factories among them)
+        self.sensors: dict = build_sensors(self)
         # host-side parts whose state a checkpoint must keep: name -> object with
         # state_dict() / load_state_dict(d)
-        self.checkpointables: dict = {k: v for k, v in (("factories", self.factories),
-                                                         ("accounts", self.accounts)) if v}
+        self.checkpointables: dict = {k: v for k, v in (
+            ("factories", self.factories), ("accounts", self.accounts),
+            ("residence", self.sensors.get("residence"))) if v is not None}
         self._series: dict[str, list] = {}
         self.recorder = None
         h5 = h5 if h5 is not None else scene.output.h5
@@ -167,7 +173,7 @@ class Simulation:
             self.recorder = HDF5Recorder(h5, scene_text=scene.text, dt=self.dt, arch=arch,
                                          precision=self.precision)
         self.wall_seconds = 0.0
-        # What runs at every output sample besides the series, in order (_sample): ``checks``,
+        # What runs at every output sample besides the sensors, in order (_sample): ``checks``,
         # check(measured) before anything is taken from the state (may raise DivergenceError);
         # ``observers``, observe(sim, values) with the sample's /series values (recorders,
         # scripts; they never change the state); ``after_sample``, hook(sim) once the sample
@@ -323,55 +329,23 @@ class Simulation:
 
     # ---------------------------------------------------------------- observing
     def _sample(self):
+        """One output sample: the checks, then each sensor adds its /series values, then the
+        series are stored, the observers see them, the results file gets them (with a frame
+        and the residence records completed since the last sample), and the after-sample
+        hooks run (the checkpoint writer)."""
         m = self.engine.measure()
         for check in self.checks:       # NaN, overlap, speed (divergence.py); _check_state
             check(m)
-        if self.engine.thermal:
-            values_thermal = {"particles/mean_temperature": m["mean_temperature"]}
-            if self.engine.moisture:
-                values_thermal["particles/mean_moisture"] = m["mean_moisture"]
-                values_thermal["particles/evaporated_mass"] = m["evaporated_mass"]
-            if self.engine.gas_stream is not None:
-                values_thermal.update(self.engine.gas_stream.series())
-        else:
-            values_thermal = {}
-        values = {"time": self.time, "particles/count": self.engine.alive_count,
-                  "particles/kinetic_energy": m["kinetic_energy"],
-                  "particles/lost": self.engine.lost, **values_thermal}
-        if self.accounts is not None:
-            self.accounts.sample(values, self.time - self._last_sample_time)
-        if self.factories is not None:
-            self.factories.sample(self.time, values)
-            values["particles/mass"] = self.mass_inside()
+        now = Now(time=self.time, interval=self.time - self._last_sample_time, measured=m)
+        values = {"time": self.time}
+        for sensor in self.sensors.values():
+            sensor.sample(values, now)
         self._last_sample_time = self.time
-        mesh = self.engine.mesh
-        if mesh is not None:
-            forces, torques, heats = mesh.take_loads(self.engine.count)
-            for k, body in enumerate(self.scene.bodies):
-                axis = np.asarray(body.motion.axis_direction, float)
-                speed = self.engine.kinematics.speed(k, self.time)
-                axial = float(torques[k] @ axis)
-                prefix = f"bodies/{body.name}/"
-                values[prefix + "force"] = forces[k]
-                values[prefix + "torque"] = torques[k]
-                values[prefix + "axial_torque"] = axial
-                values[prefix + "angular_speed"] = speed
-                # the particles' torque resists the turning; the drive supplies -T w
-                values[prefix + "power"] = -axial * speed
-                if self.engine.wall_conduction and body.temperature is not None:
-                    values[prefix + "heat_flow"] = heats[k]
-        if self.scene.walls:
-            wf = self.engine.wall_force.to_numpy()
-            wq = self.engine.wall_heat.to_numpy() if self.engine.thermal else None
-            for k, w in enumerate(self.scene.walls):
-                values[f"walls/{w.name}/force"] = wf[k].astype(np.float64)
-                if wq is not None and self.engine.wall_conduction and w.temperature is not None:
-                    values[f"walls/{w.name}/heat_flow"] = float(wq[k])
         for name, v in values.items():
             self._series.setdefault(name, []).append(np.asarray(v, dtype=np.float64))
         for observe in self.observers:
             observe(self, values)
-        residence = self.accounts.pop_residence() if self.accounts is not None else {}
+        residence = self.sensors["residence"].pop_new() if "residence" in self.sensors else {}
         if self.recorder is not None:
             self.recorder.append_series(values)
             for name, rec in residence.items():
@@ -528,10 +502,7 @@ class Simulation:
 
     def mass_inside(self) -> float:
         """Mass of the particles in the simulation now, kg (float64 sum of the stored masses)."""
-        s = self.engine.state
-        n = self.engine.count
-        alive = s.alive.to_numpy()[:n] != 0
-        return float(np.sum(s.mass.to_numpy()[:n][alive].astype(np.float64)))
+        return mass_inside(self.engine)
 
     def mass_balance(self) -> dict:
         """initial + fed = inside + removed + lost, kg; ``error`` is the difference."""
@@ -550,7 +521,7 @@ class Simulation:
     def residence_times(self, sensor: str) -> np.ndarray:
         """(id, t_in s, t_out s) rows of the particles that completed the path of residence
         sensor ``sensor`` so far."""
-        return self.accounts.residence_times(sensor)
+        return self.sensors["residence"].records(sensor)
 
     @property
     def effects(self):

@@ -1,0 +1,47 @@
+"""Whole-population series: particles/count, kinetic_energy, lost (and lost_mass in
+process/accounting.py), mass; thermal: mean temperature, mean moisture, evaporated mass and
+the plug-flow gas stream's series."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def mass_inside(engine) -> float:
+    """Mass of the particles in the simulation now, kg (float64 sum of the stored masses)."""
+    s = engine.state
+    n = engine.count
+    alive = s.alive.to_numpy()[:n] != 0
+    return float(np.sum(s.mass.to_numpy()[:n][alive].astype(np.float64)))
+
+
+class ParticleSeries:
+    """particles/count, kinetic_energy, lost; thermal scenes: mean_temperature (mean_moisture,
+    evaporated_mass when drying) and the gas stream's series."""
+
+    def __init__(self, engine):
+        self.engine = engine
+
+    def sample(self, values: dict, now) -> None:
+        e, m = self.engine, now.measured
+        thermal = {}
+        if e.thermal:
+            thermal["particles/mean_temperature"] = m["mean_temperature"]
+            if e.moisture:
+                thermal["particles/mean_moisture"] = m["mean_moisture"]
+                thermal["particles/evaporated_mass"] = m["evaporated_mass"]
+            if e.gas_stream is not None:
+                thermal.update(e.gas_stream.series())
+        values["particles/count"] = e.alive_count
+        values["particles/kinetic_energy"] = m["kinetic_energy"]
+        values["particles/lost"] = e.lost
+        values.update(thermal)
+
+
+class ParticleMass:
+    """particles/mass: the mass inside now (scenes with factories)."""
+
+    def __init__(self, engine):
+        self.engine = engine
+
+    def sample(self, values: dict, now) -> None:
+        values["particles/mass"] = mass_inside(self.engine)
