@@ -433,13 +433,16 @@ class MeshContacts:
         reactions to the bodies' load sums."""
         m = self
         e = self.e
-        E, G, Z, MU = e.youngs_eff, e.shear_eff, e.damping, e.friction
-        MUR, RM, RD = e.rolling_friction, e.rolling_model, e.rolling_damping
+        # the pair tables (material x material), as the kernels read them
+        youngs_eff, shear_eff, damping, friction = (e.youngs_eff, e.shear_eff, e.damping,
+                                                    e.friction)
+        rolling_friction, rolling_model, rolling_damping = (e.rolling_friction, e.rolling_model,
+                                                            e.rolling_damping)
         cdt, epsd = e.rolling_cdt, e.rolling_epsd
         periodic = any(e.grid.periodic)
         wall_conduction = e.wall_conduction
-        KC = e.conductance_factor if e.thermal else None
-        RC = e.radius_correction if e.thermal else None
+        conductance_factor = e.conductance_factor if e.thermal else None
+        radius_correction = e.radius_correction if e.thermal else None
         s = e.state
         same_surface_cos = SAME_SURFACE_COS
         from ..effects import rolling
@@ -521,18 +524,20 @@ class MeshContacts:
                     mb = m.body_material[body]
                     fn, ft, history, sn = contact_force(
                         normal, overlap, ri, mass_i, v_rel, ai.dot(normal), history,
-                        E[mi, mb], G[mi, mb], Z[mi, mb], MU[mi, mb], dt)
+                        youngs_eff[mi, mb], shear_eff[mi, mb], damping[mi, mb],
+                        friction[mi, mb], dt)
                     contact = fn * normal + ft
                     contact_torque = -arm * normal.cross(ft)
                     body_torque = -lever_body.cross(contact)
                     if ti.static(cdt or epsd):
-                        if MUR[mi, mb] > 0.0:
+                        if rolling_friction[mi, mb] > 0.0:
                             prev = ti.Vector([0.0, 0.0, 0.0])
                             if ti.static(epsd):
                                 prev = m.rolling_history[k]
                             tr, rolling_history = rolling_torque(
-                                RM[mi, mb], wi - m.angular_velocity[body], normal, fn, sn, ri,
-                                MUR[mi, mb], RD[mi, mb], 1.0 / inverse_inertia_i,
+                                rolling_model[mi, mb], wi - m.angular_velocity[body], normal,
+                                fn, sn, ri, rolling_friction[mi, mb], rolling_damping[mi, mb],
+                                1.0 / inverse_inertia_i,
                                 1.0 / rolling.rolling_inverse_inertia(1.0 / mass_i, inverse_inertia_i, ri),
                                 prev, dt)
                             contact_torque += tr
@@ -541,7 +546,8 @@ class MeshContacts:
                                 m.rolling_history[k] = rolling_history
                     if ti.static(wall_conduction):
                         if m.body_temperature[body] >= 0.0:
-                            h_b = contact_conductance(KC[mi, mb], RC[mi, mb], ri, overlap)
+                            h_b = contact_conductance(conductance_factor[mi, mb],
+                                                      radius_correction[mi, mb], ri, overlap)
                             q_b = h_b * (m.body_temperature[body] - s.temperature[i])
                             heat += q_b
                             conductance += h_b

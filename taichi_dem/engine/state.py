@@ -39,6 +39,28 @@ class FieldTree:
         self.fields.clear()
 
 
+class Flag:
+    """Slots of the engine's ``flags`` field (i32): kernels set them, the host reads them."""
+    REBUILD = 0          # 1: rebuild the neighbour lists before the next pair kernel
+    LOST = 1             # particles that left the domain since the start (Engine.lost)
+    DEAD_IN_SLOTS = 2    # particles removed since the last rebuild, still holding a slot
+    SIZE = 3
+
+
+class Reduction:
+    """Slots of the engine's ``reduction`` field (real), filled by Engine.measure's kernel."""
+    KINETIC_ENERGY = 0       # J, translational + rotational, of the moving particles
+    MAX_SPEED = 1            # m/s
+    NON_FINITE = 2           # 1.0 when a velocity or temperature is NaN or overflowed
+    MOVING_COUNT = 3         # moving particles alive
+    THERMAL_ENERGY = 4       # sum m c T, J
+    THERMAL_MASS = 5         # sum m c, J/K
+    THERMAL_STEP_RATIO = 6   # largest dt sum(h) / (m c) of a particle
+    WATER_MASS = 7           # kg
+    DRY_MASS = 8             # kg of dry solid
+    SIZE = 10                # (slot 9 unused)
+
+
 def fit_rows(a: np.ndarray, n: int) -> np.ndarray:
     """The first ``n`` rows of ``a``, zero-padded to ``n`` rows: a host copy of an array being
     reallocated with ``n`` entries (pair and mesh-entry arrays that grow)."""

@@ -28,7 +28,7 @@ from thermal.conduction import contact_conductance
 from thermal import moisture as drying
 from thermal import radiation as radiative
 from ..setup.pair_tables import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
-from .state import FieldTree, PairState, ParticleState, fit_rows
+from .state import FieldTree, Flag, PairState, ParticleState, Reduction, fit_rows
 
 
 class Engine:
@@ -69,10 +69,10 @@ class Engine:
         self.rolling_friction = t.add("rolling_friction", real, (m, m))
         self.rolling_model = t.add("rolling_model", ti.i32, (m, m))
         self.rolling_damping = t.add("rolling_damping", real, (m, m))
-        # [rebuild needed, lost count, dead particles still holding a slot]
-        self.flags = t.add("flags", ti.i32, 3)
+        # named slots: Flag (engine/state.py)
+        self.flags = t.add("flags", ti.i32, Flag.SIZE)
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
-        self.reduction = t.add("reduction", real, 10)
+        self.reduction = t.add("reduction", real, Reduction.SIZE)   # named slots: Reduction
         self.gas_stream = None
         if self.thermal:
             self.conductance_factor = t.add("conductance_factor", real, (m, m))
@@ -201,12 +201,12 @@ class Engine:
                     s.alive[i] = 0
                     s.position[i] = ti.Vector([PARKED, PARKED, PARKED])
                     s.velocity[i] = ti.Vector([0.0, 0.0, 0.0])
-                    ti.atomic_add(flags[1], 1)
-                    ti.atomic_add(flags[2], 1)
+                    ti.atomic_add(flags[Flag.LOST], 1)
+                    ti.atomic_add(flags[Flag.DEAD_IN_SLOTS], 1)
                 if not removed:
                     moved = minimum_image(x - s.reference_position[i])
                     if moved.dot(moved) > half_skin_sq:
-                        flags[0] = 1          # benign race: every writer writes 1
+                        flags[Flag.REBUILD] = 1      # benign race: every writer writes 1
         self.drift_particle = drift_particle
 
         @ti.kernel
@@ -222,38 +222,43 @@ class Engine:
         def measure(n: ti.i32):
             # kinetic energy (translational + rotational, J), largest speed, non-finite flag,
             # alive count; thermal: sum m c T (J), sum m c (J/K), largest dt sum(h)/(m c)
-            for k in ti.static(range(10)):
+            for k in ti.static(range(Reduction.SIZE)):
                 red[k] = 0.0
             for i in range(n):
                 if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
                     m = s.mass[i]
                     inertia = 0.4 * m * s.radius[i] ** 2
                     v2 = s.velocity[i].dot(s.velocity[i])
-                    red[0] += 0.5 * m * v2 + 0.5 * inertia * s.angular_velocity[i].dot(s.angular_velocity[i])
-                    ti.atomic_max(red[1], ti.sqrt(v2))
+                    red[Reduction.KINETIC_ENERGY] += (0.5 * m * v2 + 0.5 * inertia
+                                                      * s.angular_velocity[i].dot(s.angular_velocity[i]))
+                    ti.atomic_max(red[Reduction.MAX_SPEED], ti.sqrt(v2))
                     if not (v2 >= 0.0 and v2 < 1e300):
-                        red[2] = 1.0      # NaN or overflow
-                    red[3] += 1.0
+                        red[Reduction.NON_FINITE] = 1.0      # NaN or overflow
+                    red[Reduction.MOVING_COUNT] += 1.0
             if ti.static(thermal):
                 for i in range(n):
                     if s.alive[i] != 0:
                         thermal_mass = 1.0 / s.inverse_thermal_mass[i]
-                        red[4] += thermal_mass * s.temperature[i]
-                        red[5] += thermal_mass
-                        ti.atomic_max(red[6], dt_step * s.conductance[i] * s.inverse_thermal_mass[i])
+                        red[Reduction.THERMAL_ENERGY] += thermal_mass * s.temperature[i]
+                        red[Reduction.THERMAL_MASS] += thermal_mass
+                        ti.atomic_max(red[Reduction.THERMAL_STEP_RATIO],
+                                      dt_step * s.conductance[i] * s.inverse_thermal_mass[i])
                         if not (s.temperature[i] > 0.0 and s.temperature[i] < 1e30):
-                            red[2] = 1.0
+                            red[Reduction.NON_FINITE] = 1.0
                         if ti.static(moisture):
-                            red[7] += s.mass[i] * s.moisture[i]          # water, kg
-                            red[8] += s.mass[i]                          # dry solid, kg
+                            red[Reduction.WATER_MASS] += s.mass[i] * s.moisture[i]      # kg
+                            red[Reduction.DRY_MASS] += s.mass[i]                        # kg
 
         self._drift, self._measure = drift, measure
 
     def _compile_pair_kernels(self, p: PairState):
         s = self.state
         minimum_image = self.minimum_image
-        E, G, Z, MU, MUR, RM, RD = (self.youngs_eff, self.shear_eff, self.damping, self.friction,
-                                    self.rolling_friction, self.rolling_model, self.rolling_damping)
+        # the pair tables (material x material), as the kernels read them
+        youngs_eff, shear_eff, damping, friction = (self.youngs_eff, self.shear_eff, self.damping,
+                                                    self.friction)
+        rolling_friction, rolling_model, rolling_damping = (
+            self.rolling_friction, self.rolling_model, self.rolling_damping)
         cdt, epsd = self.rolling_cdt, self.rolling_epsd
         walls = [(tuple(w.point), tuple(w.normal), self.tables.index(w.material)) for w in self.walls]
         n_walls = len(walls)
@@ -264,8 +269,8 @@ class Engine:
         has_mesh = self.mesh is not None
         conduction, wall_conduction, convection = self.conduction, self.wall_conduction, self.convection
         thermal = self.thermal
-        KC = self.conductance_factor if thermal else None
-        RC = self.radius_correction if thermal else None
+        conductance_factor = self.conductance_factor if thermal else None
+        radius_correction = self.radius_correction if thermal else None
         wall_temperature = [w.temperature if (w.temperature is not None and wall_conduction) else -1.0
                             for w in self.walls]
         wall_heat = self.wall_heat if thermal else None
@@ -328,7 +333,9 @@ class Engine:
                             # Q = h_c (T_j - T_i), h_c = 4 k_i k_j/(k_i + k_j) a, with the Hertz
                             # contact radius a = (3 F_n R*/(4 E*))^(1/3) = sqrt(R* d_n),
                             # corrected for a softened modulus (model.conduction_tables)
-                            h_c = contact_conductance(KC[mi, mj], RC[mi, mj], r_eff, normal_overlap)
+                            h_c = contact_conductance(conductance_factor[mi, mj],
+                                                      radius_correction[mi, mj], r_eff,
+                                                      normal_overlap)
                             heat = h_c * (s.temperature[j] - s.temperature[i])
                             owned_heat += heat
                             owned_conductance += h_c
@@ -348,20 +355,21 @@ class Engine:
                         normal_acceleration = (s.acceleration[i] - s.acceleration[j]).dot(normal)
                         fn, ft, history, sn = contact_force(
                             normal, normal_overlap, r_eff, m_eff, v_rel, normal_acceleration,
-                            p.tangential_history[k], E[mi, mj], G[mi, mj], Z[mi, mj],
-                            MU[mi, mj], dt)
+                            p.tangential_history[k], youngs_eff[mi, mj], shear_eff[mi, mj],
+                            damping[mi, mj], friction[mi, mj], dt)
                         force = fn * normal + ft
                         lever = normal.cross(ft)
                         torque_i = -arm_i * lever
                         torque_j = -arm_j * lever
                         if ti.static(cdt or epsd):
-                            if MUR[mi, mj] > 0.0:
+                            if rolling_friction[mi, mj] > 0.0:
                                 prev = ti.Vector([0.0, 0.0, 0.0])
                                 if ti.static(epsd):
                                     prev = p.rolling_history[k]
                                 tr, rolling_history = rolling_torque(
-                                    RM[mi, mj], wi - wj, normal, fn, sn, r_eff, MUR[mi, mj],
-                                    RD[mi, mj], 1.0 / (inv_ii + s.inverse_inertia[j]),
+                                    rolling_model[mi, mj], wi - wj, normal, fn, sn, r_eff,
+                                    rolling_friction[mi, mj], rolling_damping[mi, mj],
+                                    1.0 / (inv_ii + s.inverse_inertia[j]),
                                     1.0 / (rolling.rolling_inverse_inertia(inv_mi, inv_ii, ri)
                                            + rolling.rolling_inverse_inertia(
                                                s.inverse_mass[j], s.inverse_inertia[j], rj)),
@@ -428,7 +436,9 @@ class Engine:
                         if ti.static(wall_temperature[w] >= 0.0):
                             if normal_overlap > 0.0:
                                 # conduction to an isothermal (e.g. water-cooled) wall
-                                h_w = contact_conductance(KC[mi, mw], RC[mi, mw], ri, normal_overlap)
+                                h_w = contact_conductance(conductance_factor[mi, mw],
+                                                          radius_correction[mi, mw], ri,
+                                                          normal_overlap)
                                 q_w = h_w * (ti.static(wall_temperature[w]) - s.temperature[i])
                                 heat += q_w
                                 conductance += h_w
@@ -440,18 +450,19 @@ class Engine:
                             fn, ft, history, sn = contact_force(
                                 wall_normal, normal_overlap, ri, s.mass[i], v_rel,
                                 s.acceleration[i].dot(wall_normal),
-                                s.wall_tangential_history[i, w], E[mi, mw], G[mi, mw],
-                                Z[mi, mw], MU[mi, mw], dt)
+                                s.wall_tangential_history[i, w], youngs_eff[mi, mw],
+                                shear_eff[mi, mw], damping[mi, mw], friction[mi, mw], dt)
                             wall_contact = fn * wall_normal + ft
                             contact_torque = -arm * wall_normal.cross(ft)
                             if ti.static(cdt or epsd):
-                                if MUR[mi, mw] > 0.0:
+                                if rolling_friction[mi, mw] > 0.0:
                                     prev = ti.Vector([0.0, 0.0, 0.0])
                                     if ti.static(epsd):
                                         prev = s.wall_rolling_history[i, w]
                                     tr, rolling_history = rolling_torque(
-                                        RM[mi, mw], wi, wall_normal, fn, sn, ri, MUR[mi, mw],
-                                        RD[mi, mw], 1.0 / s.inverse_inertia[i],
+                                        rolling_model[mi, mw], wi, wall_normal, fn, sn, ri,
+                                        rolling_friction[mi, mw], rolling_damping[mi, mw],
+                                        1.0 / s.inverse_inertia[i],
                                         1.0 / rolling.rolling_inverse_inertia(
                                             inv_m, s.inverse_inertia[i], ri),
                                         prev, dt)
@@ -542,13 +553,13 @@ class Engine:
 
     def rebuild(self, n: int):
         """Drop dead particles, re-sort and rebuild the neighbour lists."""
-        self.flags[0] = 0
+        self.flags[Flag.REBUILD] = 0
         if self.process is not None and self.process.log_enabled:
             batch = self.process.drain()
             if batch is not None:
                 self.removed_batches.append(batch)
         self.count = self.broadphase.rebuild(n)
-        self.flags[2] = 0
+        self.flags[Flag.DEAD_IN_SLOTS] = 0
 
     def advance(self, steps: int, record_last: bool = False):
         """Advance ``steps`` time steps of ``self.dt``."""
@@ -559,7 +570,7 @@ class Engine:
                 # later steps drifted at the end of the previous gather
                 self._drift(n, dt, self.time + dt)
             self.time += dt
-            rebuild = self.flags[0] != 0
+            rebuild = self.flags[Flag.REBUILD] != 0
             if self.mesh is not None:
                 self.mesh.update_frames(self.time)
                 self.mesh.interval_steps += 1
@@ -581,24 +592,29 @@ class Engine:
     def measure(self) -> dict:
         self._measure(self.count)
         r = self.reduction.to_numpy()
-        out = {"kinetic_energy": float(r[0]), "max_speed": float(r[1]), "non_finite": bool(r[2] > 0)}
+        out = {"kinetic_energy": float(r[Reduction.KINETIC_ENERGY]),
+               "max_speed": float(r[Reduction.MAX_SPEED]),
+               "non_finite": bool(r[Reduction.NON_FINITE] > 0)}
         if self.thermal:
-            out.update(thermal_energy=float(r[4]), mean_temperature=float(r[4] / r[5]) if r[5] else 0.0,
-                       thermal_step_ratio=float(r[6]))
+            energy, thermal_mass = r[Reduction.THERMAL_ENERGY], r[Reduction.THERMAL_MASS]
+            out.update(thermal_energy=float(energy),
+                       mean_temperature=float(energy / thermal_mass) if thermal_mass else 0.0,
+                       thermal_step_ratio=float(r[Reduction.THERMAL_STEP_RATIO]))
         if self.moisture:
-            out.update(mean_moisture=float(r[7] / r[8]) if r[8] else 0.0,
+            water, dry = r[Reduction.WATER_MASS], r[Reduction.DRY_MASS]
+            out.update(mean_moisture=float(water / dry) if dry else 0.0,
                        evaporated_mass=float(self.evaporated[0]))
         return out
 
     @property
     def lost(self) -> int:
-        return int(self.flags[1])
+        return int(self.flags[Flag.LOST])
 
     @property
     def alive_count(self) -> int:
         """Particles in the simulation now (slots in use minus those removed since the last
         rebuild)."""
-        return self.count - int(self.flags[2])
+        return self.count - int(self.flags[Flag.DEAD_IN_SLOTS])
 
     def insert(self, arrays: dict):
         """Put new particles into the slots after the last one in use and flag a rebuild.
@@ -694,7 +710,7 @@ class Engine:
                         mesh.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
                         if ti.static(heat_loads):
                             mesh.particle_load_heat[i, b] = 0.0
-            flags[0] = 1
+            flags[Flag.REBUILD] = 1
 
         self._insert = insert
 

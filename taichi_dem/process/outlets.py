@@ -13,6 +13,7 @@ between two rebuilds; the host drains it at every rebuild and every output sampl
 
 import taichi as ti
 
+from ..engine.state import Flag
 from ..sensors.mass_flow import PlaneCrossings
 
 EXIT_LOST = -1          # the particle left the domain
@@ -110,7 +111,7 @@ class ProcessDevice:
                 if ti.static(drying):
                     me.log_moisture[slot] = ti.cast(s.moisture[i], ti.f64)
                 if slot * 2 > ti.static(me.log_capacity):
-                    flags[0] = 1          # rebuild soon: the host drains the log then
+                    flags[Flag.REBUILD] = 1   # rebuild soon: the host drains the log then
 
         @ti.func
         def after_drift(i, x_old, x_new, x_wrapped, inside, t):
@@ -129,9 +130,9 @@ class ProcessDevice:
                 s.alive[i] = 0
                 s.position[i] = ti.Vector([PARKED, PARKED, PARKED])
                 s.velocity[i] = ti.Vector([0.0, 0.0, 0.0])
-                ti.atomic_add(flags[2], 1)            # dead, still holding a slot
+                ti.atomic_add(flags[Flag.DEAD_IN_SLOTS], 1)   # dead, still holding a slot
                 if exit_index == EXIT_LOST:
-                    ti.atomic_add(flags[1], 1)
+                    ti.atomic_add(flags[Flag.LOST], 1)
             return removed
 
         return after_drift
