@@ -123,7 +123,7 @@ class Broadphase:
         dims = ti.Vector(list(g.dims))
         n_cells = g.n_cells
         cell_count, cell_start, cell_fill, total = self.cell_count, self.cell_start, self.cell_fill, self.total
-        vec_fields, real_fields, int_fields, wall_fields = s.reorder_groups()
+        vec_fields, real_fields, int_fields, wall_fields, f64_fields = s.reorder_groups()
         n_walls = s.n_walls
 
         @ti.func
@@ -179,6 +179,11 @@ class Broadphase:
                     s.shadow_int[k] = f[s.order[k]]
                 for k in range(n):
                     f[k] = s.shadow_int[k]
+            for f in ti.static(f64_fields):
+                for k in range(n):
+                    s.shadow_f64[k] = f[s.order[k]]
+                for k in range(n):
+                    f[k] = s.shadow_f64[k]
             for f in ti.static(wall_fields):
                 for w in ti.static(range(n_walls)):
                     for k in range(n):

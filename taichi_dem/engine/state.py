@@ -53,12 +53,18 @@ class Reduction:
     MAX_SPEED = 1            # m/s
     NON_FINITE = 2           # 1.0 when a velocity or temperature is NaN or overflowed
     MOVING_COUNT = 3         # moving particles alive
-    THERMAL_ENERGY = 4       # sum m c T, J
-    THERMAL_MASS = 5         # sum m c, J/K
-    THERMAL_STEP_RATIO = 6   # largest dt sum(h) / (m c) of a particle
-    WATER_MASS = 7           # kg
-    DRY_MASS = 8             # kg of dry solid
-    SIZE = 10                # (slot 9 unused)
+    THERMAL_STEP_RATIO = 4   # largest dt sum(h) / (m c) of a particle
+    SIZE = 5
+
+
+class ThermalSum:
+    """Slots of the engine's ``thermal_sums`` field (f64: an f32 sum of m c T at 723 K would
+    round a heat balance away), filled by Engine.measure's kernel."""
+    THERMAL_ENERGY = 0       # sum m c T, J
+    THERMAL_MASS = 1         # sum m c, J/K
+    WATER_MASS = 2           # kg
+    DRY_MASS = 3             # kg of dry solid
+    SIZE = 4
 
 
 def fit_rows(a: np.ndarray, n: int) -> np.ndarray:
@@ -103,11 +109,23 @@ class ParticleState:
     # ``birth_time`` s when it was inserted
     PROCESS = {"serial": (False, "int"), "origin": (False, "int"), "birth_time": (False, "real")}
 
+    # allocated only for heat in f32 scenes: the part of the temperature (K) and moisture
+    # (kg/kg) that f32 cannot hold. The f32 spacing at 723 K is 6.1e-5 K while a cooler's
+    # per-step changes are ~1e-6 K: a plain f32 update rounds them away and heat is lost or
+    # made. The value is temperature + temperature_residual (compensated summation, f64);
+    # fluxes use the f32 part, which is within half a spacing of it
+    RESIDUALS = {"temperature_residual": (False, "f64")}
+    MOISTURE_RESIDUALS = {"moisture_residual": (False, "f64")}
+
     def __init__(self, capacity: int, real, n_walls: int, rolling_history: bool,
                  thermal: bool = False, process: bool = False, moisture: bool = False):
         self.capacity = capacity
+        # compensated (f64 residual) temperatures only where the mechanics are in f32
+        self.compensated = bool(thermal) and real != ti.f64
         self.spec = dict(self.CORE, **(self.THERMAL if thermal else {}),
                          **(self.MOISTURE if moisture else {}),
+                         **(self.RESIDUALS if self.compensated else {}),
+                         **(self.MOISTURE_RESIDUALS if self.compensated and moisture else {}),
                          **(self.PROCESS if process else {}))
         self.process = process
         self.real = real
@@ -126,6 +144,7 @@ class ParticleState:
         self.shadow_vec = t.add("shadow_vec", real, capacity, vector=True)
         self.shadow_real = t.add("shadow_real", real, capacity)
         self.shadow_int = t.add("shadow_int", ti.i32, capacity)
+        self.shadow_f64 = t.add("shadow_f64", ti.f64, capacity) if self.compensated else None
         # force (N) and torque (N m) of the pairs this particle owns, summed by the pair kernel
         self.owned_force = t.add("owned_force", real, capacity, vector=True)
         self.owned_torque = t.add("owned_torque", real, capacity, vector=True)
@@ -146,7 +165,7 @@ class ParticleState:
         t.finalize()
 
     def _add(self, name, vec, kind):
-        dtype = self.real if kind == "real" else ti.i32
+        dtype = {"real": self.real, "int": ti.i32, "f64": ti.f64}[kind]
         setattr(self, name, self.tree.add(name, dtype, self.capacity, vector=vec))
         self.names.append(name)
 
@@ -156,14 +175,15 @@ class ParticleState:
         self.names.append(name)
 
     def reorder_groups(self):
-        """(vector fields, real scalar fields, int fields, per-wall vector fields) to permute
-        together when particles are put back into cell order."""
+        """(vector fields, real scalar fields, int fields, per-wall vector fields, f64 scalar
+        fields) to permute together when particles are put back into cell order."""
         vec = [getattr(self, n) for n, (v, k) in self.spec.items() if v]
         real = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "real"]
         ints = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "int"]
         walls = [getattr(self, n) for n in ("wall_tangential_history", "wall_rolling_history")
                  if hasattr(self, n)]
-        return vec, real, ints, walls
+        doubles = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "f64"]
+        return vec, real, ints, walls, doubles
 
     def destroy(self):
         self.tree.destroy()

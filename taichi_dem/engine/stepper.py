@@ -27,8 +27,9 @@ from thermal import convection as gas_convection
 from thermal.conduction import contact_conductance
 from thermal import moisture as drying
 from thermal import radiation as radiative
+from thermal.precision import make_compensated_add
 from ..setup.pair_tables import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
-from .state import FieldTree, Flag, PairState, ParticleState, Reduction, fit_rows
+from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 
 
 class Engine:
@@ -78,6 +79,9 @@ class Engine:
             self.conductance_factor = t.add("conductance_factor", real, (m, m))
             self.radius_correction = t.add("radius_correction", real, (m, m))
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
+            # f64 sums over the particles: sum m c T (J), sum m c (J/K), water (kg), dry solid
+            # (kg); an f32 sum of m c T at 723 K would round the heat balance away
+            self.thermal_sums = t.add("thermal_sums", ti.f64, ThermalSum.SIZE)
             if self.plug_flow:
                 from thermal.plug_flow import AxialPlugFlowGas
                 self.gas_stream = AxialPlugFlowGas(scene.thermal.gas, self.state, t, real)
@@ -216,6 +220,8 @@ class Engine:
 
         thermal = self.thermal
         moisture = self.moisture
+        compensated = s.compensated
+        sums = self.thermal_sums if thermal else None
         dt_step = self.dt
 
         @ti.kernel
@@ -236,18 +242,26 @@ class Engine:
                         red[Reduction.NON_FINITE] = 1.0      # NaN or overflow
                     red[Reduction.MOVING_COUNT] += 1.0
             if ti.static(thermal):
+                for k in ti.static(range(ThermalSum.SIZE)):
+                    sums[k] = 0.0
                 for i in range(n):
                     if s.alive[i] != 0:
-                        thermal_mass = 1.0 / s.inverse_thermal_mass[i]
-                        red[Reduction.THERMAL_ENERGY] += thermal_mass * s.temperature[i]
-                        red[Reduction.THERMAL_MASS] += thermal_mass
+                        thermal_mass = 1.0 / ti.cast(s.inverse_thermal_mass[i], ti.f64)
+                        temperature = ti.cast(s.temperature[i], ti.f64)
+                        if ti.static(compensated):
+                            temperature += s.temperature_residual[i]
+                        sums[ThermalSum.THERMAL_ENERGY] += thermal_mass * temperature
+                        sums[ThermalSum.THERMAL_MASS] += thermal_mass
                         ti.atomic_max(red[Reduction.THERMAL_STEP_RATIO],
                                       dt_step * s.conductance[i] * s.inverse_thermal_mass[i])
                         if not (s.temperature[i] > 0.0 and s.temperature[i] < 1e30):
                             red[Reduction.NON_FINITE] = 1.0
                         if ti.static(moisture):
-                            red[Reduction.WATER_MASS] += s.mass[i] * s.moisture[i]      # kg
-                            red[Reduction.DRY_MASS] += s.mass[i]                        # kg
+                            water = ti.cast(s.moisture[i], ti.f64)
+                            if ti.static(compensated):
+                                water += s.moisture_residual[i]
+                            sums[ThermalSum.WATER_MASS] += ti.cast(s.mass[i], ti.f64) * water
+                            sums[ThermalSum.DRY_MASS] += ti.cast(s.mass[i], ti.f64)
 
         self._drift, self._measure = drift, measure
 
@@ -280,6 +294,8 @@ class Engine:
         plug_flow = stream is not None
         th = self.scene.thermal
         radiation, moisture = self.radiation, self.moisture
+        compensated = s.compensated
+        compensated_add, split_f64 = make_compensated_add(real)
         # names the kernel closes over must exist even when their effect is off
         emissivity = evaporated = radiate_to_gas = radiation_temperature = None
         in_radiation_region = t_evap = latent = c_water = None
@@ -514,7 +530,24 @@ class Engine:
                 if ti.static(thermal):
                     if s.alive[i] != 0:
                         # explicit update; stable while dt sum(h) / (m c) < 1 (checked per sample)
-                        if ti.static(moisture):
+                        if ti.static(moisture and compensated):
+                            # in f64 throughout, then split back (thermal/precision.py)
+                            t_new, x_new, inv_c, dm = drying.heat_and_dry(
+                                ti.cast(s.temperature[i], ti.f64) + s.temperature_residual[i],
+                                ti.cast(s.moisture[i], ti.f64) + s.moisture_residual[i],
+                                ti.cast(s.inverse_thermal_mass[i], ti.f64),
+                                ti.cast(s.mass[i], ti.f64), ti.cast(dt * heat, ti.f64),
+                                t_evap, latent, c_water)
+                            t_part, t_rest = split_f64(t_new)
+                            s.temperature[i] = t_part
+                            s.temperature_residual[i] = t_rest
+                            if dm > 0.0:
+                                x_part, x_rest = split_f64(x_new)
+                                s.moisture[i] = x_part
+                                s.moisture_residual[i] = x_rest
+                                s.inverse_thermal_mass[i] = ti.cast(inv_c, real)
+                                evaporated[0] += dm
+                        elif ti.static(moisture):
                             t_new, x_new, inv_c, dm = drying.heat_and_dry(
                                 s.temperature[i], s.moisture[i], s.inverse_thermal_mass[i],
                                 s.mass[i], dt * heat, t_evap, latent, c_water)
@@ -523,6 +556,12 @@ class Engine:
                                 s.moisture[i] = x_new
                                 s.inverse_thermal_mass[i] = inv_c
                                 evaporated[0] += ti.cast(dm, ti.f64)
+                        elif ti.static(compensated):
+                            t_part, t_rest = compensated_add(
+                                s.temperature[i], s.temperature_residual[i],
+                                dt * heat * s.inverse_thermal_mass[i])
+                            s.temperature[i] = t_part
+                            s.temperature_residual[i] = t_rest
                         else:
                             s.temperature[i] += dt * heat * s.inverse_thermal_mass[i]
                         s.conductance[i] = conductance
@@ -596,12 +635,13 @@ class Engine:
                "max_speed": float(r[Reduction.MAX_SPEED]),
                "non_finite": bool(r[Reduction.NON_FINITE] > 0)}
         if self.thermal:
-            energy, thermal_mass = r[Reduction.THERMAL_ENERGY], r[Reduction.THERMAL_MASS]
+            h = self.thermal_sums.to_numpy()
+            energy, thermal_mass = h[ThermalSum.THERMAL_ENERGY], h[ThermalSum.THERMAL_MASS]
             out.update(thermal_energy=float(energy),
                        mean_temperature=float(energy / thermal_mass) if thermal_mass else 0.0,
                        thermal_step_ratio=float(r[Reduction.THERMAL_STEP_RATIO]))
         if self.moisture:
-            water, dry = r[Reduction.WATER_MASS], r[Reduction.DRY_MASS]
+            water, dry = h[ThermalSum.WATER_MASS], h[ThermalSum.DRY_MASS]
             out.update(mean_moisture=float(water / dry) if dry else 0.0,
                        evaporated_mass=float(self.evaporated[0]))
         return out
@@ -629,6 +669,7 @@ class Engine:
             raise RuntimeError("particle capacity exceeded")
         # the device's precision (an f32 field assigned from f64 would warn at compile time)
         npf = np.float64 if self.real == ti.f64 else np.float32
+        npt = np.float64 if self.state.compensated else npf
         zeros = np.zeros(k, npf)
         self._insert(self.count, k,
                      np.ascontiguousarray(arrays["position"], npf),
@@ -641,9 +682,10 @@ class Engine:
                      np.ascontiguousarray(arrays["origin"], np.int32),
                      np.ascontiguousarray(arrays["birth_time"], npf),  # (residence: f32 is
                      # 4e-6 s at 100 s)
-                     np.ascontiguousarray(arrays.get("temperature", zeros), npf),
+                     # f64 where an f64 residual keeps what f32 cannot (thermal/precision.py)
+                     np.ascontiguousarray(arrays.get("temperature", zeros), npt),
                      np.ascontiguousarray(arrays.get("inverse_thermal_mass", zeros), npf),
-                     np.ascontiguousarray(arrays.get("moisture", zeros), npf))
+                     np.ascontiguousarray(arrays.get("moisture", zeros), npt))
         self.count += k
 
     def _compile_insert(self):
@@ -660,6 +702,9 @@ class Engine:
         heat_loads = has_mesh and mesh.particle_load_heat is not None
         flags = self.flags
         drying = self.moisture
+        compensated = s.compensated
+        real = self.real
+        compensated_add, split_f64 = make_compensated_add(real)
 
         @ti.kernel
         def insert(start: ti.i32, k: ti.i32, position: ti.types.ndarray(),
@@ -692,10 +737,19 @@ class Engine:
                     s.serial[i] = serial[q]
                     s.origin[i] = origin[q]
                     s.birth_time[i] = birth_time[q]
-                if ti.static(thermal):
+                if ti.static(thermal and compensated):
+                    t_part, t_rest = split_f64(ti.cast(temperature[q], ti.f64))
+                    s.temperature[i] = t_part
+                    s.temperature_residual[i] = t_rest
+                    s.inverse_thermal_mass[i] = inverse_thermal_mass[q]
+                elif ti.static(thermal):
                     s.temperature[i] = temperature[q]
                     s.inverse_thermal_mass[i] = inverse_thermal_mass[q]
-                if ti.static(drying):
+                if ti.static(drying and compensated):
+                    x_part, x_rest = split_f64(ti.cast(moisture[q], ti.f64))
+                    s.moisture[i] = x_part
+                    s.moisture_residual[i] = x_rest
+                elif ti.static(drying):
                     s.moisture[i] = moisture[q]
                 # the slot may hold what a removed particle left: no rows, no history, no loads
                 s.row_owned[i] = 0

@@ -44,7 +44,9 @@ import numpy as np
 from .._version import __version__
 from ..errors import CheckpointError
 
-FORMAT = "taichi_dem checkpoint 1"
+# 2: f32 scenes with heat keep f64 residuals of temperature and moisture (thermal/precision.py);
+# a version-1 file lacks them, and would resume with temperatures off by up to half an f32 step
+FORMAT = "taichi_dem checkpoint 2"
 
 # Keep the last good state in memory at every sample (Checkpointer.keep_last_good) by
 # default? The copy itself is cheap (36 ms per sample at 20,000 particles, BENCHMARKS.md),
@@ -262,9 +264,13 @@ def load(path: str) -> Snapshot:
     except (OSError, ValueError) as err:
         raise CheckpointError(f"{path}: cannot open as an HDF5 checkpoint ({err})") from None
     with f:
-        if f.attrs.get("format") != FORMAT:
+        found = f.attrs.get("format")
+        if isinstance(found, str) and found.startswith("taichi_dem checkpoint ") and found != FORMAT:
+            raise CheckpointError(f"{path}: written by an older taichi_dem ({found!r}; this "
+                                  f"version reads {FORMAT!r}): rerun the scene from its start")
+        if found != FORMAT:
             raise CheckpointError(f"{path}: not a taichi_dem checkpoint (format "
-                                  f"{f.attrs.get('format')!r}, expected {FORMAT!r})")
+                                  f"{found!r}, expected {FORMAT!r})")
         attrs = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in f.attrs.items()}
         fields = {label: {name: ds[()] for name, ds in g.items()} for label, g in f["fields"].items()}
         series: dict[str, list] = {}

@@ -254,6 +254,11 @@ class Simulation:
             heat_capacity = np.array([self.scene.materials[name].heat_capacity or 0.0
                                       for name in self.tables.names])[placed.material]
             s.temperature.from_numpy(scal(placed.temperature))
+            if s.compensated:
+                # what f32 cannot hold of the temperature (thermal/precision.py)
+                exact = np.asarray(placed.temperature, np.float64)
+                s.temperature_residual.from_numpy(
+                    scal(exact - exact.astype(np.float32).astype(np.float64), np.float64))
             thermal_mass = mass * heat_capacity
             if self.engine.moisture:
                 # X per particle from its fill (dry where the fill gives none); the water's heat
@@ -261,6 +266,10 @@ class Simulation:
                 x = np.array([f.moisture or 0.0 for f in self.scene.fills])[placed.fill] \
                     if len(self.scene.fills) else np.zeros(n)
                 s.moisture.from_numpy(scal(x))
+                if s.compensated:
+                    x = np.asarray(x, np.float64)
+                    s.moisture_residual.from_numpy(
+                        scal(x - x.astype(np.float32).astype(np.float64), np.float64))
                 thermal_mass = mass * (heat_capacity + x * self.scene.thermal.water_heat_capacity)
             s.inverse_thermal_mass.from_numpy(scal(1.0 / thermal_mass))
 
@@ -486,8 +495,12 @@ class Simulation:
         out["fixed"] = s.inverse_mass.to_numpy()[:n][order] == 0.0
         if self.engine.thermal:
             out["temperature"] = s.temperature.to_numpy()[:n][order].astype(np.float64)
+            if s.compensated:
+                out["temperature"] += s.temperature_residual.to_numpy()[:n][order]
         if self.engine.moisture:
             out["moisture"] = s.moisture.to_numpy()[:n][order].astype(np.float64)
+            if s.compensated:
+                out["moisture"] += s.moisture_residual.to_numpy()[:n][order]
         return out
 
     def kinetic_energy(self) -> float:
