@@ -22,6 +22,7 @@ import math
 import numpy as np
 import taichi as ti
 
+from thermal import gas_gap
 from thermal.conduction import contact_conductance
 
 from ..effects.hertz_mindlin import contact_force
@@ -162,9 +163,11 @@ class MeshContacts:
         self._alloc_items(max(4 * self.n_triangles, 1024))
         self._alloc_scratch(16)
         self._alloc_entries(max(2 * s.capacity // 8, 1024))
-        self.expand = engine.max_radius + engine.skin
+        # gas-gap conduction reaches a fluid lens beyond the contact (thermal/gas_gap.py)
+        self.lens = engine.gas_gap_parameters[1] if engine.gas_gap else 0.0
+        self.expand = engine.max_radius * (1.0 + self.lens) + engine.skin
         self.minimum_image = engine.grid.make_minimum_image()
-        self.triangle_image = make_triangle_image(engine.grid, engine.max_radius + engine.skin)
+        self.triangle_image = make_triangle_image(engine.grid, self.expand)
         self.binned_time = 0.0
         self.interval_steps = 0
         self._compile_static_kernels()
@@ -297,7 +300,7 @@ class MeshContacts:
         dims = ti.Vector(list(g.dims))
         n_cells = g.n_cells
         nt = self.n_triangles
-        expand = self.e.max_radius + self.e.skin
+        expand = self.expand
         half_diagonal = 0.5 * float(np.linalg.norm(g.cell_size))
         items = self.tri_cell_items
 
@@ -355,6 +358,7 @@ class MeshContacts:
         s = self.e.state
         epsd = self.rolling_history is not None
         skin = self.e.skin
+        lens = self.lens
         width = self.scratch_width
         scratch = self.scratch
 
@@ -376,7 +380,7 @@ class MeshContacts:
             for i in range(n):
                 c = s.cell[i]
                 xi = s.position[i]
-                reach = s.radius[i] + skin
+                reach = s.radius[i] * ti.static(1.0 + lens) + skin
                 count = 0
                 for slot in range(m.tri_cell_start[c], m.tri_cell_start[c + 1]):
                     t = m.tri_cell_items[slot]
@@ -447,6 +451,10 @@ class MeshContacts:
         same_surface_cos = SAME_SURFACE_COS
         from ..effects import rolling
 
+        gas_gap_on = e.gas_gap
+        gap_k, gap_lens, gap_min = e.gas_gap_parameters
+        nb = self.n_bodies
+
         @ti.func
         def particle_contacts(i, xi, vi, wi, ri, mass_i, inverse_inertia_i, ai, mi, dt):
             force = ti.Vector([0.0, 0.0, 0.0])
@@ -455,6 +463,9 @@ class MeshContacts:
             conductance = 0.0
             start = m.mesh_start[i]
             end = start + m.mesh_count[i]
+            # gas gap: each body's surface point nearest the centre (one lens per body: the
+            # plane closed form stands for the surface there)
+            nearest = ti.Vector([ri * ti.static(2.0 + gap_lens)] * max(nb, 1))
             # geometry of every candidate triangle, in its body's reference frame: the particle
             # is moved into that frame (one rotation) instead of the triangle out of it (three)
             for k in range(start, end):
@@ -470,11 +481,16 @@ class MeshContacts:
                     x_world = m.triangle_image(xi, wa, wb, wc)
                 x_ref = rot.transpose() @ (x_world - pivot - m.offset[body]) + pivot
                 m.mesh_status[k] = ti.u8(2)
-                # a triangle whose plane is farther than r cannot touch (most candidates)
-                if ti.abs((x_ref - m.tri_a[t]).dot(m.tri_normal[t])) < ri:
+                # a triangle whose plane is farther than r (and the lens) cannot touch (most
+                # candidates)
+                if ti.abs((x_ref - m.tri_a[t]).dot(m.tri_normal[t])) < ri * ti.static(1.0 + gap_lens):
                     q, region = closest_point_on_triangle(x_ref, m.tri_a[t], m.tri_b[t], m.tri_c[t])
                     d = x_ref - q
                     dist_sq = d.dot(d)
+                    if ti.static(gas_gap_on):
+                        for bb in ti.static(range(nb)):
+                            if body == bb:
+                                nearest[bb] = ti.min(nearest[bb], ti.sqrt(dist_sq))
                     if dist_sq < ri * ri and dist_sq > 0.0:
                         dist = ti.sqrt(dist_sq)
                         m.mesh_overlap[k] = ri - dist
@@ -563,6 +579,15 @@ class MeshContacts:
                     m.mesh_history[k] = ti.Vector([0.0, 0.0, 0.0])
                     if ti.static(epsd):
                         m.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
+            if ti.static(gas_gap_on):
+                for bb in ti.static(range(nb)):
+                    if m.body_temperature[bb] >= 0.0 and nearest[bb] < ri * ti.static(1.0 + gap_lens):
+                        h_g = ti.static(gap_k) * gas_gap.plane_gap_integral(
+                            ri, nearest[bb], ti.static(gap_lens), ti.static(gap_min))
+                        q_g = h_g * (m.body_temperature[bb] - s.temperature[i])
+                        heat += q_g
+                        conductance += h_g
+                        m.particle_load_heat[i, bb] = m.particle_load_heat[i, bb] - q_g
             return force, torque, heat, conductance
 
         return particle_contacts

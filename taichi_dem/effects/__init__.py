@@ -51,6 +51,12 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
         if th.wall_conduction and hot:
             effects.append(Effect("wall_conduction", "particle",
                                   "conduction to isothermal " + ", ".join(hot)))
+            if th.gas_gap:
+                effects.append(Effect("gas_gap_wall", "particle",
+                                      f"conduction through the gas gap to {', '.join(hot)} "
+                                      f"(fluid lens {th.gas_gap_lens:g} R, minimum gap "
+                                      f"{th.gas_gap_min_gap:g} m, k_g {th.gap_gas_conductivity:g} "
+                                      f"W/(m K); isothermal surfaces)"))
         gas = th.gas
         if gas is not None and not gas.plug_flow:
             effects.append(Effect("convection", "particle",

@@ -28,6 +28,7 @@ from thermal.conduction import contact_conductance
 from thermal import moisture as drying
 from thermal import radiation as radiative
 from thermal.precision import make_compensated_add
+from thermal import gas_gap
 from ..setup.pair_tables import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 
@@ -48,6 +49,11 @@ class Engine:
         self.thermal = scene.thermal is not None
         self.conduction = "conduction" in self.effects
         self.wall_conduction = "wall_conduction" in self.effects
+        # particle-fluid-wall conduction (thermal/gas_gap.py): only with wall conduction on
+        self.gas_gap = "gas_gap_wall" in self.effects
+        th = scene.thermal
+        self.gas_gap_parameters = ((th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap)
+                                   if self.gas_gap else (0.0, 0.0, 1.0))
         self.convection = "convection" in self.effects
         self.plug_flow = "plug_flow_gas" in self.effects
         self.radiation = "radiation" in self.effects
@@ -285,6 +291,8 @@ class Engine:
         thermal = self.thermal
         conductance_factor = self.conductance_factor if thermal else None
         radius_correction = self.radius_correction if thermal else None
+        gas_gap_on = self.gas_gap
+        gap_k, gap_lens, gap_min = self.gas_gap_parameters
         wall_temperature = [w.temperature if (w.temperature is not None and wall_conduction) else -1.0
                             for w in self.walls]
         wall_heat = self.wall_heat if thermal else None
@@ -450,11 +458,18 @@ class Engine:
                         history = ti.Vector([0.0, 0.0, 0.0])
                         rolling_history = ti.Vector([0.0, 0.0, 0.0])
                         if ti.static(wall_temperature[w] >= 0.0):
+                            h_w = 0.0 * ri
                             if normal_overlap > 0.0:
                                 # conduction to an isothermal (e.g. water-cooled) wall
                                 h_w = contact_conductance(conductance_factor[mi, mw],
                                                           radius_correction[mi, mw], ri,
                                                           normal_overlap)
+                            if ti.static(gas_gap_on):
+                                # and through the gas between the particle and the wall, within
+                                # the fluid lens (thermal/gas_gap.py); touching or not
+                                h_w += ti.static(gap_k) * gas_gap.plane_gap_integral(
+                                    ri, ri - normal_overlap, ti.static(gap_lens), ti.static(gap_min))
+                            if h_w > 0.0:
                                 q_w = h_w * (ti.static(wall_temperature[w]) - s.temperature[i])
                                 heat += q_w
                                 conductance += h_w

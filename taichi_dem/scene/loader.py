@@ -36,7 +36,8 @@ SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
                "contact_count": ("kind", "name", "body")}
 THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction",
                 "radiation_to", "radiation_region", "evaporation_temperature", "latent_heat",
-                "water_heat_capacity")
+                "water_heat_capacity", "gas_gap", "gap_gas_conductivity", "gas_gap_lens",
+                "gas_gap_min_gap")
 GAS_KEYS = ("model", "temperature", "velocity", "correlation", "porosity", "density",
             "viscosity", "conductivity", "heat_capacity", "axis_point", "axis_direction",
             "length", "cells", "flow_area", "radius", "mass_flow", "inlet_temperature", "flow")
@@ -999,6 +1000,26 @@ class _Parser:
         if "water_heat_capacity" in t:
             kw["water_heat_capacity"] = self.nonnegative(
                 t["water_heat_capacity"], "specific_heat", f"{key}.water_heat_capacity")
+        if "gas_gap" in t:
+            kw["gas_gap"] = self.boolean(t["gas_gap"], f"{key}.gas_gap")
+        for k in ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap"):
+            if k in t and not kw.get("gas_gap"):
+                raise self.err(f"{key}.{k}", "given but gas_gap is off; set gas_gap = true")
+        if kw.get("gas_gap"):
+            if "gap_gas_conductivity" in t:
+                kw["gap_gas_conductivity"] = self.positive(
+                    t["gap_gas_conductivity"], "thermal_conductivity", f"{key}.gap_gas_conductivity")
+            elif kw.get("gas") is not None:
+                kw["gap_gas_conductivity"] = kw["gas"].conductivity
+            if "gas_gap_lens" in t:
+                lens = self.positive(t["gas_gap_lens"], "dimensionless", f"{key}.gas_gap_lens")
+                if lens > 1.0:
+                    raise self.err(f"{key}.gas_gap_lens", f"must be at most 1 (a lens one radius "
+                                                          f"thick), got {lens:g}")
+                kw["gas_gap_lens"] = lens
+            if "gas_gap_min_gap" in t:
+                kw["gas_gap_min_gap"] = self.positive(t["gas_gap_min_gap"], "length",
+                                                      f"{key}.gas_gap_min_gap")
         settings = ThermalSettings(**kw)
         for f in fills:
             mat = self.materials[f.material]
