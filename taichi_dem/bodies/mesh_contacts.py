@@ -34,7 +34,6 @@ from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
 SAME_SURFACE_COS = math.cos(math.radians(30.0))
 
 
-@ti.data_oriented
 def make_triangle_image(grid, reach: float):
     """ti.func (x, a, b, c) -> the periodic image of point x (m) nearest to the triangle abc
     (world frame, m); x itself without periodic axes.
@@ -81,6 +80,7 @@ def make_triangle_image(grid, reach: float):
     return triangle_image
 
 
+@ti.data_oriented
 class MeshContacts:
     """Device state and kernels of the particle-triangle contacts of one simulation."""
 

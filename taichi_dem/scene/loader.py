@@ -1021,6 +1021,14 @@ class _Parser:
                 kw["gas_gap_min_gap"] = self.positive(t["gas_gap_min_gap"], "length",
                                                       f"{key}.gas_gap_min_gap")
         settings = ThermalSettings(**kw)
+        if settings.gas_gap:
+            hot = [w.name for w in list(walls) + list(bodies) if w.temperature is not None]
+            if not settings.wall_conduction or not hot:
+                raise self.err(f"{key}.gas_gap", "conducts only to walls and bodies that have a "
+                                                 "temperature, with wall_conduction on (the gas "
+                                                 "gap between particles is not in the step yet); "
+                                                 "give a wall or body a temperature or drop "
+                                                 "gas_gap")
         for f in fills:
             mat = self.materials[f.material]
             for k in ("thermal_conductivity", "heat_capacity"):

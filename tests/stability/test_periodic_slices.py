@@ -21,6 +21,23 @@ import taichi_dem as td
 
 R = 0.002
 HALF = 0.05
+# soft glass beads and steel, e 0.5, mu 0.5 (the floor and drum-slice scenes)
+GLASS_ON_STEEL = """[materials.glass]
+density = 2500.0
+youngs_modulus = 1e7
+poisson_ratio = 0.25
+[materials.steel]
+density = 7800.0
+youngs_modulus = 2e11
+poisson_ratio = 0.3
+[[interactions]]
+pair = ["glass", "glass"]
+restitution = 0.5
+friction = 0.5
+[[interactions]]
+pair = ["glass", "steel"]
+restitution = 0.5
+friction = 0.5"""
 
 
 def _obj_floor(path, n: int) -> None:
@@ -51,22 +68,7 @@ seed = 11
 min = [-0.05, -0.05, -0.02]
 max = [0.05, 0.05, 0.2]
 periodic = {per}
-[materials.glass]
-density = 2500.0
-youngs_modulus = 1e7
-poisson_ratio = 0.25
-[materials.steel]
-density = 7800.0
-youngs_modulus = 2e11
-poisson_ratio = 0.3
-[[interactions]]
-pair = ["glass", "glass"]
-restitution = 0.5
-friction = 0.5
-[[interactions]]
-pair = ["glass", "steel"]
-restitution = 0.5
-friction = 0.5
+{GLASS_ON_STEEL}
 [[walls]]
 name = "left"
 plane = {{ point = [-0.05, 0, 0], normal = [1, 0, 0] }}
@@ -141,22 +143,7 @@ seed = 5
 min = [0.0, -0.065, -0.065]
 max = [{SLICE}, 0.065, 0.065]
 periodic = ["x"]
-[materials.glass]
-density = 2500.0
-youngs_modulus = 1e7
-poisson_ratio = 0.25
-[materials.steel]
-density = 7800.0
-youngs_modulus = 2e11
-poisson_ratio = 0.3
-[[interactions]]
-pair = ["glass", "glass"]
-restitution = 0.5
-friction = 0.5
-[[interactions]]
-pair = ["glass", "steel"]
-restitution = 0.5
-friction = 0.5
+{GLASS_ON_STEEL}
 [[bodies]]
 name = "shell"
 material = "steel"

@@ -147,3 +147,16 @@ def test_gas_gap_keys_need_gas_gap(tmp_path):
                                                                "gas_gap_lens = 2.0")
     with pytest.raises(taichi_dem.SceneError, match="thermal.gas_gap_lens.*at most 1"):
         taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64")
+
+
+def test_gas_gap_without_a_wall_to_conduct_to_is_refused(tmp_path):
+    # the gas gap between particles is not in the step: a scene that would get nothing from
+    # gas_gap is told so instead of silently running without it
+    cold_wall = PLANE.replace(f"temperature = {T_W}\n", "")
+    text = _scene(tmp_path, [(0.0, 0.0, 0.02)], cold_wall)
+    with pytest.raises(taichi_dem.SceneError, match="thermal.gas_gap.*temperature"):
+        taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64")
+    text = _scene(tmp_path, [(0.0, 0.0, 0.02)], PLANE).replace("wall_conduction = true",
+                                                               "wall_conduction = false")
+    with pytest.raises(taichi_dem.SceneError, match="thermal.gas_gap.*wall_conduction"):
+        taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64")
