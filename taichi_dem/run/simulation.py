@@ -255,7 +255,7 @@ class Simulation:
                                       for name in self.tables.names])[placed.material]
             s.temperature.from_numpy(scal(placed.temperature))
             if s.compensated:
-                # what f32 cannot hold of the temperature (thermal/precision.py)
+                # what f32 cannot hold of the temperature (engine/precision.py)
                 exact = np.asarray(placed.temperature, np.float64)
                 s.temperature_residual.from_numpy(
                     scal(exact - exact.astype(np.float32).astype(np.float64), np.float64))
