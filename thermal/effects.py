@@ -92,6 +92,35 @@ class GasGapWall(Effect):
         return gas_gap_wall
 
 
+class GasGapPair(Effect):
+    """Particle-fluid-particle conduction (Rong & Horio 1999 as extended by Musser 2011;
+    gas_gap.py): through the gas in the fluid lens around the pair, touching or not (pairs
+    up to ``lens`` radii of the larger sphere apart are handed to the law); isothermal
+    surfaces. The partner's share rides on the pair fields the contact conduction declares."""
+
+    name = "gas_gap_pair"
+    stage = "contact"
+    kinds = ("pair",)
+    pair_fields = Conduction.pair_fields
+
+    def __init__(self, description, conductivity, lens, min_gap):
+        super().__init__(description)
+        self.parameters = (float(conductivity), float(lens), float(min_gap))
+        self.margin = float(lens)
+
+    def contact_func(self, engine):
+        k_gas, lens, min_gap = self.parameters
+
+        @ti.func
+        def gas_gap_pair(c, out):
+            out.conductance += k_gas * gas_gap.pair_gap_integral(
+                c.radius_i, c.radius_j, c.radius_i + c.radius_j - c.normal_overlap, lens,
+                min_gap)
+            return out
+
+        return gas_gap_pair
+
+
 class Convection(Effect):
     """Convection to a fixed gas, Q = h A (T_g - T_p), h = k_g Nu / d (PHYSICS.md)."""
 
@@ -315,6 +344,13 @@ def thermal_effects(scene) -> list:
     if th.conduction:
         out.append(Conduction(f"particle-particle conduction (contact radius correction: "
                               f"{th.contact_radius_correction})"))
+        if th.gas_gap and th.gas_gap_pairs:
+            out.append(GasGapPair(
+                f"conduction through the gas gap between particles (fluid lens "
+                f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
+                f"{th.gap_gas_conductivity:g} W/(m K); isothermal surfaces; pairs within the "
+                f"lens are listed and handed to the contact law)",
+                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap))
     hot = [w.name for w in list(scene.walls) + list(scene.bodies) if w.temperature is not None]
     if th.wall_conduction and hot:
         out.append(WallConduction("conduction to isothermal " + ", ".join(hot)))

@@ -25,7 +25,7 @@ import taichi as ti
 from ..contacts.geometry import contact_types
 from ..contacts.law import has_effects, margin_fraction
 from ..effects.mesh_contact import closest_point_on_triangle
-from ..engine.broadphase import exclusive_scan, previous_contact
+from ..engine.broadphase import exclusive_scan, previous_entry
 from ..engine.state import fit_rows
 from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
 
@@ -418,13 +418,16 @@ class MeshContacts:
                     k = m.mesh_start[i] + c
                     t = scratch[i, c]
                     m.mesh_tri[k] = t
-                    touching, history, rolling_history = previous_contact(
-                        m.old_tri, m.old_contact, m.old_history, old_rolling, epsd,
-                        old_start, old_count, t)
-                    m.mesh_history[k] = history
-                    m.mesh_contact[k] = touching
+                    old = previous_entry(m.old_tri, old_start, old_count, t)
+                    m.mesh_contact[k] = ti.u8(0)
+                    m.mesh_history[k] = ti.Vector([0.0, 0.0, 0.0])
                     if ti.static(epsd):
-                        m.rolling_history[k] = rolling_history
+                        m.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
+                    if old >= 0:
+                        m.mesh_contact[k] = m.old_contact[old]
+                        m.mesh_history[k] = m.old_history[old]
+                        if ti.static(epsd):
+                            m.rolling_history[k] = old_rolling[old]
 
         self._compact_and_carry = compact_and_carry
 

@@ -77,8 +77,12 @@ class Engine:
                                    self.contact_fields, thermal=self.thermal,
                                    process=bool(scene.factories or scene.outlets))
         self.trees.append(self.state.tree)
+        # pairs within a contact margin (a fraction of the larger radius) an effect asks for
+        # are listed and handed to the contact law too (the gas gap near a contact)
+        self.pair_margin = margin_fraction(self.contact_effects, "pair")
+        self.pair_heat = "partner_heat" in self.pair_fields
         self.grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
-                             2.0 * max_radius + skin, capacity)
+                             (2.0 + self.pair_margin) * max_radius + skin, capacity)
         t = self.new_tree()
         m = len(tables.names)
         # the material-pair tables the enabled effects read, under their physics names
@@ -285,9 +289,9 @@ class Engine:
         pair_law = make_contact_law(effects, "pair", real, self)
         plane_law = make_contact_law(effects, "plane", real, self)
         # a pair is handed to the law while its gap is below the margin an effect asks for
-        pair_margin = margin_fraction(effects, "pair")
+        pair_margin = self.pair_margin
         epsd = self.rolling_epsd
-        pair_heat = p.partner_heat is not None
+        pair_heat = self.pair_heat
         walls = [(tuple(w.point), tuple(w.normal), self.tables.index(w.material)) for w in self.walls]
         n_walls = len(walls)
         wall_rolling = s.wall_rolling_history if epsd and n_walls else None
@@ -333,7 +337,9 @@ class Engine:
                     d = minimum_image(xi - s.position[j])
                     rj = s.radius[j]
                     distance_sq = d.dot(d)
-                    reach = (ri + rj) * ti.static(1.0 + pair_margin)
+                    reach = ri + rj
+                    if ti.static(pair_margin > 0.0):
+                        reach += ti.static(pair_margin) * ti.max(ri, rj)
                     if distance_sq < reach * reach and distance_sq > 0.0:
                         c = sphere_sphere(d, distance_sq, ri, rj, vi, s.velocity[j], wi,
                                           s.angular_velocity[j], ai, s.acceleration[j], inv_mi,

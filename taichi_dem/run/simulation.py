@@ -16,6 +16,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
 from ..engine import backend
 from ..errors import DivergenceError, SceneError, StaleSimulationError
@@ -56,6 +57,8 @@ def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
     (4 r_max) or less cannot be simulated and is refused."""
     span = np.asarray(scene.domain.max, float) - np.asarray(scene.domain.min, float)
     contact = 2.0 * max_radius
+    # pairs within a contact margin are listed too (the gas gap near contacts)
+    margin = margin_fraction(enabled_effects(scene), "pair") * max_radius
     for k, axis in enumerate("xyz"):
         if axis not in scene.domain.periodic:
             continue
@@ -67,7 +70,14 @@ def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
                              f"{max_radius:.4g} m): a particle would touch two images of one "
                              f"partner; enlarge the domain along {axis}")
         # a hair under the limit so that the cell grid still tiles the axis with two cells
-        allowed = 0.5 * length * (1.0 - 1e-9) - contact
+        allowed = 0.5 * length * (1.0 - 1e-9) - contact - margin
+        if margin > 0.0 and allowed <= 0.0:
+            raise SceneError(scene.source, "thermal.gas_gap_lens",
+                             f"the fluid lens reaches {margin:.4g} m beyond contact, and the "
+                             f"periodic length along {axis} ({length:.4g} m) must exceed two "
+                             f"pair reaches 2 (2 r_max + lens r_max) = "
+                             f"{2.0 * (contact + margin):.4g} m; use a thinner lens, "
+                             "gas_gap_pairs = false, or enlarge the domain")
         if skin > allowed:
             msg = (f"skin shrunk from {skin:.4g} m to {allowed:.4g} m so that the periodic "
                    f"length along {axis} ({length:.4g} m) exceeds two pair cutoffs "
@@ -136,7 +146,8 @@ class Simulation:
 
         self.engine = Engine(scene, self.tables, max(capacity, 1), self.real, self.skin,
                              float(np.max(radii)), self.dt)
-        small = self.engine.grid.too_small_periodic_axes(2.0 * float(np.max(radii)) + self.skin)
+        small = self.engine.grid.too_small_periodic_axes(
+            (2.0 + self.engine.pair_margin) * float(np.max(radii)) + self.skin)
         if small:     # (_fit_skin_to_periodic_axes makes this unreachable; kept as a guard)
             self.engine.destroy()
             raise SceneError(scene.source, "domain.periodic",

@@ -37,7 +37,7 @@ SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
 THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction",
                 "radiation_to", "radiation_region", "evaporation_temperature", "latent_heat",
                 "water_heat_capacity", "gas_gap", "gap_gas_conductivity", "gas_gap_lens",
-                "gas_gap_min_gap")
+                "gas_gap_min_gap", "gas_gap_pairs")
 GAS_KEYS = ("model", "temperature", "velocity", "correlation", "porosity", "density",
             "viscosity", "conductivity", "heat_capacity", "axis_point", "axis_direction",
             "length", "cells", "flow_area", "radius", "mass_flow", "inlet_temperature", "flow")
@@ -1002,7 +1002,7 @@ class _Parser:
                 t["water_heat_capacity"], "specific_heat", f"{key}.water_heat_capacity")
         if "gas_gap" in t:
             kw["gas_gap"] = self.boolean(t["gas_gap"], f"{key}.gas_gap")
-        for k in ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap"):
+        for k in ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap", "gas_gap_pairs"):
             if k in t and not kw.get("gas_gap"):
                 raise self.err(f"{key}.{k}", "given but gas_gap is off; set gas_gap = true")
         if kw.get("gas_gap"):
@@ -1020,15 +1020,20 @@ class _Parser:
             if "gas_gap_min_gap" in t:
                 kw["gas_gap_min_gap"] = self.positive(t["gas_gap_min_gap"], "length",
                                                       f"{key}.gas_gap_min_gap")
+            if "gas_gap_pairs" in t:
+                kw["gas_gap_pairs"] = self.boolean(t["gas_gap_pairs"], f"{key}.gas_gap_pairs")
         settings = ThermalSettings(**kw)
         if settings.gas_gap:
             hot = [w.name for w in list(walls) + list(bodies) if w.temperature is not None]
-            if not settings.wall_conduction or not hot:
-                raise self.err(f"{key}.gas_gap", "conducts only to walls and bodies that have a "
-                                                 "temperature, with wall_conduction on (the gas "
-                                                 "gap between particles is not in the step yet); "
-                                                 "give a wall or body a temperature or drop "
-                                                 "gas_gap")
+            to_walls = settings.wall_conduction and hot
+            to_pairs = settings.conduction and settings.gas_gap_pairs
+            if not to_walls and not to_pairs:
+                raise self.err(f"{key}.gas_gap", "has nothing to conduct through: the gas gap "
+                                                 "between particles needs conduction = true "
+                                                 "(and gas_gap_pairs not false), the one to "
+                                                 "walls and bodies needs wall_conduction on and "
+                                                 "a wall or body with a temperature; enable one "
+                                                 "or drop gas_gap")
         for f in fills:
             mat = self.materials[f.material]
             for k in ("thermal_conductivity", "heat_capacity"):
