@@ -174,8 +174,9 @@ class PlugFlowGas(Effect):
         engine.gas_stream = AxialPlugFlowGas(self.gas, engine.state, tree, engine.real)
 
     def after_pairs(self, engine, n, dt):
-        """The per-cell stage: the gas sees this step's particles (W, K)."""
-        engine.gas_stream.exchange(n, dt)
+        """The per-cell stage: the gas sees this step's particles (W, K); its energy
+        integral advances by the thermal step (S dt)."""
+        engine.gas_stream.exchange(n, dt * engine.scene.thermal.time_scale)
 
     def particle_func(self, engine):
         s = engine.state
@@ -271,9 +272,11 @@ class Temperature(Effect):
     name = "temperature"
     stage = "integrate"
 
-    def __init__(self, description, compensated):
+    def __init__(self, description, compensated, time_scale=1.0):
         super().__init__(description)
         self.compensated = compensated
+        # heat capacities divided by S: the energy Q dt of a step changes T by S Q dt/(m c)
+        self.time_scale = float(time_scale)
         self.particle_fields = {"temperature": (False, "real"),
                                 "inverse_thermal_mass": (False, "real")}
         if compensated:
@@ -293,8 +296,13 @@ class Temperature(Effect):
             t_evap, latent, c_water = drying_effect.constants
             evaporated = engine.evaporated
 
+        scale = self.time_scale
+
         @ti.func
-        def update_temperature(i, heat, conductance, dt):
+        def update_temperature(i, heat, conductance, dt_mechanics):
+            dt = dt_mechanics
+            if ti.static(scale != 1.0):
+                dt = dt_mechanics * ti.static(scale)      # the thermal step
             if ti.static(moisture and compensated):
                 # in f64 throughout, then split back (engine/precision.py)
                 t_new, x_new, inv_c, dm = drying.heat_and_dry(
@@ -340,7 +348,10 @@ def thermal_effects(scene) -> list:
     if th is None:
         return []
     compensated = scene.simulation.precision != "f64"
-    out = [Temperature("explicit temperature update, m c dT/dt = sum Q", compensated)]
+    scaled = (f"; heat capacities / {th.time_scale:g} (thermal time = {th.time_scale:g} x "
+              f"simulated time)") if th.time_scale != 1.0 else ""
+    out = [Temperature("explicit temperature update, m c dT/dt = sum Q" + scaled, compensated,
+                       th.time_scale)]
     if th.conduction:
         out.append(Conduction(f"particle-particle conduction (contact radius correction: "
                               f"{th.contact_radius_correction})"))

@@ -234,7 +234,8 @@ class Engine:
         moisture = self.moisture
         compensated = s.compensated
         sums = self.thermal_sums if thermal else None
-        dt_step = self.dt
+        # the thermal step: S dt with heat capacities divided by S ([thermal] time_scale)
+        dt_step = self.dt * (self.scene.thermal.time_scale if thermal else 1.0)
 
         @ti.kernel
         def measure(n: ti.i32):

@@ -358,6 +358,9 @@ class Simulation:
             check(m)
         now = Now(time=self.time, interval=self.time - self._last_sample_time, measured=m)
         values = {"time": self.time}
+        if self.scene.thermal is not None and self.scene.thermal.time_scale != 1.0:
+            # the time the heat has had: S x simulated time ([thermal] time_scale)
+            values["thermal_time"] = self.scene.thermal.time_scale * self.time
         for sensor in self.sensors.values():
             sensor.sample(values, now)
         self._last_sample_time = self.time
@@ -437,7 +440,8 @@ class Simulation:
         if ratio >= 1.0:
             raise DivergenceError(
                 f"the temperature update is unstable at t = {self.time:.6g} s: dt sum(h)/(m c) = "
-                f"{ratio:.3g} >= 1 for some particle. Reduce simulation.dt (by {ratio:.2g}x at "
+                f"{ratio:.3g} >= 1 for some particle (dt the thermal step, thermal.time_scale x "
+                f"simulation.dt). Reduce simulation.dt or thermal.time_scale (by {ratio:.2g}x at "
                 f"least), or raise heat_capacity/lower thermal_conductivity if they are scaled")
         if ratio >= 0.5 and not getattr(self, "_warned_thermal", False):
             self._warned_thermal = True

@@ -37,7 +37,7 @@ SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
 THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction",
                 "radiation_to", "radiation_region", "evaporation_temperature", "latent_heat",
                 "water_heat_capacity", "gas_gap", "gap_gas_conductivity", "gas_gap_lens",
-                "gas_gap_min_gap", "gas_gap_pairs")
+                "gas_gap_min_gap", "gas_gap_pairs", "time_scale")
 GAS_KEYS = ("model", "temperature", "velocity", "correlation", "porosity", "density",
             "viscosity", "conductivity", "heat_capacity", "axis_point", "axis_direction",
             "length", "cells", "flow_area", "radius", "mass_flow", "inlet_temperature", "flow")
@@ -1000,6 +1000,13 @@ class _Parser:
         if "water_heat_capacity" in t:
             kw["water_heat_capacity"] = self.nonnegative(
                 t["water_heat_capacity"], "specific_heat", f"{key}.water_heat_capacity")
+        if "time_scale" in t:
+            scale = self.positive(t["time_scale"], "dimensionless", f"{key}.time_scale")
+            if scale < 1.0:
+                raise self.err(f"{key}.time_scale", f"must be at least 1 (got {scale:g}): it "
+                                                    "divides heat capacities so that heat moves "
+                                                    "S times faster than the mechanics")
+            kw["time_scale"] = scale
         if "gas_gap" in t:
             kw["gas_gap"] = self.boolean(t["gas_gap"], f"{key}.gas_gap")
         for k in ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap", "gas_gap_pairs"):

@@ -201,6 +201,10 @@ class ThermalSettings:
     # defaults: lens 0.2 R; a minimum gap of about 1 um, the roughness scale)
     gas_gap: bool = False
     gas_gap_pairs: bool = True
+    # thermal time scaling: every heat capacity divided by time_scale S, so temperatures move
+    # S times faster than the mechanics; thermal time = S x simulated time (series
+    # thermal_time); heat flows (W) stay physical
+    time_scale: float = 1.0
     gap_gas_conductivity: float = 0.02624            # W/(m K); air at 300 K
     gas_gap_lens: float = 0.2                        # of the particle radius
     gas_gap_min_gap: float = 1.0e-6                  # m
