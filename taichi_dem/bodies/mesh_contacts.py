@@ -90,6 +90,11 @@ class MeshContacts:
         s = engine.state
         tris, owner = triangle_arrays(bodies)
         self.n_triangles = len(tris)
+        # host copies for the covered area (rigid bodies: areas do not change), m^2
+        self.triangle_area = (0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0],
+                                                            tris[:, 2] - tris[:, 0]), axis=1)
+                              if len(tris) else np.zeros(0))
+        self.triangle_owner = np.asarray(owner, np.int64)
         self.n_bodies = len(bodies)
         t = self.tree = engine.new_tree()
         nt, nb, ncell = max(self.n_triangles, 1), max(self.n_bodies, 1), engine.grid.n_cells
@@ -651,6 +656,37 @@ class MeshContacts:
             self._count_contacts = count_contacts
         self._count_contacts(n)
         return self.touching.to_numpy()[: self.n_bodies].astype(np.int64)
+
+    def covered_areas(self, n: int) -> np.ndarray:
+        """Per body, the area (m^2) of its triangles that at least one particle touches now,
+        (B,): the surface the bed covers, for the wall-to-bed heat transfer coefficient. A
+        triangle counts whole, so the figure is as fine as the mesh (a drum shell's triangles
+        run the drum's length: right for a bed along the whole drum)."""
+        if getattr(self, "_covered_for", None) is not self.mesh_contact:
+            self._covered_for = self.mesh_contact
+            m = self
+            s = self.e.state
+            if not hasattr(self, "touched"):
+                tree = self.e.new_tree()
+                self.touched = tree.add("touched_triangle", ti.i32, max(self.n_triangles, 1))
+                tree.finalize()
+
+            @ti.kernel
+            def mark_touched(n: ti.i32):
+                for t in range(m.n_triangles):
+                    m.touched[t] = 0
+                for i in range(n):
+                    if s.alive[i] != 0:
+                        for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
+                            if m.mesh_contact[k] != 0:
+                                m.touched[m.mesh_tri[k]] = 1      # benign race: all write 1
+            self._mark_touched = mark_touched
+        if self.n_triangles == 0:
+            return np.zeros(self.n_bodies)
+        self._mark_touched(n)
+        touched = self.touched.to_numpy()[: self.n_triangles] != 0
+        return np.bincount(self.triangle_owner[touched], weights=self.triangle_area[touched],
+                           minlength=self.n_bodies)[: self.n_bodies]
 
     def deepest_overlaps(self, n: int) -> np.ndarray:
         """Per body, the largest overlap of a touching particle now, as a fraction of that
