@@ -44,6 +44,7 @@ class FactorySet:
         self.next_serial = first_serial
         n = len(self.factories)
         self.inserted_mass = np.zeros(n)          # kg
+        self.inserted_energy = 0.0                # J, sum m c T of every particle inserted
         self.inserted_count = np.zeros(n, np.int64)
         self.behind = np.zeros(n)                 # kg behind schedule after the last insertion
         self.waiting = [False] * n                # in a "region full" episode (warned)
@@ -151,6 +152,9 @@ class FactorySet:
         arrays["serial"] = np.arange(self.next_serial, self.next_serial + m, dtype=np.int64)
         self.next_serial += m
         arrays["birth_time"] = np.full(m, time)
+        if "inverse_thermal_mass" in arrays:
+            # m c T brought in (J), for the energy balance (sensors/energy.py)
+            self.inserted_energy += float(np.sum(arrays["temperature"] / arrays["inverse_thermal_mass"]))
         engine.insert(arrays)
 
     def _batch(self, k: int, time: float, pos: np.ndarray, rad: np.ndarray):
@@ -300,6 +304,7 @@ class FactorySet:
         return {"inserted_mass": self.inserted_mass.copy(), "inserted_count": self.inserted_count.copy(),
                 "behind": self.behind.copy(), "waiting": np.array(self.waiting, bool),
                 "next_radius": np.array(self.next_radius), "next_serial": self.next_serial,
+                "inserted_energy": self.inserted_energy,
                 "rng": str(self.rng.bit_generator.state)}
 
     def load_state_dict(self, d: dict):
@@ -310,4 +315,5 @@ class FactorySet:
         self.waiting = [bool(x) for x in d["waiting"]]
         self.next_radius = [float(x) for x in d["next_radius"]]
         self.next_serial = int(d["next_serial"])
+        self.inserted_energy = float(d.get("inserted_energy", 0.0))
         self.rng.bit_generator.state = ast.literal_eval(str(d["rng"]))

@@ -175,7 +175,8 @@ class Simulation:
         # state_dict() / load_state_dict(d)
         self.checkpointables: dict = {k: v for k, v in (
             ("factories", self.factories), ("accounts", self.accounts),
-            ("residence", self.sensors.get("residence"))) if v is not None}
+            ("residence", self.sensors.get("residence")),
+            ("energy", self.sensors.get("energy"))) if v is not None}
         self._series: dict[str, list] = {}
         self.recorder = None
         h5 = h5 if h5 is not None else scene.output.h5
