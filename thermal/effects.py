@@ -67,6 +67,18 @@ class WallConduction(Conduction):
     pair_fields = {}
 
 
+def _gas_over_solid(scene, tables, k_gas):
+    """(M, M) table: [a, b] = k_g / k_s of material a (the row's), for the solid-resistance
+    gas-gap model; 0 where a material has no conductivity (then isothermal)."""
+    names = tables.names
+    out = np.zeros((len(names), len(names)))
+    for a, name in enumerate(names):
+        k_s = scene.materials[name].thermal_conductivity
+        if k_s:
+            out[a, :] = k_gas / k_s
+    return out
+
+
 class GasGapWall(Effect):
     """Particle-fluid-wall conduction (gas_gap.py): through the gas between a particle and a
     wall or body within the fluid lens, touching or not; isothermal surfaces."""
@@ -75,18 +87,32 @@ class GasGapWall(Effect):
     stage = "contact"
     kinds = ("plane", "surface")
 
-    def __init__(self, description, conductivity, lens, min_gap):
+    def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance"):
         super().__init__(description)
         self.parameters = (float(conductivity), float(lens), float(min_gap))
         self.margin = float(lens)
+        self.model = model
+        self.tables = ("gas_over_solid",) if model == "solid_resistance" else ()
+
+    def table_values(self, scene, tables):
+        if self.model != "solid_resistance":
+            return {}
+        return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
 
     def contact_func(self, engine):
         k_gas, lens, min_gap = self.parameters
+        solid = self.model == "solid_resistance"
+        ratio = engine.table["gas_over_solid"] if solid else None
 
         @ti.func
         def gas_gap_wall(c, out):
-            out.conductance += k_gas * gas_gap.plane_gap_integral(
-                c.radius_i, c.radius_i - c.normal_overlap, lens, min_gap)
+            distance = c.radius_i - c.normal_overlap
+            if ti.static(solid):
+                out.conductance += k_gas * gas_gap.plane_solid_gap_integral(
+                    c.radius_i, distance, lens, min_gap, ratio[c.material_i, c.material_j])
+            else:
+                out.conductance += k_gas * gas_gap.plane_gap_integral(
+                    c.radius_i, distance, lens, min_gap)
             return out
 
         return gas_gap_wall
@@ -103,19 +129,33 @@ class GasGapPair(Effect):
     kinds = ("pair",)
     pair_fields = Conduction.pair_fields
 
-    def __init__(self, description, conductivity, lens, min_gap):
+    def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance"):
         super().__init__(description)
         self.parameters = (float(conductivity), float(lens), float(min_gap))
         self.margin = float(lens)
+        self.model = model
+        self.tables = ("gas_over_solid",) if model == "solid_resistance" else ()
+
+    def table_values(self, scene, tables):
+        if self.model != "solid_resistance":
+            return {}
+        return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
 
     def contact_func(self, engine):
         k_gas, lens, min_gap = self.parameters
+        solid = self.model == "solid_resistance"
+        ratio = engine.table["gas_over_solid"] if solid else None
 
         @ti.func
         def gas_gap_pair(c, out):
-            out.conductance += k_gas * gas_gap.pair_gap_integral(
-                c.radius_i, c.radius_j, c.radius_i + c.radius_j - c.normal_overlap, lens,
-                min_gap)
+            distance = c.radius_i + c.radius_j - c.normal_overlap
+            if ti.static(solid):
+                out.conductance += k_gas * gas_gap.pair_solid_gap_integral(
+                    c.radius_i, c.radius_j, distance, lens, min_gap,
+                    ratio[c.material_i, c.material_j], ratio[c.material_j, c.material_i])
+            else:
+                out.conductance += k_gas * gas_gap.pair_gap_integral(
+                    c.radius_i, c.radius_j, distance, lens, min_gap)
             return out
 
         return gas_gap_pair
@@ -342,6 +382,10 @@ class Temperature(Effect):
         return update_temperature
 
 
+MODEL_WORDS = {"isothermal": "isothermal surfaces (Rong & Horio / Musser; Morris et al.)",
+               "solid_resistance": "with the solid's resistance in series (Cheng, Yu & Zulli)"}
+
+
 def thermal_effects(scene) -> list:
     """The thermal effects ``scene`` calls for, in step order (none without [thermal])."""
     th = scene.thermal
@@ -359,9 +403,9 @@ def thermal_effects(scene) -> list:
             out.append(GasGapPair(
                 f"conduction through the gas gap between particles (fluid lens "
                 f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
-                f"{th.gap_gas_conductivity:g} W/(m K); isothermal surfaces; pairs within the "
-                f"lens are listed and handed to the contact law)",
-                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap))
+                f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]}; pairs "
+                f"within the lens are listed and handed to the contact law)",
+                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model))
     hot = [w.name for w in list(scene.walls) + list(scene.bodies) if w.temperature is not None]
     if th.wall_conduction and hot:
         out.append(WallConduction("conduction to isothermal " + ", ".join(hot)))
@@ -369,8 +413,8 @@ def thermal_effects(scene) -> list:
             out.append(GasGapWall(
                 f"conduction through the gas gap to {', '.join(hot)} (fluid lens "
                 f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
-                f"{th.gap_gas_conductivity:g} W/(m K); isothermal surfaces)",
-                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap))
+                f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]})",
+                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model))
     gas = th.gas
     if gas is not None and not gas.plug_flow:
         out.append(Convection(f"convection to a {gas.model} gas at {gas.temperature:g} K "

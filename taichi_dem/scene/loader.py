@@ -37,7 +37,7 @@ SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
 THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction",
                 "radiation_to", "radiation_region", "evaporation_temperature", "latent_heat",
                 "water_heat_capacity", "gas_gap", "gap_gas_conductivity", "gas_gap_lens",
-                "gas_gap_min_gap", "gas_gap_pairs", "time_scale")
+                "gas_gap_min_gap", "gas_gap_pairs", "time_scale", "gas_gap_model")
 GAS_KEYS = ("model", "temperature", "velocity", "correlation", "porosity", "density",
             "viscosity", "conductivity", "heat_capacity", "axis_point", "axis_direction",
             "length", "cells", "flow_area", "radius", "mass_flow", "inlet_temperature", "flow")
@@ -1009,7 +1009,8 @@ class _Parser:
             kw["time_scale"] = scale
         if "gas_gap" in t:
             kw["gas_gap"] = self.boolean(t["gas_gap"], f"{key}.gas_gap")
-        for k in ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap", "gas_gap_pairs"):
+        for k in ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap", "gas_gap_pairs",
+                  "gas_gap_model"):
             if k in t and not kw.get("gas_gap"):
                 raise self.err(f"{key}.{k}", "given but gas_gap is off; set gas_gap = true")
         if kw.get("gas_gap"):
@@ -1029,6 +1030,12 @@ class _Parser:
                                                       f"{key}.gas_gap_min_gap")
             if "gas_gap_pairs" in t:
                 kw["gas_gap_pairs"] = self.boolean(t["gas_gap_pairs"], f"{key}.gas_gap_pairs")
+            if "gas_gap_model" in t:
+                model = t["gas_gap_model"]
+                if model not in ("isothermal", "solid_resistance"):
+                    raise self.err(f"{key}.gas_gap_model", f"must be \"isothermal\" or "
+                                                           f"\"solid_resistance\", not {model!r}")
+                kw["gas_gap_model"] = model
         settings = ThermalSettings(**kw)
         if settings.gas_gap:
             hot = [w.name for w in list(walls) + list(bodies) if w.temperature is not None]

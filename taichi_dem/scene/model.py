@@ -201,6 +201,10 @@ class ThermalSettings:
     # defaults: lens 0.2 R; a minimum gap of about 1 um, the roughness scale)
     gas_gap: bool = False
     gas_gap_pairs: bool = True
+    # "solid_resistance": the particle's own resistance in series with the gas along each
+    # line (Cheng, Yu & Zulli 1999); "isothermal": isothermal surfaces (Rong & Horio 1999,
+    # Musser 2011, Morris et al. 2015), an upper bound where k_g/k_s is not small
+    gas_gap_model: str = "solid_resistance"
     # thermal time scaling: every heat capacity divided by time_scale S, so temperatures move
     # S times faster than the mechanics; thermal time = S x simulated time (series
     # thermal_time); heat flows (W) stay physical

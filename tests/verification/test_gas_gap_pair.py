@@ -28,11 +28,11 @@ DENSITY, HEAT_CAPACITY = 870.0, 1.0e6
 END = 0.01
 
 
-def _scene(tmp_path, radii, distance, gas=True):
+def _scene(tmp_path, radii, distance, gas=True, model="isothermal"):
     for name, row in (("hot", (0.0, 0.0, 0.0, radii[0])), ("cold", (distance, 0.0, 0.0, radii[1]))):
         (tmp_path / f"{name}.csv").write_text("x,y,z,radius\n" + ",".join(repr(float(c)) for c in row) + "\n")
     keys = (f"gas_gap = true\ngap_gas_conductivity = {K_G}\ngas_gap_lens = {LENS}\n"
-            f"gas_gap_min_gap = {MIN_GAP}\n") if gas else ""
+            f"gas_gap_min_gap = {MIN_GAP}\ngas_gap_model = \"{model}\"\n") if gas else ""
     return f"""
 [simulation]
 end_time = {END}
@@ -70,10 +70,10 @@ interval = 0.005
 """
 
 
-def _heat_flows(tmp_path, radii, distance, gas=True):
+def _heat_flows(tmp_path, radii, distance, gas=True, model="isothermal"):
     """(heat into the cold particle W, into the hot one W, names of the effects, relative drift
     of sum m c T) over the run."""
-    text = _scene(tmp_path, radii, distance, gas)
+    text = _scene(tmp_path, radii, distance, gas, model)
     with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
         names = {e.name for e in sim.effects}
         energy = sim.thermal_energy()
@@ -87,13 +87,17 @@ def _heat_flows(tmp_path, radii, distance, gas=True):
             names, drift)
 
 
-def _expected(radii, distance):
+def _expected(radii, distance, model="isothermal"):
     ri, rj = radii
     spot = 0.0
     if distance < ri + rj:
         r_eff = ri * rj / (ri + rj)
         spot = 4 * K_P * K_P / (K_P + K_P) * math.sqrt(r_eff * (ri + rj - distance))
-    gap = K_G * gas_gap.pair_gap_integral_reference(ri, rj, distance, LENS, MIN_GAP)
+    if model == "isothermal":
+        gap = K_G * gas_gap.pair_gap_integral_reference(ri, rj, distance, LENS, MIN_GAP)
+    else:
+        gap = K_G * gas_gap.pair_solid_gap_integral_reference(ri, rj, distance, LENS, MIN_GAP,
+                                                              K_G / K_P, K_G / K_P)
     return (spot + gap) * (T_HOT - T_COLD)
 
 
@@ -112,6 +116,19 @@ def test_pair_gas_gap_heat_flow(tmp_path, radii, relative):
     # adiabatic pair: what one loses the other gains, to the f64 round-off of sum m c T
     # (~1e-16 of it; the heat moved is ~1e-10 of it)
     assert abs(drift) < 1e-14
+
+
+@pytest.mark.parametrize("relative", [1 - 1e-4, 1.02])
+def test_pair_gas_gap_with_the_solid_resistance(tmp_path, relative):
+    # the default model: the ash's own resistance (k_g/k_s = 0.087) in series with the gas
+    distance = relative * 2 * R
+    q_cold, q_hot, names, drift = _heat_flows(tmp_path, (R, R), distance, model="solid_resistance")
+    expected = _expected((R, R), distance, "solid_resistance")
+    isothermal = _expected((R, R), distance)
+    print(f"\n  d/(2R) = {relative}: heat {q_cold:.6e} W, model {expected:.6e} W "
+          f"(isothermal surfaces: {isothermal:.6e} W)")
+    assert q_cold == pytest.approx(expected, rel=1e-3)
+    assert expected < 0.8 * isothermal
 
 
 def test_beyond_the_lens_nothing_flows(tmp_path):
