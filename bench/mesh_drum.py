@@ -46,7 +46,10 @@ radiation_region = { box = { min = [0.4, -0.3, -0.3], max = [0.5, 0.3, 0.3] } }
 
 
 def scene_text(particles: int, precision: str = "f32", thermal: bool = False,
-               gas: str = "fixed", radiation: bool = False, moisture: bool = False) -> str:
+               gas: str = "fixed", radiation: bool = False, moisture: bool = False,
+               gas_gap: str = "off") -> str:
+    """``gas_gap``: "off", "walls" (gas gap to the shell only) or "all" (and between
+    particles: near pairs listed within the fluid lens)."""
     text = _scene_text(particles, precision)
     if not thermal:
         return text
@@ -61,7 +64,9 @@ def scene_text(particles: int, precision: str = "f32", thermal: bool = False,
                         "heat_capacity = 480.0\n", 1)
     text = text.replace('name = "drum"\nmaterial = "steel"\n', 'name = "drum"\nmaterial = "steel"\ntemperature = 300.0\n')
     text = text.replace("count = ", "temperature = 450.0\ncount = ")
-    return (text + THERMAL + (RADIATION if radiation else "")
+    gap = {"off": "", "walls": "gas_gap = true\ngas_gap_pairs = false\n",
+           "all": "gas_gap = true\n"}[gas_gap]
+    return (text + THERMAL + gap + (RADIATION if radiation else "")
             + {"fixed": FIXED_GAS, "plug_flow": PLUG_FLOW_GAS, "none": ""}[gas])
 
 
@@ -179,6 +184,12 @@ VARIANTS = {      # name -> scene_text keyword arguments
     "plug_flow+radiation": dict(thermal=True, gas="plug_flow", radiation=True),
     "plug_flow+radiation+moisture": dict(thermal=True, gas="plug_flow", radiation=True, moisture=True),
 }
+GAS_GAP_VARIANTS = {  # --compare-gas-gap: what conduction through the gas near contacts costs
+    "off": dict(thermal=False),
+    "fixed": dict(thermal=True, gas="fixed"),
+    "fixed+gas_gap_walls": dict(thermal=True, gas="fixed", gas_gap="walls"),
+    "fixed+gas_gap": dict(thermal=True, gas="fixed", gas_gap="all"),
+}
 
 
 def kernel_costs(sims, rounds: int, calls: int = 30):
@@ -194,9 +205,9 @@ def kernel_costs(sims, rounds: int, calls: int = 30):
 
             def step():
                 e._pair_forces(n, 0.0)
-                if e.gas_stream is not None:
-                    e.gas_stream.exchange(n, 0.0)
-                e._gather(n, 0.0, 0, 0)
+                for c in e.cell_effects:
+                    c.after_pairs(e, n, 0.0)
+                e._gather(n, 0.0, 0, 0, e.time)
             step()
             ti.sync()
             t0 = time.perf_counter()
@@ -211,13 +222,14 @@ def kernel_costs(sims, rounds: int, calls: int = 30):
               f"| {min(v) * 1e3:.3f} | {min(v) / base_min:.2f} |")
 
 
-def compare(a) -> int:
+def compare(a, variants=None) -> int:
     """The heat variants in one process, timed round-robin (each round times every variant
     once, so load from other processes on a shared machine hits them alike); medians over the
     rounds and time ratios against thermal off."""
     import taichi_dem as td
+    variants = variants or VARIANTS
     sims = {}
-    for name, kw in VARIANTS.items():
+    for name, kw in variants.items():
         sim = td.Simulation.from_text(scene_text(a.particles, a.precision, **kw), h5="")
         sim.run(a.settle)
         sim.step(max(a.steps // 10, 1))       # warm: every kernel compiled (sampling included)
@@ -237,7 +249,8 @@ def compare(a) -> int:
         m = statistics.median(v)
         print(f"| {name} | {m / 1e6:.2f} | {base / m:.2f} |")
     kernel_costs(sims, a.repeats)
-    gas_cost(sims["plug_flow"])
+    if "plug_flow" in sims:
+        gas_cost(sims["plug_flow"])
     for sim in sims.values():
         sim.close()
     return 0
@@ -261,9 +274,13 @@ def main(argv=None) -> int:
                    "(X = 0.05) that dry")
     p.add_argument("--compare", action="store_true", help="time thermal off, fixed gas, plug-flow "
                    "gas, + radiation, + moisture in one process, round-robin, as ratios")
+    p.add_argument("--compare-gas-gap", action="store_true", help="time thermal off, fixed gas, "
+                   "+ gas gap to the shell, + gas gap between particles, round-robin")
     a = p.parse_args(argv)
     if a.compare:
         return compare(a)
+    if a.compare_gas_gap:
+        return compare(a, GAS_GAP_VARIANTS)
     import taichi as ti
     if a.profile:
         orig = ti.init

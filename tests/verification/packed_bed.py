@@ -43,7 +43,8 @@ def zehner_schlunder(k_solid: float, k_gas: float, porosity: float) -> float:
 
 
 def scene_text(material: str, radius: float, count: int, width: float, lens: float,
-               k_gas: float, time_scale: float, softened_modulus: float) -> str:
+               k_gas: float, time_scale: float, softened_modulus: float,
+               model: str = "solid_resistance") -> str:
     density, youngs, poisson, k_s, c = MATERIALS[material]
     height = 60.0 * radius
     return f"""
@@ -95,6 +96,7 @@ contact_radius_correction = "static"
 gas_gap = true
 gap_gas_conductivity = {k_gas!r}
 gas_gap_lens = {lens!r}
+gas_gap_model = "{model}"
 time_scale = {time_scale!r}
 [output]
 interval = 0.01
@@ -105,11 +107,12 @@ def packed_bed_conductivity(material: str = "glass", radius: float = 1e-3, count
                             width_diameters: float = 8.0, lens: float = 0.2,
                             k_gas: float = 0.0262, time_scale: float = 1e5,
                             softened_modulus: float = 5e7, settle: float = 0.15,
-                            heat: float = 0.15) -> dict:
+                            heat: float = 0.15, model: str = "solid_resistance") -> dict:
     """Run the experiment; returns k_eff (W/(m K)), the core porosity, the Zehner-Schlünder
     value at that porosity, the plate's and the sinks' heat flows (W) and the fit's r^2."""
     width = width_diameters * 2.0 * radius
-    text = scene_text(material, radius, count, width, lens, k_gas, time_scale, softened_modulus)
+    text = scene_text(material, radius, count, width, lens, k_gas, time_scale, softened_modulus,
+                      model)
     with taichi_dem.Simulation.from_text(text, precision="f64") as sim:
         sim.run(settle)
         s = sim.engine.state
