@@ -149,10 +149,18 @@ def chute_summary(sim, samples: list, stations, sensor: str = "outflow", window:
     key = f"sensors/{sensor}/mass_flow"
     leaving = float(np.mean(s[key][win][1:])) if key in s and win.sum() > 1 else float("nan")
     drift = float(np.polyfit(t[win], count, 1)[0] * span / max(np.mean(count), 1.0)) if win.sum() > 2 else float("nan")
-    out.update(feed=feed, outflow=leaving, count=float(np.mean(count)), count_drift=drift)
+    behind = float(s[f"factories/{inlet['name']}/behind"][-1])
+    out.update(feed=feed, outflow=leaving, count=float(np.mean(count)), count_drift=drift,
+               behind=behind)
     print(f"  over t = {t0:.3g} - {t[-1]:.3g} s: {np.mean(count):,.0f} spheres in the chute "
           f"(drift {drift:+.1%} over the window), mass flow leaving {leaving:.4g} kg/s against "
-          f"{feed:.4g} kg/s fed ({leaving / feed - 1.0:+.1%})")
+          f"{feed:.4g} kg/s fed ({leaving / feed - 1.0:+.1%}; the inlet is {behind * 1e3:.3g} g "
+          f"behind its schedule)")
+    if sim.factories is not None and sim.wall_seconds > 0:
+        n_fed = float(s[f"factories/{inlet['name']}/count"][-1])
+        print(f"  the sheet inlet inserted {n_fed:,.0f} spheres in {sim.factories.wall_seconds:.3g} s "
+              f"wall ({sim.factories.wall_seconds / sim.wall_seconds:.1%} of the run; "
+              f"{n_fed / max(sim.factories.wall_seconds, 1e-9):,.0f} spheres per wall second)")
     if not rows:
         print("  no profile samples in the window (run longer)")
         return out

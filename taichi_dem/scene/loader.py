@@ -446,8 +446,7 @@ class _Parser:
     def parse_sheet_factory(self, t: dict, key: str) -> Factory:
         """``pattern = "sheet"``: lattice layers through ``face`` at ``velocity``, one layer
         whenever the stream has carried the previous one the spacing the mass rate implies."""
-        self.check_keys(t, key, FACTORY_KEYS,
-                        required=("name", "material", "face", "velocity", "mass_rate", "radius"))
+        self.check_keys(t, key, FACTORY_KEYS)
         for k in RANDOM_ONLY_KEYS:
             if k in t:
                 reason = {"region": "a sheet inserts through its face; give face = { point, "
@@ -458,6 +457,8 @@ class _Parser:
                                       "moved one layer spacing; the interval follows from the "
                                       "mass rate and velocity"}[k]
                 raise self.err(f"{key}.{k}", f'not for pattern = "sheet": {reason}')
+        self.check_keys(t, key, FACTORY_KEYS,
+                        required=("name", "material", "face", "velocity", "mass_rate", "radius"))
         radius = self.parse_radius(t["radius"], f"{key}.radius")
         if radius.std != 0.0:
             raise self.err(f"{key}.radius", "a sheet inserts one radius (its lattice is sized for "
@@ -487,11 +488,11 @@ class _Parser:
                            normal=tuple(float(c) for c in normal),
                            radius=radius.mean, jitter=jitter)
         for k, extent in zip(("width", "depth"), sheet.extents):
-            need = 2.0 * (radius.mean + sheet.jitter_amplitude)
+            need = sheet.pitch
             if extent < need:
                 raise self.err(f"{key}.face", f"the face's {k} ({extent:g} m) is narrower than "
-                                              f"one jittered sphere, 2 (radius + jitter x "
-                                              f"diameter) = {need:g} m")
+                                              f"one jittered sphere, the lattice pitch 2 radius "
+                                              f"x 1.001 + 2 jitter x diameter = {need:g} m")
         # the face and the first layer in front of it must lie inside the domain
         lo, hi = np.asarray(self.domain.min, float), np.asarray(self.domain.max, float)
         front = normal * 2.0 * (radius.mean + sheet.jitter_amplitude)

@@ -263,7 +263,8 @@ class SheetInlet:
 
     Each layer is a square lattice of pitch ``pitch`` in the face, every other layer shifted by
     half a pitch along both edges (the hollows of the one before), the centres ``radius +
-    jitter_amplitude`` in front of the face and from its edges, each displaced at random by at
+    jitter_amplitude`` in front of the face and half a pitch from its edges (so a face that
+    spans a periodic axis keeps its spheres clear across it too), each displaced at random by at
     most ``jitter_amplitude`` (= ``jitter`` x diameter). The pitch is the contact distance plus
     twice the jitter (and a 1e-3 clearance), so no two spheres of one layer can touch; two
     successive layers are then clear of each other while their spacing along the normal is at
@@ -302,7 +303,7 @@ class SheetInlet:
     def sites(self, parity: int) -> np.ndarray:
         """(n, 2) lattice sites of a layer of ``parity`` 0 or 1 as (a, b) distances (m) along the
         width and depth edges from ``point``."""
-        margin = self.radius + self.jitter_amplitude
+        margin = 0.5 * self.pitch
         axes = []
         for extent in self.extents:
             span = extent - 2.0 * margin - 0.5 * self.pitch * parity
