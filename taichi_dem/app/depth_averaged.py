@@ -43,7 +43,8 @@ def source(inclination_deg: float, friction_deg: float) -> float:
 def froude(h, u, inclination_deg: float, gravity: float, earth_pressure: float = 1.0):
     """Fr = u / sqrt(K g h cos(zeta)) (dimensionless; h m, u m/s, g m/s^2)."""
     c2 = earth_pressure * gravity * np.asarray(h, float) * math.cos(math.radians(inclination_deg))
-    return np.asarray(u, float) / np.sqrt(c2)
+    with np.errstate(divide="ignore"):          # K = 0: no wave speed, Fr = inf
+        return np.asarray(u, float) / np.sqrt(c2)
 
 
 def steady_profile(x, h0: float, u0: float, inclination_deg: float, friction_deg: float,

@@ -176,28 +176,34 @@ def chute_summary(sim, samples: list, stations, sensor: str = "outflow", window:
                                               earth_pressure=earth_pressure)
         except ValueError as e:
             print(f"  depth-averaged model, delta = {delta:g} deg: {e}")
+    phi_in = inlet["mass_rate"] / (inlet["density"] * inlet["h0"] * inlet["width"] * inlet["u0"])
+    # the depth the DEM's solid would fill at the inflow's solid fraction: the model carries the
+    # inlet's bulk density unchanged, the DEM compacts or dilates along the chute
+    table["h_inflow_density"] = table["h"] * table["phi"] / phi_in
     out.update(x=xs, **table, models={d: {"h": m["h"][1:], "u": m["u"][1:]} for d, m in models.items()})
     d1, d2 = frictions
     print(f"  profile (mean of {len(rows)} samples) beside the steady depth-averaged model (K = "
           f"{earth_pressure:g}) from the inlet state, basal friction delta = {d1:g} and {d2:g} deg:")
     print("    x mm | h mm DEM  d=%g  d=%g | u_mean m/s DEM  d=%g  d=%g | u_surf  u_base | flux kg/s  phi"
-          % (d1, d2, d1, d2))
+          "  h phi/phi0 mm" % (d1, d2, d1, d2))
     for i, x in enumerate(xs):
         m1 = models.get(d1, {"h": [np.nan] * (len(xs) + 1), "u": [np.nan] * (len(xs) + 1)})
         m2 = models.get(d2, m1)
         print(f"  {x * 1e3:6.0f} | {table['h'][i] * 1e3:8.2f} {m1['h'][i + 1] * 1e3:5.2f} "
               f"{m2['h'][i + 1] * 1e3:5.2f} | {table['u_mean'][i]:14.3f} {m1['u'][i + 1]:5.3f} "
               f"{m2['u'][i + 1]:5.3f} | {table['u_surface'][i]:6.3f} {table['u_base'][i]:7.3f} | "
-              f"{table['flux'][i]:9.4f} {table['phi'][i]:5.3f}")
+              f"{table['flux'][i]:9.4f} {table['phi'][i]:5.3f} {table['h_inflow_density'][i] * 1e3:8.2f}")
     if d1 in models and d2 in models:
         lo = {k: models[d2][k][1:] for k in ("h", "u")}
         hi = {k: models[d1][k][1:] for k in ("h", "u")}
         pos = {"u_mean": da.position_between(table["u_mean"], lo["u"], hi["u"]),
                "u_surface": da.position_between(table["u_surface"], lo["u"], hi["u"]),
-               "h": da.position_between(table["h"], lo["h"], hi["h"])}
+               "h": da.position_between(table["h"], lo["h"], hi["h"]),
+               "h_inflow_density": da.position_between(table["h_inflow_density"], lo["h"], hi["h"])}
         out["position"] = pos
         for k, label in (("u_mean", "depth-averaged velocity"), ("u_surface", "free-surface velocity"),
-                         ("h", "flow depth")):
+                         ("h", "flow depth"),
+                         ("h_inflow_density", f"flow depth at the inflow's solid fraction {phi_in:.2f}")):
             p = pos[k]
             print(f"  {label}: position between delta = {d2:g} (0) and {d1:g} deg (1) curves "
                   f"{np.nanmin(p):.2f} - {np.nanmax(p):.2f} along x (mean {np.nanmean(p):.2f})")
