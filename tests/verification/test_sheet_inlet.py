@@ -142,3 +142,23 @@ def test_a_blocked_stream_drops_sites_instead_of_overlapping(tmp_path, capsys):
     behind = sim.series["factories/inlet/behind"][-1]
     assert behind > 0.3 * 0.03 * 0.015                       # most of the feed had no room
     assert "dropped" in capsys.readouterr().err
+
+
+def test_resumed_sheet_continues_its_layers(tmp_path):
+    # a checkpoint carries the layer count and the mass of the layers done: the resumed run
+    # inserts the same layers at the same steps as the uninterrupted one
+    full = _sim(tmp_path, '"0.03 kg/s"', end=0.01)
+    full.run()
+    fed_full = full.series["factories/inlet/mass"].copy()
+    layers_full = int(full.factories.layers[0])
+    full.close()
+    first = _sim(tmp_path, '"0.03 kg/s"', end=0.01)
+    first.run(until=0.005)
+    first.checkpointer.path = str(tmp_path / "sheet.checkpoint.h5")
+    first.checkpointer.save(sim=first)
+    first.close()
+    resumed = td.Simulation.from_checkpoint(str(tmp_path / "sheet.checkpoint.h5"), arch="cpu")
+    resumed.run(until=0.01)
+    assert int(resumed.factories.layers[0]) == layers_full
+    assert np.allclose(resumed.series["factories/inlet/mass"], fed_full, rtol=0, atol=1e-12)
+    resumed.close()
