@@ -86,6 +86,41 @@ def process_summary(sim, window: float = 0.25) -> dict:
         ev = s["particles/evaporated_mass"]
         rate = (ev[-1] - _tail(ev, window)[0]) / span if span > 0 else 0.0
         print(f"summary: water evaporated: {ev[-1]:.4g} kg in all, {rate * 3.6:.3g} t/h lately")
+    if "thermal/particle_heat_loss" in s and len(s["time"]) > 1:
+        loss = float(s["thermal/particle_heat_loss"][-1])
+        walls = float(s["thermal/wall_heat"][-1])
+        gas = float(s["thermal/gas_heat"][-1])
+        booked = walls - gas
+        out["heat_out_of_particles"] = loss
+        out["heat_into_walls"] = walls
+        scale = sim.scene.thermal.time_scale
+        when = (f" in {scale * t[-1]:.4g} s of thermal time ({t[-1]:.4g} s simulated, "
+                f"time_scale {scale:g})") if scale != 1.0 else f" in {t[-1]:.4g} s"
+        line = (f"summary: energy balance{when}: the particles lost {loss / 1e3:.4g} kJ; "
+                f"{walls / 1e3:.4g} kJ went into isothermal walls and bodies"
+                + (f", {gas / 1e3:.4g} kJ came from the gas" if gas else ""))
+        if abs(booked) > 0 or abs(loss) > 0:
+            error = (loss - booked) / max(abs(booked), abs(loss))
+            out["energy_balance_error"] = error
+            line += f" (difference {error:.2%}"
+            if sim.scene.thermal.gas is not None and not sim.scene.thermal.gas.plug_flow:
+                line += "; convection to the fixed gas is not booked"
+            if sim.scene.thermal.radiation:
+                line += "; radiation is not booked"
+            line += ")"
+        print(line)
+        for b in sim.scene.bodies:
+            key = f"bodies/{b.name}/heat_transfer_coefficient"
+            if key in s:
+                h = _tail(np.asarray(s[key], float), window)
+                if np.any(np.isfinite(h)):
+                    mean_h = float(np.nanmean(h))
+                    out[f"{b.name}/heat_transfer_coefficient"] = mean_h
+                    q = float(np.mean(_tail(s[f"bodies/{b.name}/heat_flow"], window)))
+                    print(f"summary: {b.name}: {q:.4g} W into it, wall-to-bed heat transfer "
+                          f"coefficient {mean_h:.4g} W/(m^2 K) over "
+                          f"{float(np.mean(_tail(s[f'bodies/{b.name}/covered_area'], window))):.3g} "
+                          f"m^2 covered (mean of the last {span:.3g} s)")
     for f in sim.scene.factories:
         fed = float(s[f"factories/{f.name}/mass"][-1])
         behind = float(s[f"factories/{f.name}/behind"][-1])

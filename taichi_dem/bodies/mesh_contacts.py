@@ -22,12 +22,10 @@ import math
 import numpy as np
 import taichi as ti
 
-from thermal import gas_gap
-from thermal.conduction import contact_conductance
-
-from ..effects.hertz_mindlin import contact_force
+from ..contacts.geometry import contact_types
+from ..contacts.law import has_effects, margin_fraction
 from ..effects.mesh_contact import closest_point_on_triangle
-from ..engine.broadphase import exclusive_scan, previous_contact
+from ..engine.broadphase import exclusive_scan, previous_entry
 from ..engine.state import fit_rows
 from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
 
@@ -92,6 +90,11 @@ class MeshContacts:
         s = engine.state
         tris, owner = triangle_arrays(bodies)
         self.n_triangles = len(tris)
+        # host copies for the covered area (rigid bodies: areas do not change), m^2
+        self.triangle_area = (0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0],
+                                                            tris[:, 2] - tris[:, 0]), axis=1)
+                              if len(tris) else np.zeros(0))
+        self.triangle_owner = np.asarray(owner, np.int64)
         self.n_bodies = len(bodies)
         t = self.tree = engine.new_tree()
         nt, nb, ncell = max(self.n_triangles, 1), max(self.n_bodies, 1), engine.grid.n_cells
@@ -164,7 +167,7 @@ class MeshContacts:
         self._alloc_scratch(16)
         self._alloc_entries(max(2 * s.capacity // 8, 1024))
         # gas-gap conduction reaches a fluid lens beyond the contact (thermal/gas_gap.py)
-        self.lens = engine.gas_gap_parameters[1] if engine.gas_gap else 0.0
+        self.lens = margin_fraction(engine.contact_effects, "surface")
         self.expand = engine.max_radius * (1.0 + self.lens) + engine.skin
         self.minimum_image = engine.grid.make_minimum_image()
         self.triangle_image = make_triangle_image(engine.grid, self.expand)
@@ -420,52 +423,56 @@ class MeshContacts:
                     k = m.mesh_start[i] + c
                     t = scratch[i, c]
                     m.mesh_tri[k] = t
-                    touching, history, rolling_history = previous_contact(
-                        m.old_tri, m.old_contact, m.old_history, old_rolling, epsd,
-                        old_start, old_count, t)
-                    m.mesh_history[k] = history
-                    m.mesh_contact[k] = touching
+                    old = previous_entry(m.old_tri, old_start, old_count, t)
+                    m.mesh_contact[k] = ti.u8(0)
+                    m.mesh_history[k] = ti.Vector([0.0, 0.0, 0.0])
                     if ti.static(epsd):
-                        m.rolling_history[k] = rolling_history
+                        m.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
+                    if old >= 0:
+                        m.mesh_contact[k] = m.old_contact[old]
+                        m.mesh_history[k] = m.old_history[old]
+                        if ti.static(epsd):
+                            m.rolling_history[k] = old_rolling[old]
 
         self._compact_and_carry = compact_and_carry
 
     # --------------------------------------------------------------- contact law
-    def make_particle_contacts(self, rolling_torque):
-        """ti.func (i, position, velocity, angular velocity, radius, mass, material, dt,
-        record) -> (force N, torque N m) of all mesh contacts of particle i; adds the
-        reactions to the bodies' load sums."""
+    def make_particle_contacts(self, triangle_law, surface_law, sphere_surface):
+        """ti.func (i, position, velocity, angular velocity, radius, mass, inverse mass,
+        inverse inertia, acceleration, material, temperature, dt) -> (force N, torque N m,
+        heat W, conductance W/K) of all mesh contacts of particle i; adds the reactions to the
+        bodies' load sums. Detection is here (candidates, closest points, one contact per flat
+        or convex surface); the physics is the contact law (contacts/law.py) on each accepted
+        contact (``triangle_law``) and, for near-contact heat effects, on each body's surface
+        point nearest the centre (``surface_law``)."""
         m = self
         e = self.e
-        # the pair tables (material x material), as the kernels read them
-        youngs_eff, shear_eff, damping, friction = (e.youngs_eff, e.shear_eff, e.damping,
-                                                    e.friction)
-        rolling_friction, rolling_model, rolling_damping = (e.rolling_friction, e.rolling_model,
-                                                            e.rolling_damping)
-        cdt, epsd = e.rolling_cdt, e.rolling_epsd
+        real = e.real
+        _, _, History = contact_types(real)
+        epsd = e.rolling_epsd
         periodic = any(e.grid.periodic)
-        wall_conduction = e.wall_conduction
-        conductance_factor = e.conductance_factor if e.thermal else None
-        radius_correction = e.radius_correction if e.thermal else None
+        heat_loads = self.particle_load_heat is not None
         s = e.state
         same_surface_cos = SAME_SURFACE_COS
-        from ..effects import rolling
-
-        gas_gap_on = e.gas_gap
-        gap_k, gap_lens, gap_min = e.gas_gap_parameters
+        # near-contact heat effects (the gas gap) see each body's nearest surface point within
+        # the margin they ask for (one lens per body: the plane closed form stands for the
+        # surface there)
+        near = has_effects(e.contact_effects, "surface")
+        lens = self.lens
         nb = self.n_bodies
+        vec0 = ti.Vector([0.0, 0.0, 0.0])
 
         @ti.func
-        def particle_contacts(i, xi, vi, wi, ri, mass_i, inverse_inertia_i, ai, mi, dt):
-            force = ti.Vector([0.0, 0.0, 0.0])
-            torque = ti.Vector([0.0, 0.0, 0.0])
+        def particle_contacts(i, xi, vi, wi, ri, mass_i, inv_mi, inverse_inertia_i, ai, mi,
+                              temperature_i, dt):
+            force = vec0
+            torque = vec0
             heat = 0.0
             conductance = 0.0
             start = m.mesh_start[i]
             end = start + m.mesh_count[i]
-            # gas gap: each body's surface point nearest the centre (one lens per body: the
-            # plane closed form stands for the surface there)
-            nearest = ti.Vector([ri * ti.static(2.0 + gap_lens)] * max(nb, 1))
+            nearest = ti.Vector([ri * ti.static(2.0 + lens)] * max(nb, 1))
+            nearest_normal = ti.Matrix([[0.0, 0.0, 1.0]] * max(nb, 1))
             # geometry of every candidate triangle, in its body's reference frame: the particle
             # is moved into that frame (one rotation) instead of the triangle out of it (three)
             for k in range(start, end):
@@ -483,14 +490,15 @@ class MeshContacts:
                 m.mesh_status[k] = ti.u8(2)
                 # a triangle whose plane is farther than r (and the lens) cannot touch (most
                 # candidates)
-                if ti.abs((x_ref - m.tri_a[t]).dot(m.tri_normal[t])) < ri * ti.static(1.0 + gap_lens):
+                if ti.abs((x_ref - m.tri_a[t]).dot(m.tri_normal[t])) < ri * ti.static(1.0 + lens):
                     q, region = closest_point_on_triangle(x_ref, m.tri_a[t], m.tri_b[t], m.tri_c[t])
                     d = x_ref - q
                     dist_sq = d.dot(d)
-                    if ti.static(gas_gap_on):
+                    if ti.static(near):
                         for bb in ti.static(range(nb)):
                             if body == bb:
-                                nearest[bb] = ti.min(nearest[bb], ti.sqrt(dist_sq))
+                                if dist_sq < nearest[bb] * nearest[bb] and dist_sq > 0.0:
+                                    nearest[bb] = ti.sqrt(dist_sq)
                     if dist_sq < ri * ri and dist_sq > 0.0:
                         dist = ti.sqrt(dist_sq)
                         m.mesh_overlap[k] = ri - dist
@@ -515,79 +523,67 @@ class MeshContacts:
                         in_front = (m.mesh_point[k] - m.mesh_point[best]).dot(n_best)
                         if m.mesh_normal[k].dot(n_best) > same_surface_cos or in_front <= 1e-3 * ri:
                             m.mesh_status[k] = ti.u8(2)
-            # forces of the accepted contacts
+            # the contact law on each accepted contact
             for k in range(start, end):
                 if m.mesh_status[k] == 1:
                     body = m.tri_body[m.mesh_tri[k]]
-                    history = m.mesh_history[k]
+                    history = History(tangential=m.mesh_history[k], rolling=vec0)
+                    if ti.static(epsd):
+                        history.rolling = m.rolling_history[k]
                     if m.mesh_contact[k] == 0:
                         # a contact moving on to a neighbouring triangle keeps its history
                         for o in range(start, end):
                             if (o != k and m.mesh_contact[o] != 0 and m.mesh_status[o] != 1
                                     and m.tri_body[m.mesh_tri[o]] == body):
-                                history = m.mesh_history[o]
+                                history.tangential = m.mesh_history[o]
                                 m.mesh_contact[o] = ti.u8(0)
-                                m.mesh_history[o] = ti.Vector([0.0, 0.0, 0.0])
+                                m.mesh_history[o] = vec0
                                 break
                     normal = m.mesh_normal[k]
                     overlap = m.mesh_overlap[k]
-                    arm = ri - 0.5 * overlap
                     # the overlap centre, in the triangle's frame (periodic image of the particle)
                     contact_point = m.mesh_point[k] - 0.5 * overlap * normal
                     lever_body = contact_point - (m.axis_point[body] + m.offset[body])
                     wall_velocity = m.body_velocity[body] + m.angular_velocity[body].cross(lever_body)
-                    v_rel = vi - wall_velocity - arm * wi.cross(normal)
-                    mb = m.body_material[body]
-                    fn, ft, history, sn = contact_force(
-                        normal, overlap, ri, mass_i, v_rel, ai.dot(normal), history,
-                        youngs_eff[mi, mb], shear_eff[mi, mb], damping[mi, mb],
-                        friction[mi, mb], dt)
-                    contact = fn * normal + ft
-                    contact_torque = -arm * normal.cross(ft)
-                    body_torque = -lever_body.cross(contact)
-                    if ti.static(cdt or epsd):
-                        if rolling_friction[mi, mb] > 0.0:
-                            prev = ti.Vector([0.0, 0.0, 0.0])
-                            if ti.static(epsd):
-                                prev = m.rolling_history[k]
-                            tr, rolling_history = rolling_torque(
-                                rolling_model[mi, mb], wi - m.angular_velocity[body], normal,
-                                fn, sn, ri, rolling_friction[mi, mb], rolling_damping[mi, mb],
-                                1.0 / inverse_inertia_i,
-                                1.0 / rolling.rolling_inverse_inertia(1.0 / mass_i, inverse_inertia_i, ri),
-                                prev, dt)
-                            contact_torque += tr
-                            body_torque -= tr
-                            if ti.static(epsd):
-                                m.rolling_history[k] = rolling_history
-                    if ti.static(wall_conduction):
-                        if m.body_temperature[body] >= 0.0:
-                            h_b = contact_conductance(conductance_factor[mi, mb],
-                                                      radius_correction[mi, mb], ri, overlap)
-                            q_b = h_b * (m.body_temperature[body] - s.temperature[i])
-                            heat += q_b
-                            conductance += h_b
-                            m.particle_load_heat[i, body] = m.particle_load_heat[i, body] - q_b
-                    force += contact
-                    torque += contact_torque
-                    m.particle_load_force[i, body] = m.particle_load_force[i, body] - contact
-                    m.particle_load_torque[i, body] = m.particle_load_torque[i, body] + body_torque
-                    m.mesh_history[k] = history
+                    body_temperature = m.body_temperature[body]
+                    c = sphere_surface(normal, overlap, ri, vi, wi, ai, mass_i, inv_mi,
+                                       inverse_inertia_i, mi, m.body_material[body],
+                                       wall_velocity, m.angular_velocity[body],
+                                       body_temperature - temperature_i,
+                                       1 if body_temperature >= 0.0 else 0)
+                    out, history = triangle_law(c, history, dt)
+                    if ti.static(heat_loads):
+                        heat += out.heat
+                        conductance += out.conductance
+                        m.particle_load_heat[i, body] = m.particle_load_heat[i, body] - out.heat
+                    force += out.force
+                    torque += out.torque_i
+                    m.particle_load_force[i, body] = m.particle_load_force[i, body] - out.force
+                    # about the body's axis: the reaction at the contact point, plus the
+                    # rolling resistance's reaction
+                    m.particle_load_torque[i, body] = (m.particle_load_torque[i, body]
+                                                       - lever_body.cross(out.force) + out.torque_j)
+                    m.mesh_history[k] = history.tangential
+                    if ti.static(epsd):
+                        m.rolling_history[k] = history.rolling
                     m.mesh_contact[k] = ti.u8(1)
                 elif m.mesh_contact[k] != 0:
                     m.mesh_contact[k] = ti.u8(0)
-                    m.mesh_history[k] = ti.Vector([0.0, 0.0, 0.0])
+                    m.mesh_history[k] = vec0
                     if ti.static(epsd):
-                        m.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
-            if ti.static(gas_gap_on):
+                        m.rolling_history[k] = vec0
+            if ti.static(near):
+                # near-contact heat: the law on each body's nearest surface point
                 for bb in ti.static(range(nb)):
-                    if m.body_temperature[bb] >= 0.0 and nearest[bb] < ri * ti.static(1.0 + gap_lens):
-                        h_g = ti.static(gap_k) * gas_gap.plane_gap_integral(
-                            ri, nearest[bb], ti.static(gap_lens), ti.static(gap_min))
-                        q_g = h_g * (m.body_temperature[bb] - s.temperature[i])
-                        heat += q_g
-                        conductance += h_g
-                        m.particle_load_heat[i, bb] = m.particle_load_heat[i, bb] - q_g
+                    body_temperature = m.body_temperature[bb]
+                    if body_temperature >= 0.0 and nearest[bb] < ri * ti.static(1.0 + lens):
+                        c = sphere_surface(vec0, ri - nearest[bb], ri, vi, wi, ai, mass_i,
+                                           inv_mi, inverse_inertia_i, mi, m.body_material[bb],
+                                           vec0, vec0, body_temperature - temperature_i, 1)
+                        out, _ = surface_law(c, History(tangential=vec0, rolling=vec0), dt)
+                        heat += out.heat
+                        conductance += out.conductance
+                        m.particle_load_heat[i, bb] = m.particle_load_heat[i, bb] - out.heat
             return force, torque, heat, conductance
 
         return particle_contacts
@@ -660,6 +656,37 @@ class MeshContacts:
             self._count_contacts = count_contacts
         self._count_contacts(n)
         return self.touching.to_numpy()[: self.n_bodies].astype(np.int64)
+
+    def covered_areas(self, n: int) -> np.ndarray:
+        """Per body, the area (m^2) of its triangles that at least one particle touches now,
+        (B,): the surface the bed covers, for the wall-to-bed heat transfer coefficient. A
+        triangle counts whole, so the figure is as fine as the mesh (a drum shell's triangles
+        run the drum's length: right for a bed along the whole drum)."""
+        if getattr(self, "_covered_for", None) is not self.mesh_contact:
+            self._covered_for = self.mesh_contact
+            m = self
+            s = self.e.state
+            if not hasattr(self, "touched"):
+                tree = self.e.new_tree()
+                self.touched = tree.add("touched_triangle", ti.i32, max(self.n_triangles, 1))
+                tree.finalize()
+
+            @ti.kernel
+            def mark_touched(n: ti.i32):
+                for t in range(m.n_triangles):
+                    m.touched[t] = 0
+                for i in range(n):
+                    if s.alive[i] != 0:
+                        for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
+                            if m.mesh_contact[k] != 0:
+                                m.touched[m.mesh_tri[k]] = 1      # benign race: all write 1
+            self._mark_touched = mark_touched
+        if self.n_triangles == 0:
+            return np.zeros(self.n_bodies)
+        self._mark_touched(n)
+        touched = self.touched.to_numpy()[: self.n_triangles] != 0
+        return np.bincount(self.triangle_owner[touched], weights=self.triangle_area[touched],
+                           minlength=self.n_bodies)[: self.n_bodies]
 
     def deepest_overlaps(self, n: int) -> np.ndarray:
         """Per body, the largest overlap of a touching particle now, as a fraction of that

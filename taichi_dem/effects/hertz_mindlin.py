@@ -58,3 +58,38 @@ def contact_force(normal, normal_overlap, r_eff, m_eff, v_rel, normal_accelerati
         tangential_force *= limit / ti.sqrt(magnitude_sq)
         displacement = -tangential_force / tangential_stiffness
     return normal_force, tangential_force, displacement, normal_stiffness
+
+
+from .base import Effect  # noqa: E402  (the effect object below uses the law above)
+
+
+class HertzMindlin(Effect):
+    """Hertz-Mindlin no-slip contact on every kind of contact (pairs, planes, triangles)."""
+
+    name = "hertz_mindlin"
+    stage = "contact"
+    kinds = ("pair", "plane", "triangle")
+    mechanical = True
+    contact_fields = {"tangential_history": (True, "real")}
+    tables = ("youngs_eff", "shear_eff", "damping", "friction")
+
+    def contact_func(self, engine):
+        youngs_eff, shear_eff, damping, friction = (engine.table[n] for n in self.tables)
+
+        @ti.func
+        def hertz_mindlin(c, out, history, dt):
+            mi, mj = c.material_i, c.material_j
+            fn, ft, tangential, sn = contact_force(
+                c.normal, c.normal_overlap, c.r_eff, c.m_eff, c.v_rel, c.normal_acceleration,
+                history.tangential, youngs_eff[mi, mj], shear_eff[mi, mj], damping[mi, mj],
+                friction[mi, mj], dt)
+            out.force = fn * c.normal + ft
+            lever = c.normal.cross(ft)
+            out.torque_i = -c.arm_i * lever
+            out.torque_j = -c.arm_j * lever
+            out.normal_force = fn
+            out.normal_stiffness = sn
+            history.tangential = tangential
+            return out, history
+
+        return hertz_mindlin

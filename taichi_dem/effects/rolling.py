@@ -59,3 +59,52 @@ def epsd(relative_spin, normal, normal_force, normal_stiffness, r_eff, rolling_f
         if total > limit:
             torque *= limit / total
     return torque, spring
+
+
+from .base import Effect  # noqa: E402
+from ..setup.pair_tables import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD  # noqa: E402
+
+
+class _Rolling(Effect):
+    stage = "contact"
+    kinds = ("pair", "plane", "triangle")
+    mechanical = True
+    tables = ("rolling_friction", "rolling_model", "rolling_damping")
+    model_code = -1
+
+    def contact_func(self, engine):
+        rolling_friction, rolling_model, rolling_damping = (engine.table[n] for n in self.tables)
+        code = self.model_code
+        epsd_model = self.name == "rolling_epsd"
+
+        @ti.func
+        def rolling_resistance(c, out, history, dt):
+            mi, mj = c.material_i, c.material_j
+            if rolling_friction[mi, mj] > 0.0 and rolling_model[mi, mj] == code:
+                torque = c.w_rel * 0.0
+                if ti.static(epsd_model):
+                    torque, history.rolling = epsd(
+                        c.w_rel, c.normal, out.normal_force, out.normal_stiffness, c.r_eff,
+                        rolling_friction[mi, mj], rolling_damping[mi, mj], c.rolling_inertia,
+                        history.rolling, dt)
+                else:
+                    torque = constant_torque(c.w_rel, out.normal_force, c.r_eff,
+                                             rolling_friction[mi, mj], c.inertia_eff, dt)
+                out.torque_i += torque
+                out.torque_j -= torque
+            return out, history
+
+        return rolling_resistance
+
+
+class RollingConstantTorque(_Rolling):
+    """Constant directional torque (EDEM type A) on pairs whose interaction asks for it."""
+    name = "rolling_constant_torque"
+    model_code = ROLLING_CONSTANT_TORQUE
+
+
+class RollingEPSD(_Rolling):
+    """EPSD rolling spring (Ai et al. 2011 model C) on pairs whose interaction asks for it."""
+    name = "rolling_epsd"
+    model_code = ROLLING_EPSD
+    contact_fields = {"rolling_history": (True, "real")}

@@ -36,23 +36,16 @@ def exclusive_scan(counts: ti.template(), starts: ti.template(), n):
 
 
 @ti.func
-def previous_contact(old_key: ti.template(), old_contact: ti.template(),
-                     old_history: ti.template(), old_rolling: ti.template(),
-                     with_rolling: ti.template(), start, count, key):
-    """What a list entry held before the rebuild: the old row of its particle (``start``,
+def previous_entry(old_key: ti.template(), start, count, key):
+    """Where a list entry was before the rebuild: the old row of its particle (``start``,
     ``count``) is searched for the partner ``key`` (a particle id or a triangle id). Returns
-    (touching flag, tangential history, rolling history); zeros for a new entry."""
-    touching = ti.u8(0)
-    history = ti.Vector([0.0, 0.0, 0.0])
-    rolling = ti.Vector([0.0, 0.0, 0.0])
+    the old entry's index, -1 for a new entry."""
+    found = -1
     for m in range(start, start + count):
         if old_key[m] == key:
-            touching = old_contact[m]
-            history = old_history[m]
-            if ti.static(with_rolling):
-                rolling = old_rolling[m]
+            found = m
             break
-    return touching, history, rolling
+    return found
 
 
 class GridSpec:
@@ -214,7 +207,9 @@ class Broadphase:
         skin = self.e.skin
         cell_start = self.cell_start
         total = self.total
-        fixed_pairs = self.e.conduction
+        # two fixed particles are listed only when a pair effect conducts heat between them
+        fixed_pairs = self.e.pair_heat
+        margin = self.e.pair_margin
 
         minimum_image = g.make_minimum_image()
 
@@ -252,6 +247,8 @@ class Broadphase:
                             if j != i and (movable_i or s.inverse_mass[j] > 0.0 or ti.static(fixed_pairs)):
                                 d = minimum_image(xi - s.position[j])
                                 cutoff = ri + s.radius[j] + skin
+                                if ti.static(margin > 0.0):
+                                    cutoff += ti.static(margin) * ti.max(ri, s.radius[j])
                                 if d.dot(d) < cutoff * cutoff:
                                     if count < width:
                                         scratch[i, count] = j
@@ -295,7 +292,8 @@ class Broadphase:
         """Kernels that touch the pair arrays; rebuilt whenever those are reallocated."""
         s = self.e.state
         p = pairs
-        rolling_history = p.rolling_history is not None
+        # the state each contact carries (declared by the effects), with its previous copy
+        carried = [(getattr(p, n), getattr(p, "old_" + n)) for n in p.contact_field_names]
         self._compact = self._make_compact(p)
 
         @ti.kernel
@@ -304,11 +302,8 @@ class Broadphase:
                 for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                     p.old_partner_id[k] = s.particle_id[p.neighbour[k]]
                     p.old_contact[k] = p.contact[k]
-                    p.old_tangential_history[k] = p.tangential_history[k]
-                    if ti.static(rolling_history):
-                        p.old_rolling_history[k] = p.rolling_history[k]
-
-        old_rolling = p.old_rolling_history if rolling_history else p.old_tangential_history  # (unused without EPSD)
+                    for f in ti.static(carried):
+                        f[1][k] = f[0][k]
 
         @ti.kernel
         def link_and_carry(n: ti.i32):
@@ -318,16 +313,18 @@ class Broadphase:
                 old_count = s.old_row_count_by_id[pid]
                 owned_end = s.row_start[i] + s.row_owned[i]
                 for k in range(s.row_start[i], owned_end):
-                    # owned: carry the history of this pair if it existed before the rebuild
+                    # owned: carry the state of this pair if it existed before the rebuild
                     p.mirror[k] = -1
-                    touching, history, rolling = previous_contact(
-                        p.old_partner_id, p.old_contact, p.old_tangential_history,
-                        old_rolling, rolling_history, old_start, old_count,
-                        s.particle_id[p.neighbour[k]])
-                    p.contact[k] = touching
-                    p.tangential_history[k] = history
-                    if ti.static(rolling_history):
-                        p.rolling_history[k] = rolling
+                    old = previous_entry(p.old_partner_id, old_start, old_count,
+                                         s.particle_id[p.neighbour[k]])
+                    if old >= 0:
+                        p.contact[k] = p.old_contact[old]
+                        for f in ti.static(carried):
+                            f[0][k] = f[1][old]
+                    else:
+                        p.contact[k] = ti.u8(0)
+                        for f in ti.static(carried):
+                            f[0][k] = ti.Vector([0.0, 0.0, 0.0])
                 for k in range(owned_end, s.row_start[i] + s.row_count[i]):
                     # not owned: the owner's entry of the same pair lies in j's owned part
                     j = p.neighbour[k]

@@ -95,13 +95,11 @@ class ParticleState:
         "material": (False, "int"), "particle_id": (False, "int"), "alive": (False, "int"),
     }
 
-    # allocated only when [thermal] is present: temperature K, 1/(m c) 1/(J/K)
-    THERMAL = {"temperature": (False, "real"), "inverse_thermal_mass": (False, "real")}
-    # allocated only when the scene dries particles (a fill or factory gives ``moisture``):
-    # X, kg water per kg dry solid. With it, inverse_thermal_mass is 1/(m (c + X c_w)) (m the
-    # dry mass, ``mass``; c_w = [thermal] water_heat_capacity) and changes as the particle
-    # dries; code that inserts particles must set both moisture and that thermal mass
-    MOISTURE = {"moisture": (False, "real")}
+    # Optional fields are declared by the effects that need them (effects/base.py), e.g. the
+    # temperature effect: temperature K, inverse_thermal_mass 1/(J/K) (1/(m (c + X c_w)) when
+    # drying, X = moisture kg water per kg dry solid, m the dry mass ``mass``), and in f32
+    # scenes temperature_residual (f64): the part of the temperature that f32 cannot hold
+    # (engine/precision.py). Code that inserts particles sets them by name.
 
     # allocated only when the scene has factories or outlets: ``serial`` is the id users see
     # (unique over the whole run), while ``particle_id`` is a slot key < capacity that is
@@ -109,24 +107,15 @@ class ParticleState:
     # ``birth_time`` s when it was inserted
     PROCESS = {"serial": (False, "int"), "origin": (False, "int"), "birth_time": (False, "real")}
 
-    # allocated only for heat in f32 scenes: the part of the temperature (K) and moisture
-    # (kg/kg) that f32 cannot hold. The f32 spacing at 723 K is 6.1e-5 K while a cooler's
-    # per-step changes are ~1e-6 K: a plain f32 update rounds them away and heat is lost or
-    # made. The value is temperature + temperature_residual (compensated summation, f64);
-    # fluxes use the f32 part, which is within half a spacing of it
-    RESIDUALS = {"temperature_residual": (False, "f64")}
-    MOISTURE_RESIDUALS = {"moisture_residual": (False, "f64")}
-
-    def __init__(self, capacity: int, real, n_walls: int, rolling_history: bool,
-                 thermal: bool = False, process: bool = False, moisture: bool = False):
+    def __init__(self, capacity: int, real, n_walls: int, particle_fields: dict,
+                 contact_fields: dict, thermal: bool = False, process: bool = False):
+        """``particle_fields``: {name: (is_vector, kind)} the enabled effects declare;
+        ``contact_fields``: the state each contact carries (one per particle and plane wall
+        here, named ``wall_<name>``)."""
         self.capacity = capacity
+        self.spec = dict(self.CORE, **particle_fields, **(self.PROCESS if process else {}))
         # compensated (f64 residual) temperatures only where the mechanics are in f32
-        self.compensated = bool(thermal) and real != ti.f64
-        self.spec = dict(self.CORE, **(self.THERMAL if thermal else {}),
-                         **(self.MOISTURE if moisture else {}),
-                         **(self.RESIDUALS if self.compensated else {}),
-                         **(self.MOISTURE_RESIDUALS if self.compensated and moisture else {}),
-                         **(self.PROCESS if process else {}))
+        self.compensated = "temperature_residual" in self.spec
         self.process = process
         self.real = real
         self.n_walls = n_walls
@@ -134,11 +123,12 @@ class ParticleState:
         self.names: list[str] = []
         for name, (vec, kind) in self.spec.items():
             self._add(name, vec, kind)
+        self.wall_fields = []
         if n_walls:
-            # tangential displacement of each particle's contact with each plane wall
-            self._add_wall("wall_tangential_history")
-            if rolling_history:
-                self._add_wall("wall_rolling_history")
+            # e.g. the tangential displacement of each particle's contact with each plane wall
+            for name in contact_fields:
+                self._add_wall("wall_" + name)
+                self.wall_fields.append("wall_" + name)
         # scratch for reordering: one shadow per dtype/shape
         t = self.tree
         self.shadow_vec = t.add("shadow_vec", real, capacity, vector=True)
@@ -180,8 +170,7 @@ class ParticleState:
         vec = [getattr(self, n) for n, (v, k) in self.spec.items() if v]
         real = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "real"]
         ints = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "int"]
-        walls = [getattr(self, n) for n in ("wall_tangential_history", "wall_rolling_history")
-                 if hasattr(self, n)]
+        walls = [getattr(self, n) for n in self.wall_fields]
         doubles = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "f64"]
         return vec, real, ints, walls, doubles
 
@@ -200,28 +189,33 @@ class PairState:
     owner's entry.
     """
 
-    def __init__(self, capacity: int, real, rolling_history: bool, conduction: bool = False):
+    def __init__(self, capacity: int, real, contact_fields: dict, pair_fields: dict):
+        """``contact_fields``: the state each contact carries (the enabled effects declare
+        them: tangential_history, rolling_history), kept with a copy of the previous list
+        (``old_<name>``) to carry it across rebuilds; ``pair_fields``: the partner's share of
+        a pair effect's output (partner_heat W, pair_conductance W/K), valid while touching."""
         self.capacity = capacity
         t = self.tree = FieldTree()
-        # the partner's share of the heat flow (W), valid while touching (conduction only)
-        self.partner_heat = t.add("partner_heat", real, capacity) if conduction else None
-        self.pair_conductance = t.add("pair_conductance", real, capacity) if conduction else None
+        self.contact_field_names = list(contact_fields)
+        self.partner_heat = self.pair_conductance = None
+        for name, (vec, kind) in pair_fields.items():
+            setattr(self, name, t.add(name, real, capacity, vector=vec))
         self.neighbour = t.add("neighbour", ti.i32, capacity)
         self.mirror = t.add("mirror", ti.i32, capacity)
         # 1 while the pair touches; the partner's force and torque are valid only then, and the
         # history is zero whenever it is 0 (so non-touching pairs cost one byte per step)
         self.contact = t.add("contact", ti.u8, capacity)
-        self.tangential_history = t.add("tangential_history", real, capacity, vector=True)
         self.partner_force = t.add("partner_force", real, capacity, vector=True)    # N
         self.partner_torque = t.add("partner_torque", real, capacity, vector=True)  # N m
-        self.rolling_history = (t.add("rolling_history", real, capacity, vector=True)
-                                if rolling_history else None)
+        self.tangential_history = self.rolling_history = None
+        self.old_tangential_history = self.old_rolling_history = None
+        for name, (vec, kind) in contact_fields.items():
+            setattr(self, name, t.add(name, real, capacity, vector=vec))
         # the previous list, by partner id, to carry history across rebuilds
         self.old_partner_id = t.add("old_partner_id", ti.i32, capacity)
         self.old_contact = t.add("old_contact", ti.u8, capacity)
-        self.old_tangential_history = t.add("old_tangential_history", real, capacity, vector=True)
-        self.old_rolling_history = (t.add("old_rolling_history", real, capacity, vector=True)
-                                    if rolling_history else None)
+        for name, (vec, kind) in contact_fields.items():
+            setattr(self, "old_" + name, t.add("old_" + name, real, capacity, vector=vec))
         t.finalize()
 
     def destroy(self):

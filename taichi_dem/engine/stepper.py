@@ -4,32 +4,29 @@ One step (velocity Verlet):
   drift:  v += a dt/2, w += alpha dt/2, x += v dt; wrap periodic faces; mark particles that
           left the domain; flag a rebuild if any moved more than half the skin
   rebuild neighbours when flagged (broadphase.py)
-  pair:   one kernel over owned neighbour entries computes the contact geometry once and runs
-          every enabled pair effect on it (Hertz-Mindlin, rolling friction); the owner sums its
-          own share, the partner's share is stored at the entry (only while touching) - no
-          atomics
-  gas:    (plug-flow gas only, thermal/plug_flow.py) per-cell sums of the particles' h A and
-          h A T, then the gas marches from its inlet cell by cell
-  gather: each particle adds its partners' shares through the mirror index, adds plane walls and gravity, and completes the kick: v += a dt/2; within a
-          run of steps it goes on with the next step's drift (one pass over the particles less);
-          thermal: adds convection, radiation, then updates T (and dries, thermal/moisture.py)
-Effects not enabled are excluded with ``ti.static`` and so never compiled.
+  pair:   one kernel over owned neighbour entries: the contact geometry once
+          (contacts/geometry.py), then the contact law (contacts/law.py), the enabled contact
+          effects unrolled on it; the owner sums its own share, the partner's share is stored
+          at the entry - no atomics
+  cell:   effects with a per-cell stage (the plug-flow gas marching cell by cell)
+  gather: each particle adds its partners' shares through the mirror index, runs the same
+          contact law on its plane walls and mesh triangles, then the particle effects
+          (gravity, convection, gas, radiation), the integrate stage (temperature, drying) and
+          the second half kick v += a dt/2; within a run of steps it goes on with the next
+          step's drift (one pass over the particles less)
+The effects (effects/, thermal/effects.py) declare their stage, fields and tables; those not
+enabled are neither allocated nor compiled (``ti.static``). The engine never imports thermal/.
 """
 
 import numpy as np
 import taichi as ti
 
 from .broadphase import Broadphase, GridSpec
-from ..effects import effect_names
-from ..effects.hertz_mindlin import contact_force
-from ..effects import rolling
-from thermal import convection as gas_convection
-from thermal.conduction import contact_conductance
-from thermal import moisture as drying
-from thermal import radiation as radiative
-from thermal.precision import make_compensated_add
-from thermal import gas_gap
-from ..setup.pair_tables import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD, PairTables
+from .precision import make_compensated_add
+from ..contacts.geometry import contact_types, make_geometry
+from ..contacts.law import make_contact_law, margin_fraction
+from ..effects import enabled_effects
+from ..setup.pair_tables import PairTables
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 
 
@@ -43,17 +40,24 @@ class Engine:
         self.real = real
         self.skin = skin
         self.dt = dt
-        self.effects = effect_names(scene)
+        # the step is composed of these (effects/base.py): what they declare is allocated,
+        # what they do is unrolled into the kernels; nothing else is compiled
+        self.effect_list = enabled_effects(scene)
+        self.effects = {e.name for e in self.effect_list}
+        by_name = {e.name: e for e in self.effect_list}
+        self.contact_effects = tuple(e for e in self.effect_list if e.stage == "contact")
+        self.particle_effects = tuple(e for e in self.effect_list if e.stage == "particle")
+        self.cell_effects = tuple(e for e in self.effect_list if hasattr(e, "after_pairs"))
+        self.temperature_effect = by_name.get("temperature")
+        self.drying_effect = by_name.get("drying")
         self.rolling_cdt = "rolling_constant_torque" in self.effects
         self.rolling_epsd = "rolling_epsd" in self.effects
         self.thermal = scene.thermal is not None
         self.conduction = "conduction" in self.effects
         self.wall_conduction = "wall_conduction" in self.effects
-        # particle-fluid-wall conduction (thermal/gas_gap.py): only with wall conduction on
         self.gas_gap = "gas_gap_wall" in self.effects
-        th = scene.thermal
-        self.gas_gap_parameters = ((th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap)
-                                   if self.gas_gap else (0.0, 0.0, 1.0))
+        self.gas_gap_parameters = (by_name["gas_gap_wall"].parameters if self.gas_gap
+                                   else (0.0, 0.0, 1.0))
         self.convection = "convection" in self.effects
         self.plug_flow = "plug_flow_gas" in self.effects
         self.radiation = "radiation" in self.effects
@@ -61,61 +65,63 @@ class Engine:
         self.trees: list[FieldTree] = []
         self.walls = scene.walls
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
-        self.state = ParticleState(capacity, real, len(scene.walls), self.rolling_epsd,
-                                   thermal=self.thermal, moisture=self.moisture,
+        particle_fields = {}
+        for e in self.effect_list:
+            particle_fields.update(e.particle_fields)
+        self.contact_fields = {}
+        self.pair_fields = {}
+        for e in self.contact_effects:
+            self.contact_fields.update(e.contact_fields)
+            self.pair_fields.update(e.pair_fields)
+        self.state = ParticleState(capacity, real, len(scene.walls), particle_fields,
+                                   self.contact_fields, thermal=self.thermal,
                                    process=bool(scene.factories or scene.outlets))
         self.trees.append(self.state.tree)
+        # pairs within a contact margin (a fraction of the larger radius) an effect asks for
+        # are listed and handed to the contact law too (the gas gap near a contact)
+        self.pair_margin = margin_fraction(self.contact_effects, "pair")
+        self.pair_heat = "partner_heat" in self.pair_fields
         self.grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
-                             2.0 * max_radius + skin, capacity)
+                             (2.0 + self.pair_margin) * max_radius + skin, capacity)
         t = self.new_tree()
         m = len(tables.names)
-        self.youngs_eff = t.add("youngs_eff", real, (m, m))
-        self.shear_eff = t.add("shear_eff", real, (m, m))
-        self.damping = t.add("damping", real, (m, m))
-        self.friction = t.add("friction", real, (m, m))
-        self.rolling_friction = t.add("rolling_friction", real, (m, m))
-        self.rolling_model = t.add("rolling_model", ti.i32, (m, m))
-        self.rolling_damping = t.add("rolling_damping", real, (m, m))
+        # the material-pair tables the enabled effects read, under their physics names
+        self.table = {}
+        table_values = {}
+        for e in self.effect_list:
+            for name, values in e.table_values(scene, tables).items():
+                if name not in self.table:
+                    dtype = ti.i32 if values.dtype.kind in "iu" else real
+                    self.table[name] = t.add(name, dtype, (m, m))
+                    setattr(self, name, self.table[name])
+                    table_values[name] = values
         # named slots: Flag (engine/state.py)
         self.flags = t.add("flags", ti.i32, Flag.SIZE)
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
         self.reduction = t.add("reduction", real, Reduction.SIZE)   # named slots: Reduction
         self.gas_stream = None
         if self.thermal:
-            self.conductance_factor = t.add("conductance_factor", real, (m, m))
-            self.radius_correction = t.add("radius_correction", real, (m, m))
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
             # f64 sums over the particles: sum m c T (J), sum m c (J/K), water (kg), dry solid
             # (kg); an f32 sum of m c T at 723 K would round the heat balance away
             self.thermal_sums = t.add("thermal_sums", ti.f64, ThermalSum.SIZE)
-            if self.plug_flow:
-                from thermal.plug_flow import AxialPlugFlowGas
-                self.gas_stream = AxialPlugFlowGas(scene.thermal.gas, self.state, t, real)
-            if self.radiation:
-                self.emissivity = t.add("emissivity", real, m)         # per material
-            if self.moisture:
-                self.evaporated = t.add("evaporated", ti.f64, 1)      # kg since the start
+        for e in self.effect_list:
+            e.allocate(self, t)
         self.process = None
         if scene.factories or scene.outlets or has_planes:
             from ..process.outlets import ProcessDevice
             self.process = ProcessDevice(self, t)
         t.finalize()
         self.removed_batches: list = []    # removal-log entries drained at rebuilds
-        if self.radiation:
-            self.emissivity.from_numpy(np.array([scene.materials[k].emissivity or 0.0 for k in tables.names],
-                                                np.float64 if real == ti.f64 else np.float32))
+        npf = np.float64 if real == ti.f64 else np.float32
+        for name, values in table_values.items():
+            field = self.table[name]
+            field.from_numpy(values.astype(np.int32 if field.dtype == ti.i32 else npf))
+        for e in self.effect_list:
+            if hasattr(e, "upload"):
+                e.upload(self)
         if self.gas_stream is not None:
             self.gas_stream.compile()
-        if self.thermal:
-            from ..setup.pair_tables import conduction_tables
-            factor, correction = conduction_tables(scene, tables.names)
-            npf = np.float64 if real == ti.f64 else np.float32
-            self.conductance_factor.from_numpy(factor.astype(npf))
-            self.radius_correction.from_numpy(correction.astype(npf))
-        for name in ("youngs_eff", "shear_eff", "damping", "friction", "rolling_friction",
-                     "rolling_damping"):
-            getattr(self, name).from_numpy(getattr(tables, name).astype(np.float64 if real == ti.f64 else np.float32))
-        self.rolling_model.from_numpy(tables.rolling_model.astype(np.int32))
         self.max_radius = max_radius
         self.time = 0.0
         self.pairs: "PairState | None" = None
@@ -143,7 +149,7 @@ class Engine:
         """(Re)allocate the pair arrays with room for ``capacity`` entries, keeping the saved
         previous list (old_* arrays) so the history can still be carried."""
         old = self.pairs
-        new = PairState(capacity, self.real, self.rolling_epsd, self.conduction)
+        new = PairState(capacity, self.real, self.contact_fields, self.pair_fields)
         if old is not None:
             new.old_partner_id.from_numpy(fit_rows(old.old_partner_id.to_numpy(), capacity))
             new.old_tangential_history.from_numpy(fit_rows(old.old_tangential_history.to_numpy(), capacity))
@@ -228,7 +234,8 @@ class Engine:
         moisture = self.moisture
         compensated = s.compensated
         sums = self.thermal_sums if thermal else None
-        dt_step = self.dt
+        # the thermal step: S dt with heat capacities divided by S ([thermal] time_scale)
+        dt_step = self.dt * (self.scene.thermal.time_scale if thermal else 1.0)
 
         @ti.kernel
         def measure(n: ti.i32):
@@ -274,72 +281,56 @@ class Engine:
     def _compile_pair_kernels(self, p: PairState):
         s = self.state
         minimum_image = self.minimum_image
-        # the pair tables (material x material), as the kernels read them
-        youngs_eff, shear_eff, damping, friction = (self.youngs_eff, self.shear_eff, self.damping,
-                                                    self.friction)
-        rolling_friction, rolling_model, rolling_damping = (
-            self.rolling_friction, self.rolling_model, self.rolling_damping)
-        cdt, epsd = self.rolling_cdt, self.rolling_epsd
+        real = self.real
+        effects = self.effect_list
+        # the contact geometry of each kind and the contact law composed from the enabled
+        # effects (contacts/): the same law runs on pairs, planes and triangles
+        sphere_sphere, sphere_surface = make_geometry(real, self.thermal)
+        _, _, History = contact_types(real)
+        pair_law = make_contact_law(effects, "pair", real, self)
+        plane_law = make_contact_law(effects, "plane", real, self)
+        # a pair is handed to the law while its gap is below the margin an effect asks for
+        pair_margin = self.pair_margin
+        epsd = self.rolling_epsd
+        pair_heat = self.pair_heat
         walls = [(tuple(w.point), tuple(w.normal), self.tables.index(w.material)) for w in self.walls]
         n_walls = len(walls)
-        gravity = ti.Vector(list(self.scene.simulation.gravity))
+        wall_rolling = s.wall_rolling_history if epsd and n_walls else None
+        has_wall_rolling = wall_rolling is not None
+        wall_temperature = [w.temperature if (w.temperature is not None and self.wall_conduction)
+                            else -1.0 for w in self.walls]
         wall_force = self.wall_force
-        real = self.real
         drift_particle = self.drift_particle
-        has_mesh = self.mesh is not None
-        conduction, wall_conduction, convection = self.conduction, self.wall_conduction, self.convection
         thermal = self.thermal
-        conductance_factor = self.conductance_factor if thermal else None
-        radius_correction = self.radius_correction if thermal else None
-        gas_gap_on = self.gas_gap
-        gap_k, gap_lens, gap_min = self.gas_gap_parameters
-        wall_temperature = [w.temperature if (w.temperature is not None and wall_conduction) else -1.0
-                            for w in self.walls]
         wall_heat = self.wall_heat if thermal else None
-        gas = self.scene.thermal.gas if (thermal and convection) else None
-        has_gas = gas is not None and not self.plug_flow       # a uniform ("fixed") gas
-        stream = self.gas_stream
-        plug_flow = stream is not None
-        th = self.scene.thermal
-        radiation, moisture = self.radiation, self.moisture
-        compensated = s.compensated
-        compensated_add, split_f64 = make_compensated_add(real)
-        # names the kernel closes over must exist even when their effect is off
-        emissivity = evaporated = radiate_to_gas = radiation_temperature = None
-        in_radiation_region = t_evap = latent = c_water = None
-        if radiation:
-            emissivity = self.emissivity
-            radiate_to_gas = th.radiation_to == "gas"
-            radiation_temperature = (gas.temperature if (radiate_to_gas and not plug_flow)
-                                     else (th.radiation_temperature or 0.0))
-            in_radiation_region = _region_test(th.radiation_region)
-        if moisture:
-            evaporated = self.evaporated
-            t_evap, latent, c_water = th.evaporation_temperature, th.latent_heat, th.water_heat_capacity
-        gas_velocity = ti.Vector(list(gas.velocity)) if has_gas else None
-        prandtl = gas.heat_capacity * gas.viscosity / gas.conductivity if gas is not None else 0.0
-        prandtl_cube_root = prandtl ** (1.0 / 3.0)
+        mesh_contacts = None
+        if self.mesh is not None:
+            mesh_contacts = self.mesh.make_particle_contacts(
+                make_contact_law(effects, "triangle", real, self),
+                make_contact_law(effects, "surface", real, self), sphere_surface)
+        has_mesh = mesh_contacts is not None
+        Load = ti.types.struct(acceleration=ti.types.vector(3, real), heat=real,
+                               conductance=real)
+        particle_effects = tuple(e.particle_func(self) for e in self.particle_effects)
+        update_temperature = (self.temperature_effect.integrate_func(self, self.drying_effect)
+                              if thermal else None)
+        vec0 = ti.Vector([0.0, 0.0, 0.0])
 
         @ti.func
-        def rolling_torque(pair_model, w_rel, normal, fn, sn, r_eff, mu_r, eta_r, inertia_eff,
-                           rolling_inertia, history, dt):
-            torque = ti.Vector([0.0, 0.0, 0.0])
-            if ti.static(cdt):
-                if pair_model == ROLLING_CONSTANT_TORQUE:
-                    torque = rolling.constant_torque(w_rel, fn, r_eff, mu_r, inertia_eff, dt)
-            if ti.static(epsd):
-                if pair_model == ROLLING_EPSD:
-                    torque, history = rolling.epsd(w_rel, normal, fn, sn, r_eff, mu_r, eta_r,
-                                                   rolling_inertia, history, dt)
-            return torque, history
+        def temperature_of(i):
+            t = 0.0 * s.radius[i]
+            if ti.static(thermal):
+                t = s.temperature[i]
+            return t
 
         @ti.kernel
         def pair_forces(n: ti.i32, dt: real):
             for i in range(n):
-                xi, vi, wi = s.position[i], s.velocity[i], s.angular_velocity[i]
+                xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
                 ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
-                owned_force = ti.Vector([0.0, 0.0, 0.0])
-                owned_torque = ti.Vector([0.0, 0.0, 0.0])
+                temperature_i = temperature_of(i)
+                owned_force = vec0
+                owned_torque = vec0
                 owned_heat = 0.0
                 owned_conductance = 0.0
                 for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
@@ -347,80 +338,46 @@ class Engine:
                     d = minimum_image(xi - s.position[j])
                     rj = s.radius[j]
                     distance_sq = d.dot(d)
-                    if distance_sq < (ri + rj) * (ri + rj) and distance_sq > 0.0:
-                        dist = ti.sqrt(distance_sq)
-                        normal_overlap = ri + rj - dist
-                        normal = d / dist                                   # from j to i
-                        r_eff = ri * rj / (ri + rj)
-                        mj = s.material[j]
-                        if ti.static(conduction):
-                            # Q = h_c (T_j - T_i), h_c = 4 k_i k_j/(k_i + k_j) a, with the Hertz
-                            # contact radius a = (3 F_n R*/(4 E*))^(1/3) = sqrt(R* d_n),
-                            # corrected for a softened modulus (model.conduction_tables)
-                            h_c = contact_conductance(conductance_factor[mi, mj],
-                                                      radius_correction[mi, mj], r_eff,
-                                                      normal_overlap)
-                            heat = h_c * (s.temperature[j] - s.temperature[i])
-                            owned_heat += heat
-                            owned_conductance += h_c
-                            p.partner_heat[k] = -heat
-                            p.pair_conductance[k] = h_c
-                            if inv_mi + s.inverse_mass[j] <= 0.0:
-                                # two fixed particles (listed only for heat): no forces
-                                p.partner_force[k] = ti.Vector([0.0, 0.0, 0.0])
-                                p.partner_torque[k] = ti.Vector([0.0, 0.0, 0.0])
-                                p.contact[k] = ti.u8(1)
-                                continue
-                        m_eff = 1.0 / (inv_mi + s.inverse_mass[j])
-                        arm_i = ri - 0.5 * normal_overlap     # centre to contact point
-                        arm_j = rj - 0.5 * normal_overlap
-                        wj = s.angular_velocity[j]
-                        v_rel = vi - s.velocity[j] - (arm_i * wi + arm_j * wj).cross(normal)
-                        normal_acceleration = (s.acceleration[i] - s.acceleration[j]).dot(normal)
-                        fn, ft, history, sn = contact_force(
-                            normal, normal_overlap, r_eff, m_eff, v_rel, normal_acceleration,
-                            p.tangential_history[k], youngs_eff[mi, mj], shear_eff[mi, mj],
-                            damping[mi, mj], friction[mi, mj], dt)
-                        force = fn * normal + ft
-                        lever = normal.cross(ft)
-                        torque_i = -arm_i * lever
-                        torque_j = -arm_j * lever
-                        if ti.static(cdt or epsd):
-                            if rolling_friction[mi, mj] > 0.0:
-                                prev = ti.Vector([0.0, 0.0, 0.0])
-                                if ti.static(epsd):
-                                    prev = p.rolling_history[k]
-                                tr, rolling_history = rolling_torque(
-                                    rolling_model[mi, mj], wi - wj, normal, fn, sn, r_eff,
-                                    rolling_friction[mi, mj], rolling_damping[mi, mj],
-                                    1.0 / (inv_ii + s.inverse_inertia[j]),
-                                    1.0 / (rolling.rolling_inverse_inertia(inv_mi, inv_ii, ri)
-                                           + rolling.rolling_inverse_inertia(
-                                               s.inverse_mass[j], s.inverse_inertia[j], rj)),
-                                    prev, dt)
-                                torque_i += tr
-                                torque_j -= tr
-                                if ti.static(epsd):
-                                    p.rolling_history[k] = rolling_history
-                        owned_force += force
-                        owned_torque += torque_i
-                        p.partner_force[k] = -force
-                        p.partner_torque[k] = torque_j
-                        p.tangential_history[k] = history
-                        p.contact[k] = ti.u8(1)
+                    reach = ri + rj
+                    if ti.static(pair_margin > 0.0):
+                        reach += ti.static(pair_margin) * ti.max(ri, rj)
+                    if distance_sq < reach * reach and distance_sq > 0.0:
+                        c = sphere_sphere(d, distance_sq, ri, rj, vi, s.velocity[j], wi,
+                                          s.angular_velocity[j], ai, s.acceleration[j], inv_mi,
+                                          s.inverse_mass[j], inv_ii, s.inverse_inertia[j], mi,
+                                          s.material[j], temperature_i, temperature_of(j))
+                        history = History(tangential=p.tangential_history[k], rolling=vec0)
+                        if ti.static(epsd):
+                            history.rolling = p.rolling_history[k]
+                        out, history = pair_law(c, history, dt)
+                        if c.normal_overlap <= 0.0:
+                            # near, not touching (heat only): no spring to carry
+                            history.tangential = vec0
+                            history.rolling = vec0
+                        if ti.static(pair_heat):
+                            owned_heat += out.heat
+                            owned_conductance += out.conductance
+                            p.partner_heat[k] = -out.heat
+                            p.pair_conductance[k] = out.conductance
+                        owned_force += out.force
+                        owned_torque += out.torque_i
+                        p.partner_force[k] = -out.force
+                        p.partner_torque[k] = out.torque_j
+                        p.tangential_history[k] = history.tangential
+                        if ti.static(epsd):
+                            p.rolling_history[k] = history.rolling
+                        p.contact[k] = ti.cast(ti.select(c.normal_overlap > 0.0, 1, 2), ti.u8)
                     elif p.contact[k] != 0:
                         # the contact opened: its history is discarded
                         p.contact[k] = ti.u8(0)
-                        p.tangential_history[k] = ti.Vector([0.0, 0.0, 0.0])
+                        p.tangential_history[k] = vec0
                         if ti.static(epsd):
-                            p.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
+                            p.rolling_history[k] = vec0
                 s.owned_force[i] = owned_force
                 s.owned_torque[i] = owned_torque
                 if ti.static(thermal):
                     s.owned_heat[i] = owned_heat
                     s.conductance[i] = owned_conductance
-
-        mesh_contacts = self.mesh.make_particle_contacts(rolling_torque) if has_mesh else None
 
         @ti.kernel
         def gather(n: ti.i32, dt: real, record: ti.i32, then_drift: ti.i32, t_next: ti.f64):
@@ -440,7 +397,7 @@ class Engine:
                 if ti.static(thermal):
                     heat = s.owned_heat[i]
                     conductance = s.conductance[i]
-                if ti.static(conduction):
+                if ti.static(pair_heat):
                     for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
                         m = p.mirror[k]
                         if m >= 0:
@@ -449,139 +406,59 @@ class Engine:
                                 conductance += p.pair_conductance[m]
                 inv_m = s.inverse_mass[i]
                 if ti.static(n_walls > 0):
+                    # plane walls: the contact law on each particle-plane contact
                     xi, vi, wi, ri, mi = s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i], s.material[i]
+                    temperature_i = temperature_of(i)
                     for w in ti.static(range(n_walls)):
                         wall_point = ti.Vector(walls[w][0])
                         wall_normal = ti.Vector(walls[w][1])
-                        mw = ti.static(walls[w][2])
-                        normal_overlap = ri - (xi - wall_point).dot(wall_normal)
-                        history = ti.Vector([0.0, 0.0, 0.0])
-                        rolling_history = ti.Vector([0.0, 0.0, 0.0])
-                        if ti.static(wall_temperature[w] >= 0.0):
-                            h_w = 0.0 * ri
-                            if normal_overlap > 0.0:
-                                # conduction to an isothermal (e.g. water-cooled) wall
-                                h_w = contact_conductance(conductance_factor[mi, mw],
-                                                          radius_correction[mi, mw], ri,
-                                                          normal_overlap)
-                            if ti.static(gas_gap_on):
-                                # and through the gas between the particle and the wall, within
-                                # the fluid lens (thermal/gas_gap.py); touching or not
-                                h_w += ti.static(gap_k) * gas_gap.plane_gap_integral(
-                                    ri, ri - normal_overlap, ti.static(gap_lens), ti.static(gap_min))
-                            if h_w > 0.0:
-                                q_w = h_w * (ti.static(wall_temperature[w]) - s.temperature[i])
-                                heat += q_w
-                                conductance += h_w
-                                if record != 0:
-                                    wall_heat[w] -= q_w
-                        if normal_overlap > 0.0 and inv_m > 0.0:
-                            arm = ri - 0.5 * normal_overlap
-                            v_rel = vi - arm * wi.cross(wall_normal)       # the wall is at rest
-                            fn, ft, history, sn = contact_force(
-                                wall_normal, normal_overlap, ri, s.mass[i], v_rel,
-                                s.acceleration[i].dot(wall_normal),
-                                s.wall_tangential_history[i, w], youngs_eff[mi, mw],
-                                shear_eff[mi, mw], damping[mi, mw], friction[mi, mw], dt)
-                            wall_contact = fn * wall_normal + ft
-                            contact_torque = -arm * wall_normal.cross(ft)
-                            if ti.static(cdt or epsd):
-                                if rolling_friction[mi, mw] > 0.0:
-                                    prev = ti.Vector([0.0, 0.0, 0.0])
-                                    if ti.static(epsd):
-                                        prev = s.wall_rolling_history[i, w]
-                                    tr, rolling_history = rolling_torque(
-                                        rolling_model[mi, mw], wi, wall_normal, fn, sn, ri,
-                                        rolling_friction[mi, mw], rolling_damping[mi, mw],
-                                        1.0 / s.inverse_inertia[i],
-                                        1.0 / rolling.rolling_inverse_inertia(
-                                            inv_m, s.inverse_inertia[i], ri),
-                                        prev, dt)
-                                    contact_torque += tr
-                            force += wall_contact
-                            torque += contact_torque
+                        isothermal = ti.static(wall_temperature[w] >= 0.0)
+                        c = sphere_surface(
+                            wall_normal, ri - (xi - wall_point).dot(wall_normal), ri, vi, wi,
+                            s.acceleration[i], s.mass[i], inv_m, s.inverse_inertia[i], mi,
+                            ti.static(walls[w][2]), vec0, vec0,
+                            ti.static(wall_temperature[w]) - temperature_i,
+                            ti.static(1 if isothermal else 0))
+                        history = History(tangential=s.wall_tangential_history[i, w], rolling=vec0)
+                        if ti.static(has_wall_rolling):
+                            history.rolling = wall_rolling[i, w]
+                        out, history = plane_law(c, history, dt)
+                        if ti.static(thermal and isothermal):
+                            heat += out.heat
+                            conductance += out.conductance
                             if record != 0:
-                                wall_force[w] -= wall_contact
-                        s.wall_tangential_history[i, w] = history
-                        if ti.static(epsd):
-                            s.wall_rolling_history[i, w] = rolling_history
+                                wall_heat[w] -= out.heat
+                        if c.normal_overlap > 0.0 and inv_m > 0.0:
+                            force += out.force
+                            torque += out.torque_i
+                            if record != 0:
+                                wall_force[w] -= out.force
+                        else:
+                            history.tangential = vec0
+                            history.rolling = vec0
+                        s.wall_tangential_history[i, w] = history.tangential
+                        if ti.static(has_wall_rolling):
+                            wall_rolling[i, w] = history.rolling
                 if ti.static(has_mesh):
                     if inv_m > 0.0:
                         mesh_force, mesh_torque, mesh_heat, mesh_conductance = mesh_contacts(
                             i, s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i],
-                            s.mass[i], s.inverse_inertia[i], s.acceleration[i], s.material[i], dt)
+                            s.mass[i], inv_m, s.inverse_inertia[i], s.acceleration[i],
+                            s.material[i], temperature_of(i), dt)
                         force += mesh_force
                         torque += mesh_torque
                         heat += mesh_heat
                         conductance += mesh_conductance
-                if ti.static(has_gas):
-                    # convection, Q = h A (T_g - T_p), h = k_g Nu / d (PHYSICS.md)
-                    diameter = 2.0 * s.radius[i]
-                    reynolds = ti.static(gas.density / gas.viscosity) * diameter * (gas_velocity - s.velocity[i]).norm()
-                    nusselt = 0.0
-                    if ti.static(gas.correlation == "gunn"):
-                        nusselt = gas_convection.nusselt_gunn(reynolds, prandtl_cube_root, ti.static(gas.porosity))
-                    else:
-                        nusselt = gas_convection.nusselt_ranz_marshall(reynolds, prandtl_cube_root)
-                    h_gas = gas_convection.convective_conductance(ti.static(gas.conductivity), nusselt, diameter)
-                    heat += h_gas * (ti.static(gas.temperature) - s.temperature[i])
-                    conductance += h_gas
-                # --- plug-flow gas, radiation, drying (thermal/: plug_flow, radiation, moisture)
-                if ti.static(plug_flow):
-                    q_gas, g_gas = stream.particle_heat(i, s.temperature[i])
-                    heat += q_gas
-                    conductance += g_gas
-                if ti.static(radiation):
-                    if in_radiation_region(s.position[i]):
-                        t_surroundings = ti.static(radiation_temperature) + 0.0 * heat
-                        sees = 1
-                        if ti.static(radiate_to_gas and plug_flow):
-                            t_surroundings, sees = stream.local_temperature(i)
-                        if sees != 0:
-                            q_rad, g_rad = radiative.exchange(emissivity[s.material[i]], s.radius[i],
-                                                              t_surroundings, s.temperature[i])
-                            heat += q_rad
-                            conductance += g_rad
+                # the particle effects: gravity, convection, plug-flow gas, radiation
+                load = Load(acceleration=vec0, heat=heat, conductance=conductance)
+                for effect in ti.static(particle_effects):
+                    load = effect(i, load)
                 if ti.static(thermal):
                     if s.alive[i] != 0:
                         # explicit update; stable while dt sum(h) / (m c) < 1 (checked per sample)
-                        if ti.static(moisture and compensated):
-                            # in f64 throughout, then split back (thermal/precision.py)
-                            t_new, x_new, inv_c, dm = drying.heat_and_dry(
-                                ti.cast(s.temperature[i], ti.f64) + s.temperature_residual[i],
-                                ti.cast(s.moisture[i], ti.f64) + s.moisture_residual[i],
-                                ti.cast(s.inverse_thermal_mass[i], ti.f64),
-                                ti.cast(s.mass[i], ti.f64), ti.cast(dt * heat, ti.f64),
-                                t_evap, latent, c_water)
-                            t_part, t_rest = split_f64(t_new)
-                            s.temperature[i] = t_part
-                            s.temperature_residual[i] = t_rest
-                            if dm > 0.0:
-                                x_part, x_rest = split_f64(x_new)
-                                s.moisture[i] = x_part
-                                s.moisture_residual[i] = x_rest
-                                s.inverse_thermal_mass[i] = ti.cast(inv_c, real)
-                                evaporated[0] += dm
-                        elif ti.static(moisture):
-                            t_new, x_new, inv_c, dm = drying.heat_and_dry(
-                                s.temperature[i], s.moisture[i], s.inverse_thermal_mass[i],
-                                s.mass[i], dt * heat, t_evap, latent, c_water)
-                            s.temperature[i] = t_new
-                            if dm > 0.0:
-                                s.moisture[i] = x_new
-                                s.inverse_thermal_mass[i] = inv_c
-                                evaporated[0] += ti.cast(dm, ti.f64)
-                        elif ti.static(compensated):
-                            t_part, t_rest = compensated_add(
-                                s.temperature[i], s.temperature_residual[i],
-                                dt * heat * s.inverse_thermal_mass[i])
-                            s.temperature[i] = t_part
-                            s.temperature_residual[i] = t_rest
-                        else:
-                            s.temperature[i] += dt * heat * s.inverse_thermal_mass[i]
-                        s.conductance[i] = conductance
+                        update_temperature(i, load.heat, load.conductance, dt)
                 if inv_m > 0.0 and s.alive[i] != 0:
-                    a = force * inv_m + gravity
+                    a = force * inv_m + load.acceleration
                     alpha = torque * s.inverse_inertia[i]
                     s.acceleration[i] = a
                     s.angular_acceleration[i] = alpha
@@ -600,8 +477,8 @@ class Engine:
             self.mesh.update_frames(self.time)
         self.count = self.broadphase.rebuild(n)
         self._pair_forces(self.count, 0.0)
-        if self.gas_stream is not None:
-            self.gas_stream.exchange(self.count, 0.0)
+        for e in self.cell_effects:
+            e.after_pairs(self, self.count, 0.0)
         self._gather(self.count, 0.0, 0, 0, self.time)
         return self.count
 
@@ -638,8 +515,8 @@ class Engine:
                 if self.thermal:
                     self.wall_heat.fill(0.0)
             self._pair_forces(self.count, dt)
-            if self.gas_stream is not None:
-                self.gas_stream.exchange(self.count, dt)     # the gas sees this step's particles
+            for e in self.cell_effects:
+                e.after_pairs(self, self.count, dt)     # the gas sees this step's particles
             # the state is left at a whole step (no pending drift) when advance returns
             self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
 
@@ -709,8 +586,7 @@ class Engine:
         thermal = self.thermal
         process = s.process
         n_walls = s.n_walls
-        wall_fields = [getattr(s, n) for n in ("wall_tangential_history", "wall_rolling_history")
-                       if hasattr(s, n)]
+        wall_fields = [getattr(s, n) for n in s.wall_fields]
         mesh = self.mesh
         has_mesh = mesh is not None
         n_bodies = mesh.n_bodies if has_mesh else 0
@@ -783,27 +659,3 @@ class Engine:
 
         self._insert = insert
 
-
-def _region_test(region):
-    """A ti.func position -> bool: inside ``region`` (a scene Region), always True for None."""
-    if region is None:
-        @ti.func
-        def inside(x):
-            return True
-        return inside
-    if region.kind == "box":
-        lo, hi = ti.Vector(list(region.box_min)), ti.Vector(list(region.box_max))
-
-        @ti.func
-        def inside(x):
-            return (x >= lo).all() and (x <= hi).all()
-        return inside
-    p0, axis = ti.Vector(list(region.axis_point)), ti.Vector(list(region.axis_direction))
-    length, r2 = region.length, region.radius ** 2
-
-    @ti.func
-    def inside(x):
-        d = x - p0
-        a = d.dot(axis)
-        return a >= 0.0 and a <= length and (d - a * axis).norm_sqr() <= r2
-    return inside

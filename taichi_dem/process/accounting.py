@@ -28,6 +28,7 @@ class ProcessAccounts:
         self.outlet_count = np.zeros(no, np.int64)
         self.lost_mass = 0.0
         self.lost_count = 0
+        self.removed_energy = 0.0                # J, sum m c T of what left the scene
         self._reset_interval()
         # callables batch -> None, given every drained batch of the removal log
         self.listeners: list = []
@@ -47,6 +48,9 @@ class ProcessAccounts:
         exit_ = batch["exit"]
         mass = batch["mass"]
         lost = exit_ == EXIT_LOST
+        if "thermal_mass" in batch:
+            # m c T carried out of the scene (J), through outlets or across the domain's faces
+            self.removed_energy += float(np.sum(batch["thermal_mass"] * batch["temperature"]))
         self.lost_mass += float(np.sum(mass[lost]))
         self.lost_count += int(np.sum(lost))
         for o in range(len(self.outlets)):
@@ -101,10 +105,12 @@ class ProcessAccounts:
 
     def state_dict(self) -> dict:
         return {"outlet_mass": self.outlet_mass.copy(), "outlet_count": self.outlet_count.copy(),
-                "lost_mass": self.lost_mass, "lost_count": self.lost_count}
+                "lost_mass": self.lost_mass, "lost_count": self.lost_count,
+                "removed_energy": self.removed_energy}
 
     def load_state_dict(self, d: dict):
         self.outlet_mass = np.asarray(d["outlet_mass"], float).copy()
         self.outlet_count = np.asarray(d["outlet_count"], np.int64).copy()
         self.lost_mass = float(d["lost_mass"])
         self.lost_count = int(d["lost_count"])
+        self.removed_energy = float(d.get("removed_energy", 0.0))

@@ -55,6 +55,7 @@ class FactorySet:
         self.next_serial = first_serial
         n = len(self.factories)
         self.inserted_mass = np.zeros(n)          # kg
+        self.inserted_energy = 0.0                # J, sum m c T of every particle inserted
         self.inserted_count = np.zeros(n, np.int64)
         self.behind = np.zeros(n)                 # kg behind schedule after the last insertion
         self.waiting = [False] * n                # in a "region full" episode (warned)
@@ -209,6 +210,9 @@ class FactorySet:
         arrays["serial"] = np.arange(self.next_serial, self.next_serial + m, dtype=np.int64)
         self.next_serial += m
         arrays["birth_time"] = np.full(m, time)
+        if "inverse_thermal_mass" in arrays:
+            # m c T brought in (J), for the energy balance (sensors/energy.py)
+            self.inserted_energy += float(np.sum(arrays["temperature"] / arrays["inverse_thermal_mass"]))
         engine.insert(arrays)
 
     def _batch(self, k: int, time: float, pos: np.ndarray, rad: np.ndarray):
@@ -434,6 +438,7 @@ class FactorySet:
                 "behind": self.behind.copy(), "waiting": np.array(self.waiting, bool),
                 "next_radius": np.array(self.next_radius), "next_serial": self.next_serial,
                 "layers": self.layers.copy(), "layer_mass_before": self.layer_mass_before.copy(),
+                "inserted_energy": self.inserted_energy,
                 "rng": str(self.rng.bit_generator.state)}
 
     def load_state_dict(self, d: dict):
@@ -447,4 +452,5 @@ class FactorySet:
         if "layers" in d:                      # (checkpoints from before sheet factories lack them)
             self.layers = np.asarray(d["layers"], np.int64).copy()
             self.layer_mass_before = np.asarray(d["layer_mass_before"], float).copy()
+        self.inserted_energy = float(d.get("inserted_energy", 0.0))
         self.rng.bit_generator.state = ast.literal_eval(str(d["rng"]))

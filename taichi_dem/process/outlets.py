@@ -60,6 +60,7 @@ class ProcessDevice:
         cap = s.capacity
         self.log_capacity = 0
         self.log_temperature = None
+        self.log_thermal_mass = None
         self.log_moisture = None
         if self.log_enabled:
             self.log_capacity = cap
@@ -71,6 +72,8 @@ class ProcessDevice:
             self.log_t_out = tree.add("log_t_out", ti.f64, cap)
             self.log_mass = tree.add("log_mass", ti.f64, cap)
             self.log_temperature = tree.add("log_temperature", ti.f64, cap) if self.thermal else None
+            # m c of what leaves (J/K): the enthalpy it carries out, for the energy balance
+            self.log_thermal_mass = tree.add("log_thermal_mass", ti.f64, cap) if self.thermal else None
             self.log_moisture = tree.add("log_moisture", ti.f64, cap) if engine.moisture else None
         self.planes = PlaneCrossings(scene, tree)
 
@@ -87,6 +90,7 @@ class ProcessDevice:
         n_outlets = len(outlet_tests)
         thermal = self.thermal
         drying = self.log_moisture is not None
+        compensated = engine.state.compensated
         process_fields = s.process
         count_crossings = self.planes.make_func(s)
         me = self
@@ -107,7 +111,11 @@ class ProcessDevice:
                     me.log_origin[slot] = -1
                     me.log_t_in[slot] = 0.0
                 if ti.static(thermal):
-                    me.log_temperature[slot] = ti.cast(s.temperature[i], ti.f64)
+                    temperature = ti.cast(s.temperature[i], ti.f64)
+                    if ti.static(compensated):
+                        temperature += s.temperature_residual[i]
+                    me.log_temperature[slot] = temperature
+                    me.log_thermal_mass[slot] = 1.0 / ti.cast(s.inverse_thermal_mass[i], ti.f64)
                 if ti.static(drying):
                     me.log_moisture[slot] = ti.cast(s.moisture[i], ti.f64)
                 if slot * 2 > ti.static(me.log_capacity):
@@ -147,6 +155,7 @@ class ProcessDevice:
                "t_out": self.log_t_out.to_numpy()[:n], "mass": self.log_mass.to_numpy()[:n]}
         if self.log_temperature is not None:
             out["temperature"] = self.log_temperature.to_numpy()[:n]
+            out["thermal_mass"] = self.log_thermal_mass.to_numpy()[:n]
         if self.log_moisture is not None:
             out["moisture"] = self.log_moisture.to_numpy()[:n]
         self.log_count[0] = 0

@@ -44,7 +44,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import CheckpointError
 
-# 2: f32 scenes with heat keep f64 residuals of temperature and moisture (thermal/precision.py);
+# 2: f32 scenes with heat keep f64 residuals of temperature and moisture (engine/precision.py);
 # a version-1 file lacks them, and would resume with temperatures off by up to half an f32 step
 FORMAT = "taichi_dem checkpoint 2"
 

@@ -16,6 +16,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
 from ..engine import backend
 from ..errors import DivergenceError, SceneError, StaleSimulationError
@@ -56,6 +57,8 @@ def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
     (4 r_max) or less cannot be simulated and is refused."""
     span = np.asarray(scene.domain.max, float) - np.asarray(scene.domain.min, float)
     contact = 2.0 * max_radius
+    # pairs within a contact margin are listed too (the gas gap near contacts)
+    margin = margin_fraction(enabled_effects(scene), "pair") * max_radius
     for k, axis in enumerate("xyz"):
         if axis not in scene.domain.periodic:
             continue
@@ -67,7 +70,14 @@ def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
                              f"{max_radius:.4g} m): a particle would touch two images of one "
                              f"partner; enlarge the domain along {axis}")
         # a hair under the limit so that the cell grid still tiles the axis with two cells
-        allowed = 0.5 * length * (1.0 - 1e-9) - contact
+        allowed = 0.5 * length * (1.0 - 1e-9) - contact - margin
+        if margin > 0.0 and allowed <= 0.0:
+            raise SceneError(scene.source, "thermal.gas_gap_lens",
+                             f"the fluid lens reaches {margin:.4g} m beyond contact, and the "
+                             f"periodic length along {axis} ({length:.4g} m) must exceed two "
+                             f"pair reaches 2 (2 r_max + lens r_max) = "
+                             f"{2.0 * (contact + margin):.4g} m; use a thinner lens, "
+                             "gas_gap_pairs = false, or enlarge the domain")
         if skin > allowed:
             msg = (f"skin shrunk from {skin:.4g} m to {allowed:.4g} m so that the periodic "
                    f"length along {axis} ({length:.4g} m) exceeds two pair cutoffs "
@@ -136,7 +146,8 @@ class Simulation:
 
         self.engine = Engine(scene, self.tables, max(capacity, 1), self.real, self.skin,
                              float(np.max(radii)), self.dt)
-        small = self.engine.grid.too_small_periodic_axes(2.0 * float(np.max(radii)) + self.skin)
+        small = self.engine.grid.too_small_periodic_axes(
+            (2.0 + self.engine.pair_margin) * float(np.max(radii)) + self.skin)
         if small:     # (_fit_skin_to_periodic_axes makes this unreachable; kept as a guard)
             self.engine.destroy()
             raise SceneError(scene.source, "domain.periodic",
@@ -164,7 +175,8 @@ class Simulation:
         # state_dict() / load_state_dict(d)
         self.checkpointables: dict = {k: v for k, v in (
             ("factories", self.factories), ("accounts", self.accounts),
-            ("residence", self.sensors.get("residence"))) if v is not None}
+            ("residence", self.sensors.get("residence")),
+            ("energy", self.sensors.get("energy"))) if v is not None}
         self._series: dict[str, list] = {}
         self.recorder = None
         h5 = h5 if h5 is not None else scene.output.h5
@@ -255,7 +267,7 @@ class Simulation:
                                       for name in self.tables.names])[placed.material]
             s.temperature.from_numpy(scal(placed.temperature))
             if s.compensated:
-                # what f32 cannot hold of the temperature (thermal/precision.py)
+                # what f32 cannot hold of the temperature (engine/precision.py)
                 exact = np.asarray(placed.temperature, np.float64)
                 s.temperature_residual.from_numpy(
                     scal(exact - exact.astype(np.float32).astype(np.float64), np.float64))
@@ -347,6 +359,9 @@ class Simulation:
             check(m)
         now = Now(time=self.time, interval=self.time - self._last_sample_time, measured=m)
         values = {"time": self.time}
+        if self.scene.thermal is not None and self.scene.thermal.time_scale != 1.0:
+            # the time the heat has had: S x simulated time ([thermal] time_scale)
+            values["thermal_time"] = self.scene.thermal.time_scale * self.time
         for sensor in self.sensors.values():
             sensor.sample(values, now)
         self._last_sample_time = self.time
@@ -426,7 +441,8 @@ class Simulation:
         if ratio >= 1.0:
             raise DivergenceError(
                 f"the temperature update is unstable at t = {self.time:.6g} s: dt sum(h)/(m c) = "
-                f"{ratio:.3g} >= 1 for some particle. Reduce simulation.dt (by {ratio:.2g}x at "
+                f"{ratio:.3g} >= 1 for some particle (dt the thermal step, thermal.time_scale x "
+                f"simulation.dt). Reduce simulation.dt or thermal.time_scale (by {ratio:.2g}x at "
                 f"least), or raise heat_capacity/lower thermal_conductivity if they are scaled")
         if ratio >= 0.5 and not getattr(self, "_warned_thermal", False):
             self._warned_thermal = True

@@ -42,7 +42,7 @@ SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
 THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction",
                 "radiation_to", "radiation_region", "evaporation_temperature", "latent_heat",
                 "water_heat_capacity", "gas_gap", "gap_gas_conductivity", "gas_gap_lens",
-                "gas_gap_min_gap")
+                "gas_gap_min_gap", "gas_gap_pairs", "time_scale", "gas_gap_model")
 GAS_KEYS = ("model", "temperature", "velocity", "correlation", "porosity", "density",
             "viscosity", "conductivity", "heat_capacity", "axis_point", "axis_direction",
             "length", "cells", "flow_area", "radius", "mass_flow", "inlet_temperature", "flow")
@@ -1138,9 +1138,17 @@ class _Parser:
         if "water_heat_capacity" in t:
             kw["water_heat_capacity"] = self.nonnegative(
                 t["water_heat_capacity"], "specific_heat", f"{key}.water_heat_capacity")
+        if "time_scale" in t:
+            scale = self.positive(t["time_scale"], "dimensionless", f"{key}.time_scale")
+            if scale < 1.0:
+                raise self.err(f"{key}.time_scale", f"must be at least 1 (got {scale:g}): it "
+                                                    "divides heat capacities so that heat moves "
+                                                    "S times faster than the mechanics")
+            kw["time_scale"] = scale
         if "gas_gap" in t:
             kw["gas_gap"] = self.boolean(t["gas_gap"], f"{key}.gas_gap")
-        for k in ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap"):
+        for k in ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap", "gas_gap_pairs",
+                  "gas_gap_model"):
             if k in t and not kw.get("gas_gap"):
                 raise self.err(f"{key}.{k}", "given but gas_gap is off; set gas_gap = true")
         if kw.get("gas_gap"):
@@ -1158,15 +1166,26 @@ class _Parser:
             if "gas_gap_min_gap" in t:
                 kw["gas_gap_min_gap"] = self.positive(t["gas_gap_min_gap"], "length",
                                                       f"{key}.gas_gap_min_gap")
+            if "gas_gap_pairs" in t:
+                kw["gas_gap_pairs"] = self.boolean(t["gas_gap_pairs"], f"{key}.gas_gap_pairs")
+            if "gas_gap_model" in t:
+                model = t["gas_gap_model"]
+                if model not in ("isothermal", "solid_resistance"):
+                    raise self.err(f"{key}.gas_gap_model", f"must be \"isothermal\" or "
+                                                           f"\"solid_resistance\", not {model!r}")
+                kw["gas_gap_model"] = model
         settings = ThermalSettings(**kw)
         if settings.gas_gap:
             hot = [w.name for w in list(walls) + list(bodies) if w.temperature is not None]
-            if not settings.wall_conduction or not hot:
-                raise self.err(f"{key}.gas_gap", "conducts only to walls and bodies that have a "
-                                                 "temperature, with wall_conduction on (the gas "
-                                                 "gap between particles is not in the step yet); "
-                                                 "give a wall or body a temperature or drop "
-                                                 "gas_gap")
+            to_walls = settings.wall_conduction and hot
+            to_pairs = settings.conduction and settings.gas_gap_pairs
+            if not to_walls and not to_pairs:
+                raise self.err(f"{key}.gas_gap", "has nothing to conduct through: the gas gap "
+                                                 "between particles needs conduction = true "
+                                                 "(and gas_gap_pairs not false), the one to "
+                                                 "walls and bodies needs wall_conduction on and "
+                                                 "a wall or body with a temperature; enable one "
+                                                 "or drop gas_gap")
         for f in fills:
             mat = self.materials[f.material]
             for k in ("thermal_conductivity", "heat_capacity"):

@@ -195,10 +195,20 @@ class ThermalSettings:
     evaporation_temperature: float = 373.15          # K
     latent_heat: float = 2.26e6                      # J/kg
     water_heat_capacity: float = 4186.0              # J/(kg K), liquid water
-    # conduction through the gas gap near particle-wall/body contacts (thermal/gas_gap.py):
-    # the fluid lens gas_gap_lens radii thick, gaps narrower than gas_gap_min_gap m count as it
-    # (MFiX's defaults: lens 0.2 R; a minimum gap of about 1 um, the roughness scale)
+    # conduction through the gas gap near particle-particle (with conduction on; unless
+    # gas_gap_pairs is false) and particle-wall/body contacts (thermal/gas_gap.py): the fluid
+    # lens gas_gap_lens radii thick, gaps narrower than gas_gap_min_gap m count as it (MFiX's
+    # defaults: lens 0.2 R; a minimum gap of about 1 um, the roughness scale)
     gas_gap: bool = False
+    gas_gap_pairs: bool = True
+    # "solid_resistance": the particle's own resistance in series with the gas along each
+    # line (Cheng, Yu & Zulli 1999); "isothermal": isothermal surfaces (Rong & Horio 1999,
+    # Musser 2011, Morris et al. 2015), an upper bound where k_g/k_s is not small
+    gas_gap_model: str = "solid_resistance"
+    # thermal time scaling: every heat capacity divided by time_scale S, so temperatures move
+    # S times faster than the mechanics; thermal time = S x simulated time (series
+    # thermal_time); heat flows (W) stay physical
+    time_scale: float = 1.0
     gap_gas_conductivity: float = 0.02624            # W/(m K); air at 300 K
     gas_gap_lens: float = 0.2                        # of the particle radius
     gas_gap_min_gap: float = 1.0e-6                  # m

@@ -54,4 +54,7 @@ def build_sensors(sim) -> dict:
         out["bodies"] = BodyLoads(scene, sim.engine)
     if scene.walls:
         out["walls"] = WallLoads(scene, sim.engine)
+    if scene.thermal is not None:
+        from .energy import EnergyBalance
+        out["energy"] = EnergyBalance(sim)      # after the loads and the outlet accounts
     return out

@@ -4,11 +4,17 @@ interval, summed from the contacts by bodies/mesh_contacts.py) and plane walls (
 flow in the last step of the interval, stepper.py)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
 class BodyLoads:
-    """/series bodies/<name>/force, torque, axial_torque, angular_speed, power, heat_flow."""
+    """/series bodies/<name>/force, torque, axial_torque, angular_speed, power; for an
+    isothermal body heat_flow (W, into the body), covered_area (m^2, the area of its triangles
+    a particle touches at the sample) and heat_transfer_coefficient (W/(m^2 K)) = heat_flow /
+    (covered_area (mean bed temperature - body temperature)), the bed being every particle in
+    the scene; NaN while nothing touches or the bed is at the body's temperature."""
 
     def __init__(self, scene, engine):
         self.scene = scene
@@ -17,6 +23,8 @@ class BodyLoads:
     def sample(self, values: dict, now) -> None:
         e = self.engine
         forces, torques, heats = e.mesh.take_loads(e.count)
+        hot = [b.temperature is not None for b in self.scene.bodies]
+        areas = e.mesh.covered_areas(e.count) if (e.wall_conduction and any(hot)) else None
         for k, body in enumerate(self.scene.bodies):
             axis = np.asarray(body.motion.axis_direction, float)
             speed = e.kinematics.speed(k, now.time)
@@ -30,6 +38,12 @@ class BodyLoads:
             values[prefix + "power"] = -axial * speed
             if e.wall_conduction and body.temperature is not None:
                 values[prefix + "heat_flow"] = heats[k]
+                values[prefix + "covered_area"] = float(areas[k])
+                difference = now.measured.get("mean_temperature", body.temperature) - body.temperature
+                coefficient = math.nan
+                if areas[k] > 0.0 and difference != 0.0:
+                    coefficient = float(heats[k]) / (float(areas[k]) * difference)
+                values[prefix + "heat_transfer_coefficient"] = coefficient
 
 
 class WallLoads:

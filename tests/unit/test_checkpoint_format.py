@@ -1,5 +1,5 @@
 """A checkpoint of an older format is refused with a message that says so (format 2 added the
-f64 temperature residuals of f32 scenes, thermal/precision.py)."""
+f64 temperature residuals of f32 scenes, engine/precision.py)."""
 import h5py
 import pytest
 

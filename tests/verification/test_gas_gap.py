@@ -112,3 +112,64 @@ def test_gas_gap_dominates_the_hertz_spot_for_ash_on_a_cold_wall(kernels):
     spot = 4 * k_ash * k_steel / (k_ash + k_steel) * math.sqrt(R * overlap)
     print(f"\n  ash on steel: gas gap {g_gas:.4g} W/K, Hertz spot {spot:.4g} W/K")
     assert g_gas > 20 * spot
+
+
+# ---------------------------------------------------- with the solid's own resistance
+@pytest.fixture(scope="module")
+def solid_kernels(kernels):
+    @ti.kernel
+    def plane(radius: ti.f64, distance: ti.types.ndarray(), lens: ti.f64, min_gap: ti.f64,
+              g: ti.f64, out: ti.types.ndarray()):
+        for k in range(out.shape[0]):
+            out[k] = gas_gap.plane_solid_gap_integral(radius, distance[k], lens, min_gap, g)
+
+    @ti.kernel
+    def pair(ri: ti.f64, rj: ti.f64, distance: ti.types.ndarray(), lens: ti.f64,
+             min_gap: ti.f64, gi: ti.f64, gj: ti.f64, out: ti.types.ndarray()):
+        for k in range(out.shape[0]):
+            out[k] = gas_gap.pair_solid_gap_integral(ri, rj, distance[k], lens, min_gap, gi, gj)
+
+    return plane, pair
+
+
+# k_g / k_s: steel, glass and ash in air
+GAS_OVER_SOLID = [0.026 / 45.0, 0.026 / 1.0, 0.026 / 0.3]
+
+
+@pytest.mark.parametrize("g", GAS_OVER_SOLID)
+@pytest.mark.parametrize("lens,min_gap", [(0.2, 1e-6), (0.4, 1e-8)])
+def test_solid_resistance_sphere_on_plate_equals_quadrature(solid_kernels, g, lens, min_gap):
+    plane, _ = solid_kernels
+    distance = R * (1.0 + OFFSETS)
+    got = np.zeros(len(distance))
+    plane(R, distance, lens, min_gap, g, got)
+    ref = np.array([gas_gap.plane_solid_gap_integral_reference(R, d, lens, min_gap, g)
+                    for d in distance])
+    iso = np.array([gas_gap.plane_gap_integral_reference(R, d, lens, min_gap) for d in distance])
+    worst = np.max(np.abs(got - ref) / np.maximum(ref, 1e-300) * (ref > 0))
+    print(f"\n  plane k_g/k_s = {g:.3g}, lens {lens}: worst {worst:.2e}; at contact the solid "
+          f"keeps {ref[4] / iso[4]:.3f} of the isothermal-surface conductance")
+    assert np.all((got == 0.0) == (ref == 0.0))
+    np.testing.assert_allclose(got, ref, rtol=1e-3)
+    # the solid's resistance only ever lowers the conductance
+    assert np.all(ref <= iso * (1 + 1e-9))
+
+
+@pytest.mark.parametrize("ratio", [1.0, 0.3])
+@pytest.mark.parametrize("g", GAS_OVER_SOLID)
+def test_solid_resistance_two_spheres_equals_quadrature(solid_kernels, ratio, g):
+    _, pair = solid_kernels
+    small = ratio * R
+    distance = (R + small) + small * OFFSETS
+    got = np.zeros(len(distance))
+    pair(R, small, distance, 0.2, 1e-6, g, 2 * g, got)
+    ref = np.array([gas_gap.pair_solid_gap_integral_reference(R, small, d, 0.2, 1e-6, g, 2 * g)
+                    for d in distance])
+    worst = np.max(np.abs(got - ref) / np.maximum(ref, 1e-300) * (ref > 0))
+    print(f"\n  pair ratio {ratio}, k_g/k_s = {g:.3g}: worst relative difference {worst:.2e}")
+    assert np.all((got == 0.0) == (ref == 0.0))
+    np.testing.assert_allclose(got, ref, rtol=1e-3)
+    # symmetric under swapping the particles (with their conductivities)
+    swapped = np.zeros(len(distance))
+    pair(small, R, distance, 0.2, 1e-6, 2 * g, g, swapped)
+    np.testing.assert_allclose(swapped, got, rtol=1e-12)

@@ -27,7 +27,7 @@ def _scene(tmp_path, rows, wall, gas=True, fixed=True):
     lines = ["x,y,z,radius"] + [",".join(repr(float(c)) for c in (*p, R)) for p in rows]
     (tmp_path / "p.csv").write_text("\n".join(lines) + "\n")
     keys = (f"gas_gap = true\ngap_gas_conductivity = {K_G}\ngas_gap_lens = {LENS}\n"
-            f"gas_gap_min_gap = {MIN_GAP}\n") if gas else ""
+            f"gas_gap_min_gap = {MIN_GAP}\ngas_gap_model = \"isothermal\"\n") if gas else ""
     return f"""
 [simulation]
 end_time = 0.01

@@ -1,4 +1,4 @@
-"""Temperatures and moisture that f32 can hold (issue 10 item 7).
+"""Temperatures and moisture that f32 can hold (issue 10 item 7): compensated summation.
 
 The spacing of f32 at 723 K is 6.1e-5 K; an update T += dt Q/(m c) of ~1e-6 K per step, as in a
 cooler, is rounded away and heat is lost or made. In f32 scenes every particle carries an f64

@@ -1,0 +1,96 @@
+"""The geometry of one contact, the same record for every contact kind.
+
+A ``Contact`` holds what every contact effect reads (SI units):
+
+    normal               unit vector from the partner (particle, plane, triangle) to particle i
+    normal_overlap       m; > 0 touching, < 0 a gap (pairs within an effect's margin)
+    arm_i, arm_j         m, centre to contact point (arm_j = 0 for a plane or triangle)
+    v_rel                m/s, velocity of i relative to the partner at the contact point
+    w_rel                rad/s, spin of i relative to the partner
+    normal_acceleration  m/s^2, relative acceleration along the normal at the last step
+    r_eff, m_eff         R* = r_i r_j/(r_i + r_j) (r_i on a wall), m* (0: no mechanics, a fixed
+                         particle on a wall or two fixed particles)
+    inertia_eff          kg m^2, 1/(1/I_i + 1/I_j) (I_i on a wall)
+    rolling_inertia      kg m^2, 1/(1/(I_i + m_i r_i^2) + 1/(I_j + m_j r_j^2))
+    radius_i, radius_j   m (radius_j = 0 for a plane or triangle: a flat partner)
+    material_i, material_j  rows of the pair tables
+    temperature_difference  K, T_partner - T_i (0 where the partner has no temperature)
+    conducts             1 when the partner has a temperature (heat may flow), else 0
+
+Values an enabled effect does not read are eliminated by the compiler.
+"""
+import taichi as ti
+
+from ..effects import rolling
+
+
+def contact_types(real):
+    """(Contact, Response, History) struct types in the simulation's precision.
+
+    ``Response``: force on i (N), torques on i and on the partner about their centres (N m),
+    heat into i (W), conductance (W/K), and the normal force (N) and normal stiffness (N/m)
+    that later effects (rolling) read. ``History``: the tangential spring (m) and the rolling
+    spring torque (N m) a contact carries from step to step."""
+    vec3 = ti.types.vector(3, real)
+    contact = ti.types.struct(
+        normal=vec3, normal_overlap=real, arm_i=real, arm_j=real, v_rel=vec3, w_rel=vec3,
+        normal_acceleration=real, r_eff=real, m_eff=real, inertia_eff=real,
+        rolling_inertia=real, radius_i=real, radius_j=real, material_i=ti.i32,
+        material_j=ti.i32, temperature_difference=real, conducts=ti.i32)
+    response = ti.types.struct(force=vec3, torque_i=vec3, torque_j=vec3, heat=real,
+                               conductance=real, normal_force=real, normal_stiffness=real)
+    history = ti.types.struct(tangential=vec3, rolling=vec3)
+    return contact, response, history
+
+
+def make_geometry(real, thermal: bool):
+    """ti.funcs building a ``Contact``: (sphere_sphere, sphere_surface).
+
+    sphere_sphere(d, dist_sq, particle i's and j's state ...) for two particles whose centres
+    are ``d`` = x_i - x_j apart (minimum image, m); sphere_surface(...) for a particle on a
+    surface (plane or triangle) at its nearest point, the surface moving at ``surface_velocity``
+    (m/s, at the contact point) and spinning at ``surface_spin`` (rad/s)."""
+    Contact, _, _ = contact_types(real)
+
+    @ti.func
+    def sphere_sphere(d, distance_sq, ri, rj, vi, vj, wi, wj, ai, aj, inv_mi, inv_mj,
+                      inv_ii, inv_ij, mi, mj, ti_, tj_):
+        dist = ti.sqrt(distance_sq)
+        normal_overlap = ri + rj - dist
+        normal = d / dist                                   # from j to i
+        arm_i = ri - 0.5 * normal_overlap                   # centre to contact point
+        arm_j = rj - 0.5 * normal_overlap
+        inverse_mass_sum = inv_mi + inv_mj
+        m_eff = 0.0 * ri
+        if inverse_mass_sum > 0.0:
+            m_eff = 1.0 / inverse_mass_sum
+        temperature_difference = 0.0 * ri
+        if ti.static(thermal):
+            temperature_difference = tj_ - ti_
+        return Contact(
+            normal=normal, normal_overlap=normal_overlap, arm_i=arm_i, arm_j=arm_j,
+            v_rel=vi - vj - (arm_i * wi + arm_j * wj).cross(normal), w_rel=wi - wj,
+            normal_acceleration=(ai - aj).dot(normal), r_eff=ri * rj / (ri + rj), m_eff=m_eff,
+            inertia_eff=1.0 / (inv_ii + inv_ij),
+            rolling_inertia=1.0 / (rolling.rolling_inverse_inertia(inv_mi, inv_ii, ri)
+                                   + rolling.rolling_inverse_inertia(inv_mj, inv_ij, rj)),
+            radius_i=ri, radius_j=rj, material_i=mi, material_j=mj,
+            temperature_difference=temperature_difference, conducts=1)
+
+    @ti.func
+    def sphere_surface(normal, normal_overlap, ri, vi, wi, ai, mass_i, inv_mi, inv_ii, mi, mj,
+                       surface_velocity, surface_spin, temperature_difference, conducts):
+        arm = ri - 0.5 * normal_overlap
+        m_eff = 0.0 * ri
+        if inv_mi > 0.0:
+            m_eff = mass_i
+        return Contact(
+            normal=normal, normal_overlap=normal_overlap, arm_i=arm, arm_j=0.0 * ri,
+            v_rel=vi - surface_velocity - arm * wi.cross(normal), w_rel=wi - surface_spin,
+            normal_acceleration=ai.dot(normal), r_eff=ri, m_eff=m_eff,
+            inertia_eff=1.0 / inv_ii,
+            rolling_inertia=1.0 / rolling.rolling_inverse_inertia(inv_mi, inv_ii, ri),
+            radius_i=ri, radius_j=0.0 * ri, material_i=mi, material_j=mj,
+            temperature_difference=temperature_difference, conducts=conducts)
+
+    return sphere_sphere, sphere_surface

@@ -1,0 +1,67 @@
+"""What an effect declares: its stage, the fields and pair tables it needs, and its kernels.
+
+An ``Effect`` is one physical effect of a scene, built by ``enabled_effects(scene)`` only when
+the scene calls for it. The engine composes the step from these declarations:
+
+stage      where it runs
+---------  -------------------------------------------------------------------------------
+contact    in the contact law (contacts/law.py), on each contact of the ``kinds`` it names
+           ("pair", "plane", "triangle", "surface"): ``contact_func(engine)`` returns a
+           ti.func; mechanical effects ``(contact, response, history, dt) -> (response,
+           history)``, heat effects ``(contact, response) -> response`` adding a conductance
+particle   in the per-particle pass (gather), after the contacts: ``particle_func(engine)``
+           returns a ti.func ``(i, load) -> load`` adding to the particle's load (force N,
+           torque N m, acceleration m/s^2, heat W, conductance W/K)
+integrate  the update of the particle's state from its load (velocity Verlet, temperature,
+           drying); run by the engine in that order
+process    factories and outlets (process/); observe: sensors (sensors/)
+
+Fields are declared by name: ``particle_fields`` (per particle, ``{name: (is_vector, kind)}``,
+kind "real" | "int" | "f64"), ``contact_fields`` (state each contact carries from step to
+step, e.g. the tangential spring: per neighbour entry, per particle and plane wall, per mesh
+contact; zeroed when the contact opens and on insertion), ``pair_fields`` (per neighbour entry,
+the partner's share of a pair effect's output). They are allocated only when an effect that
+declares them is enabled, permuted with the particles, carried across rebuilds and saved in
+checkpoints by name. ``tables``: material-pair tables (M x M) by name, uploaded from
+``table_values``. ``margin``: a contact margin (fraction of the particle radius) within which
+non-touching contacts are handed to the law (heat through the gas near a contact).
+"""
+from __future__ import annotations
+
+
+class Effect:
+    """One enabled physical effect (see the module docstring for what each attribute means)."""
+
+    name = "effect"
+    stage = "particle"
+    kinds: tuple[str, ...] = ()
+    mechanical = False
+    margin = 0.0
+    particle_fields: dict = {}
+    contact_fields: dict = {}
+    pair_fields: dict = {}
+    tables: tuple[str, ...] = ()
+
+    def __init__(self, description: str = "", name: str | None = None, stage: str | None = None):
+        self.description = description
+        if name is not None:
+            self.name = name
+        if stage is not None:
+            self.stage = stage
+
+    def table_values(self, scene, tables) -> dict:
+        """{table name: (M, M) numpy array} for the tables this effect declares; by default
+        the attribute of that name of the scene's ``PairTables``."""
+        return {name: getattr(tables, name) for name in self.tables}
+
+    def allocate(self, engine, tree) -> None:
+        """Allocate what the effect holds beyond its declared fields (e.g. a gas stream)."""
+
+    def contact_func(self, engine):
+        raise NotImplementedError(f"{self.name} is not a contact effect")
+
+    def particle_func(self, engine):
+        raise NotImplementedError(f"{self.name} is not a particle effect")
+
+    def __repr__(self):
+        return f"<effect {self.name} ({self.stage})>"

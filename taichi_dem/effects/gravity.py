@@ -1,0 +1,23 @@
+"""Uniform gravity: every moving particle accelerates at g (m/s^2)."""
+import taichi as ti
+
+from .base import Effect
+
+
+class Gravity(Effect):
+    name = "gravity"
+    stage = "particle"
+
+    def __init__(self, description, gravity):
+        super().__init__(description)
+        self.gravity = tuple(float(g) for g in gravity)
+
+    def particle_func(self, engine):
+        g = ti.Vector(list(self.gravity))
+
+        @ti.func
+        def gravity(i, load):
+            load.acceleration += g
+            return load
+
+        return gravity

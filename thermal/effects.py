@@ -1,0 +1,439 @@
+"""The thermal effects, registered with the engine through the same declarations as every
+other effect (taichi_dem/effects/base.py): the engine never imports ``thermal``; the scene's
+effect list (taichi_dem/effects/__init__.py) brings these in only for a scene with [thermal].
+
+contact stage (heat effects add a conductance, W/K, to the contact law's response):
+  Conduction       particle-particle, through the Hertz contact spot (conduction.py)
+  WallConduction   particle-wall and particle-triangle, through the contact spot
+  GasGapWall       particle-wall and particle-body, through the gas gap (gas_gap.py)
+particle stage (add heat W and conductance W/K to the particle's load):
+  Convection       a fixed (uniform) gas (convection.py)
+  PlugFlowGas      the axial plug-flow gas; its cells march after the pair stage (plug_flow.py)
+  Radiation        grey body to the gas, a surface or an enclosure (radiation.py)
+integrate stage:
+  Temperature      m c dT/dt = sum Q, explicit; with Drying (moisture.py) where wet
+"""
+from __future__ import annotations
+
+import numpy as np
+import taichi as ti
+
+from taichi_dem.effects.base import Effect
+from taichi_dem.effects.regions import region_test
+from taichi_dem.engine.precision import make_compensated_add
+
+from . import convection as gas_convection
+from . import gas_gap
+from . import moisture as drying
+from . import radiation as radiative
+from .conduction import contact_conductance
+
+
+class Conduction(Effect):
+    """Q = h_c (T_j - T_i), h_c = 4 k_i k_j/(k_i + k_j) a, a the Hertz contact radius
+    sqrt(R* d_n), corrected for a softened modulus (setup.pair_tables.conduction_tables)."""
+
+    name = "conduction"
+    stage = "contact"
+    kinds = ("pair",)
+    tables = ("conductance_factor", "radius_correction")
+    # the partner's share, stored at the owner's entry: heat W, conductance W/K
+    pair_fields = {"partner_heat": (False, "real"), "pair_conductance": (False, "real")}
+
+    def table_values(self, scene, tables):
+        from taichi_dem.setup.pair_tables import conduction_tables
+        factor, correction = conduction_tables(scene, tables.names)
+        return {"conductance_factor": factor, "radius_correction": correction}
+
+    def contact_func(self, engine):
+        factor, correction = engine.table["conductance_factor"], engine.table["radius_correction"]
+
+        @ti.func
+        def conduction(c, out):
+            if c.normal_overlap > 0.0:
+                out.conductance += contact_conductance(
+                    factor[c.material_i, c.material_j], correction[c.material_i, c.material_j],
+                    c.r_eff, c.normal_overlap)
+            return out
+
+        return conduction
+
+
+class WallConduction(Conduction):
+    """The contact-spot conduction to an isothermal wall or body (R* = r)."""
+
+    name = "wall_conduction"
+    kinds = ("plane", "triangle")
+    pair_fields = {}
+
+
+def _gas_over_solid(scene, tables, k_gas):
+    """(M, M) table: [a, b] = k_g / k_s of material a (the row's), for the solid-resistance
+    gas-gap model; 0 where a material has no conductivity (then isothermal)."""
+    names = tables.names
+    out = np.zeros((len(names), len(names)))
+    for a, name in enumerate(names):
+        k_s = scene.materials[name].thermal_conductivity
+        if k_s:
+            out[a, :] = k_gas / k_s
+    return out
+
+
+class GasGapWall(Effect):
+    """Particle-fluid-wall conduction (gas_gap.py): through the gas between a particle and a
+    wall or body within the fluid lens, touching or not; isothermal surfaces."""
+
+    name = "gas_gap_wall"
+    stage = "contact"
+    kinds = ("plane", "surface")
+
+    def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance"):
+        super().__init__(description)
+        self.parameters = (float(conductivity), float(lens), float(min_gap))
+        self.margin = float(lens)
+        self.model = model
+        self.tables = ("gas_over_solid",) if model == "solid_resistance" else ()
+
+    def table_values(self, scene, tables):
+        if self.model != "solid_resistance":
+            return {}
+        return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
+
+    def contact_func(self, engine):
+        k_gas, lens, min_gap = self.parameters
+        solid = self.model == "solid_resistance"
+        ratio = engine.table["gas_over_solid"] if solid else None
+
+        @ti.func
+        def gas_gap_wall(c, out):
+            distance = c.radius_i - c.normal_overlap
+            if ti.static(solid):
+                out.conductance += k_gas * gas_gap.plane_solid_gap_integral(
+                    c.radius_i, distance, lens, min_gap, ratio[c.material_i, c.material_j])
+            else:
+                out.conductance += k_gas * gas_gap.plane_gap_integral(
+                    c.radius_i, distance, lens, min_gap)
+            return out
+
+        return gas_gap_wall
+
+
+class GasGapPair(Effect):
+    """Particle-fluid-particle conduction (Rong & Horio 1999 as extended by Musser 2011;
+    gas_gap.py): through the gas in the fluid lens around the pair, touching or not (pairs
+    up to ``lens`` radii of the larger sphere apart are handed to the law); isothermal
+    surfaces. The partner's share rides on the pair fields the contact conduction declares."""
+
+    name = "gas_gap_pair"
+    stage = "contact"
+    kinds = ("pair",)
+    pair_fields = Conduction.pair_fields
+
+    def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance"):
+        super().__init__(description)
+        self.parameters = (float(conductivity), float(lens), float(min_gap))
+        self.margin = float(lens)
+        self.model = model
+        self.tables = ("gas_over_solid",) if model == "solid_resistance" else ()
+
+    def table_values(self, scene, tables):
+        if self.model != "solid_resistance":
+            return {}
+        return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
+
+    def contact_func(self, engine):
+        k_gas, lens, min_gap = self.parameters
+        solid = self.model == "solid_resistance"
+        ratio = engine.table["gas_over_solid"] if solid else None
+
+        @ti.func
+        def gas_gap_pair(c, out):
+            distance = c.radius_i + c.radius_j - c.normal_overlap
+            if ti.static(solid):
+                out.conductance += k_gas * gas_gap.pair_solid_gap_integral(
+                    c.radius_i, c.radius_j, distance, lens, min_gap,
+                    ratio[c.material_i, c.material_j], ratio[c.material_j, c.material_i])
+            else:
+                out.conductance += k_gas * gas_gap.pair_gap_integral(
+                    c.radius_i, c.radius_j, distance, lens, min_gap)
+            return out
+
+        return gas_gap_pair
+
+
+class Convection(Effect):
+    """Convection to a fixed gas, Q = h A (T_g - T_p), h = k_g Nu / d (PHYSICS.md)."""
+
+    name = "convection"
+    stage = "particle"
+
+    def __init__(self, description, gas):
+        super().__init__(description)
+        self.gas = gas
+
+    def particle_func(self, engine):
+        s = engine.state
+        gas = self.gas
+        gas_velocity = ti.Vector(list(gas.velocity))
+        prandtl_cube_root = (gas.heat_capacity * gas.viscosity / gas.conductivity) ** (1.0 / 3.0)
+        density_over_viscosity = gas.density / gas.viscosity
+        gunn = gas.correlation == "gunn"
+        porosity = gas.porosity
+
+        @ti.func
+        def convection(i, load):
+            diameter = 2.0 * s.radius[i]
+            reynolds = density_over_viscosity * diameter * (gas_velocity - s.velocity[i]).norm()
+            nusselt = 0.0
+            if ti.static(gunn):
+                nusselt = gas_convection.nusselt_gunn(reynolds, prandtl_cube_root, porosity)
+            else:
+                nusselt = gas_convection.nusselt_ranz_marshall(reynolds, prandtl_cube_root)
+            h_gas = gas_convection.convective_conductance(ti.static(gas.conductivity), nusselt,
+                                                          diameter)
+            load.heat += h_gas * (ti.static(gas.temperature) - s.temperature[i])
+            load.conductance += h_gas
+            return load
+
+        return convection
+
+
+class PlugFlowGas(Effect):
+    """Convection to the axial plug-flow gas of the particle's cell; the gas itself marches
+    cell by cell between the pair and the particle stages (``after_pairs``)."""
+
+    name = "convection"
+    stage = "particle"
+
+    def __init__(self, description, gas):
+        super().__init__(description)
+        self.gas = gas
+
+    def allocate(self, engine, tree):
+        from .plug_flow import AxialPlugFlowGas
+        engine.gas_stream = AxialPlugFlowGas(self.gas, engine.state, tree, engine.real)
+
+    def after_pairs(self, engine, n, dt):
+        """The per-cell stage: the gas sees this step's particles (W, K); its energy
+        integral advances by the thermal step (S dt)."""
+        engine.gas_stream.exchange(n, dt * engine.scene.thermal.time_scale)
+
+    def particle_func(self, engine):
+        s = engine.state
+        stream = engine.gas_stream
+
+        @ti.func
+        def plug_flow_convection(i, load):
+            q_gas, g_gas = stream.particle_heat(i, s.temperature[i])
+            load.heat += q_gas
+            load.conductance += g_gas
+            return load
+
+        return plug_flow_convection
+
+
+class PlugFlowStream(Effect):
+    """The axial plug-flow gas itself (listed so ``taichi-dem check`` shows it; its work is
+    done by PlugFlowGas)."""
+    name = "plug_flow_gas"
+    stage = "cell"
+
+
+class Radiation(Effect):
+    """Grey-body exchange with the gas, a surface or an enclosure (no shadowing)."""
+
+    name = "radiation"
+    stage = "particle"
+
+    def __init__(self, description, thermal):
+        super().__init__(description)
+        self.thermal = thermal
+
+    def allocate(self, engine, tree):
+        engine.emissivity = tree.add("emissivity", engine.real, len(engine.tables.names))
+
+    def upload(self, engine):
+        npf = np.float64 if engine.real == ti.f64 else np.float32
+        engine.emissivity.from_numpy(np.array(
+            [engine.scene.materials[k].emissivity or 0.0 for k in engine.tables.names], npf))
+
+    def particle_func(self, engine):
+        s = engine.state
+        th = self.thermal
+        stream = engine.gas_stream
+        plug_flow = stream is not None
+        gas = th.gas
+        radiate_to_gas = th.radiation_to == "gas"
+        radiation_temperature = (gas.temperature if (radiate_to_gas and not plug_flow)
+                                 else (th.radiation_temperature or 0.0))
+        in_radiation_region = region_test(th.radiation_region)
+        emissivity = engine.emissivity
+
+        @ti.func
+        def radiation(i, load):
+            if in_radiation_region(s.position[i]):
+                t_surroundings = ti.static(radiation_temperature) + 0.0 * load.heat
+                sees = 1
+                if ti.static(radiate_to_gas and plug_flow):
+                    t_surroundings, sees = stream.local_temperature(i)
+                if sees != 0:
+                    q_rad, g_rad = radiative.exchange(emissivity[s.material[i]], s.radius[i],
+                                                      t_surroundings, s.temperature[i])
+                    load.heat += q_rad
+                    load.conductance += g_rad
+            return load
+
+        return radiation
+
+
+class Drying(Effect):
+    """Moisture: evaporation at T_e (moisture.py); run by the Temperature update."""
+
+    name = "drying"
+    stage = "integrate"
+
+    def __init__(self, description, thermal, compensated):
+        super().__init__(description)
+        self.constants = (thermal.evaporation_temperature, thermal.latent_heat,
+                          thermal.water_heat_capacity)
+        self.particle_fields = {"moisture": (False, "real")}
+        if compensated:
+            self.particle_fields["moisture_residual"] = (False, "f64")
+
+    def allocate(self, engine, tree):
+        engine.evaporated = tree.add("evaporated", ti.f64, 1)      # kg since the start
+
+
+class Temperature(Effect):
+    """The explicit temperature update m c dT/dt = sum Q (stable while dt sum(h)/(m c) < 1,
+    checked per sample). In f32 scenes the temperature carries an f64 residual
+    (engine/precision.py) so that per-step changes below the f32 spacing are kept."""
+
+    name = "temperature"
+    stage = "integrate"
+
+    def __init__(self, description, compensated, time_scale=1.0):
+        super().__init__(description)
+        self.compensated = compensated
+        # heat capacities divided by S: the energy Q dt of a step changes T by S Q dt/(m c)
+        self.time_scale = float(time_scale)
+        self.particle_fields = {"temperature": (False, "real"),
+                                "inverse_thermal_mass": (False, "real")}
+        if compensated:
+            self.particle_fields["temperature_residual"] = (False, "f64")
+
+    def integrate_func(self, engine, drying_effect):
+        """ti.func (i, heat W, conductance W/K, dt s): the particle's new temperature (and
+        moisture, when drying)."""
+        s = engine.state
+        real = engine.real
+        compensated = self.compensated
+        moisture = drying_effect is not None
+        compensated_add, split_f64 = make_compensated_add(real)
+        t_evap = latent = c_water = 0.0
+        evaporated = None
+        if moisture:
+            t_evap, latent, c_water = drying_effect.constants
+            evaporated = engine.evaporated
+
+        scale = self.time_scale
+
+        @ti.func
+        def update_temperature(i, heat, conductance, dt_mechanics):
+            dt = dt_mechanics
+            if ti.static(scale != 1.0):
+                dt = dt_mechanics * ti.static(scale)      # the thermal step
+            if ti.static(moisture and compensated):
+                # in f64 throughout, then split back (engine/precision.py)
+                t_new, x_new, inv_c, dm = drying.heat_and_dry(
+                    ti.cast(s.temperature[i], ti.f64) + s.temperature_residual[i],
+                    ti.cast(s.moisture[i], ti.f64) + s.moisture_residual[i],
+                    ti.cast(s.inverse_thermal_mass[i], ti.f64),
+                    ti.cast(s.mass[i], ti.f64), ti.cast(dt * heat, ti.f64),
+                    t_evap, latent, c_water)
+                t_part, t_rest = split_f64(t_new)
+                s.temperature[i] = t_part
+                s.temperature_residual[i] = t_rest
+                if dm > 0.0:
+                    x_part, x_rest = split_f64(x_new)
+                    s.moisture[i] = x_part
+                    s.moisture_residual[i] = x_rest
+                    s.inverse_thermal_mass[i] = ti.cast(inv_c, real)
+                    evaporated[0] += dm
+            elif ti.static(moisture):
+                t_new, x_new, inv_c, dm = drying.heat_and_dry(
+                    s.temperature[i], s.moisture[i], s.inverse_thermal_mass[i],
+                    s.mass[i], dt * heat, t_evap, latent, c_water)
+                s.temperature[i] = t_new
+                if dm > 0.0:
+                    s.moisture[i] = x_new
+                    s.inverse_thermal_mass[i] = inv_c
+                    evaporated[0] += ti.cast(dm, ti.f64)
+            elif ti.static(compensated):
+                t_part, t_rest = compensated_add(
+                    s.temperature[i], s.temperature_residual[i],
+                    dt * heat * s.inverse_thermal_mass[i])
+                s.temperature[i] = t_part
+                s.temperature_residual[i] = t_rest
+            else:
+                s.temperature[i] += dt * heat * s.inverse_thermal_mass[i]
+            s.conductance[i] = conductance
+
+        return update_temperature
+
+
+MODEL_WORDS = {"isothermal": "isothermal surfaces (Rong & Horio / Musser; Morris et al.)",
+               "solid_resistance": "with the solid's resistance in series (Cheng, Yu & Zulli)"}
+
+
+def thermal_effects(scene) -> list:
+    """The thermal effects ``scene`` calls for, in step order (none without [thermal])."""
+    th = scene.thermal
+    if th is None:
+        return []
+    compensated = scene.simulation.precision != "f64"
+    scaled = (f"; heat capacities / {th.time_scale:g} (thermal time = {th.time_scale:g} x "
+              f"simulated time)") if th.time_scale != 1.0 else ""
+    out = [Temperature("explicit temperature update, m c dT/dt = sum Q" + scaled, compensated,
+                       th.time_scale)]
+    if th.conduction:
+        out.append(Conduction(f"particle-particle conduction (contact radius correction: "
+                              f"{th.contact_radius_correction})"))
+        if th.gas_gap and th.gas_gap_pairs:
+            out.append(GasGapPair(
+                f"conduction through the gas gap between particles (fluid lens "
+                f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
+                f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]}; pairs "
+                f"within the lens are listed and handed to the contact law)",
+                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model))
+    hot = [w.name for w in list(scene.walls) + list(scene.bodies) if w.temperature is not None]
+    if th.wall_conduction and hot:
+        out.append(WallConduction("conduction to isothermal " + ", ".join(hot)))
+        if th.gas_gap:
+            out.append(GasGapWall(
+                f"conduction through the gas gap to {', '.join(hot)} (fluid lens "
+                f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
+                f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]})",
+                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model))
+    gas = th.gas
+    if gas is not None and not gas.plug_flow:
+        out.append(Convection(f"convection to a {gas.model} gas at {gas.temperature:g} K "
+                              f"({gas.correlation})", gas))
+    if gas is not None and gas.plug_flow:
+        speed = sum(c * c for c in gas.velocity) ** 0.5
+        out.append(PlugFlowGas(f"convection to the plug-flow gas of the particle's cell "
+                               f"({gas.correlation}, u = {speed:.3g} m/s)", gas))
+        out.append(PlugFlowStream(
+            f"axial plug-flow gas: {gas.cells} cells over {gas.length:g} m "
+            f"{gas.flow.replace('_', ' ')}, {gas.mass_flow:g} kg/s in at "
+            f"{gas.temperature:g} K, energy balance per cell"))
+    if th.radiation:
+        to = {"gas": "the local gas temperature",
+              "surface": f"'{th.radiation_surface}' at {th.radiation_temperature or 0:g} K",
+              "enclosure": f"an enclosure at {th.radiation_temperature or 0:g} K"}[th.radiation_to]
+        where = " inside radiation_region" if th.radiation_region is not None else ""
+        out.append(Radiation(f"grey-body radiation to {to}{where} (no shadowing)", th))
+    if th.moisture:
+        out.append(Drying(f"moisture: evaporation at {th.evaporation_temperature:g} K, "
+                          f"latent heat {th.latent_heat:g} J/kg", th, compensated))
+    return out
