@@ -139,8 +139,8 @@ class Hopper(Demo):
 
 
 # ---------------------------------------------------------------------------------- chute
-class Chute(Demo):
-    """Seed 004's chute: the surge's velocities and depth in the measuring section, and the
+class ChuteRelease(Demo):
+    """Seed 004's chute with a released block: the surge's velocities and depth in the measuring section, and the
     mass flow off the chute's end.
 
     Frame: x down the slope, z normal to the base (gravity is tilted). At every sample the
@@ -149,7 +149,7 @@ class Chute(Demo):
     down-slope velocity of the spheres within one diameter of their bin's top; the mean
     velocity that of all spheres in the section. The summary reports these at the sample
     that held the most particles in the section (the body of the surge)."""
-    name, scene = "chute", "chute.toml"
+    name, scene = "chute_release", "chute_release.toml"
     SENSOR: Optional[str] = None
     SECTION = (0.05, 0.15)             # m down the slope: the paper's developed-flow region
     BIN = 0.005
@@ -206,6 +206,47 @@ class Chute(Demo):
             print(f"  {out[-1] / total:.0%} of the release left the chute by t = {t[-1]:.3g} s")
 
 
+class Chute(Demo):
+    """Seed 004's steady chute: a sheet inlet feeds the 38 deg chute; at steady state the flow
+    depth, depth-averaged, free-surface and basal down-slope velocities at x = 30, 50, ...,
+    150 mm and the mass flow leaving, beside the steady depth-averaged model for basal friction
+    angles 23 and 30 deg (``summaries.chute_summary``; the measurement is
+    ``analysis.chute_station``, over a slab 10 mm long centred on each station, the last one
+    ending at the chute's end)."""
+    name, scene = "chute", "chute.toml"
+    SENSOR = "outflow"
+    STATIONS = tuple(0.03 + 0.02 * k for k in range(7))   # m: 30, 50, ..., 150 mm
+    HALF_SLAB = 0.005                                       # m
+    START = 0.05                 # s: profiles recorded from here (the summary keeps the window)
+    WINDOW = 0.1                 # s averaged at the end
+
+    def __init__(self):
+        self.samples: list = []
+
+    def slabs(self, length: float):
+        """(station, x0, x1) slabs, clipped to the chute [0, length] (m)."""
+        return [(x, max(x - self.HALF_SLAB, 0.0), min(x + self.HALF_SLAB, length))
+                for x in self.STATIONS]
+
+    def attach(self, sim):
+        from .summaries import chute_inlet
+        width = chute_inlet(sim)["width"]
+        length = float(next(x.point[0] for x in sim.scene.sensors if x.name == self.SENSOR))
+        slabs = self.slabs(length)
+
+        def observe(sim, values):
+            if sim.time < self.START - 1e-9:
+                return
+            p = sim.particles()
+            self.samples.append((sim.time, {x: analysis.chute_station(p, x0, x1, width)
+                                            for x, x0, x1 in slabs}))
+        sim.add_observer(observe)
+
+    def summary(self, sim):
+        from .summaries import chute_summary
+        return chute_summary(sim, self.samples, self.STATIONS, self.SENSOR, self.WINDOW)
+
+
 # ---------------------------------------------------------------------------------- heap
 class AngleOfRepose(Demo):
     """Seed 001's fly ash: the heap left by a lifted cylinder, its flank's angle against the
@@ -255,7 +296,7 @@ class DryerDrum(Process):
 
 DEMOS: dict[str, type[Demo]] = {d.name: d for d in (PaddleCooler, PaddleCoolerOptimised,
                                                      DryerDrum, Pile, Hopper, Chute,
-                                                     AngleOfRepose)}
+                                                     ChuteRelease, AngleOfRepose)}
 
 
 def get(name: str) -> Demo:

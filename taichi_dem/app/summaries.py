@@ -139,3 +139,107 @@ def process_summary(sim, window: float = 0.25) -> dict:
               f"{b['lost'] if not math.isnan(b['lost']) else 0.0:.4g} lost "
               f"(difference {b['error']:.2g} kg)")
     return out
+
+
+def chute_inlet(sim) -> dict:
+    """The chute scene's figures the steady-chute summary needs, read from the scene: the
+    first sheet factory's depth h0 and width W (m, its face's edges), normal speed u0 (m/s) and
+    mass rate (kg/s, at the end of the run), the inclination (deg, from the tilted gravity:
+    x down the slope, z normal to the base) and g (m/s^2)."""
+    f = next(f for f in sim.scene.factories if f.pattern == "sheet")
+    w, h0 = f.sheet.extents
+    u0 = float(np.asarray(f.velocity) @ np.asarray(f.sheet.normal))
+    g = np.asarray(sim.scene.simulation.gravity, float)
+    return {"h0": h0, "width": w, "u0": u0, "mass_rate": f.mass_rate.at(sim.time),
+            "density": sim.scene.materials[f.material].density, "name": f.name,
+            "inclination": math.degrees(math.atan2(g[0], -g[2])), "g": float(np.linalg.norm(g))}
+
+
+def chute_summary(sim, samples: list, stations, sensor: str = "outflow", window: float = 0.1,
+                  frictions=(23.0, 30.0), earth_pressure: float = 1.0) -> dict:
+    """Print and return the steady chute flow against the steady depth-averaged model.
+
+    ``samples``: (time s, {station x m: analysis.chute_station dict}) recorded at output
+    samples; the profile is their mean over the last ``window`` s (at most 40 % of the run).
+    The model (app/depth_averaged.py) starts from the inlet's h0 and u0 at x = 0 and is
+    integrated for each basal friction angle in ``frictions`` (deg); "position" is where the
+    DEM lies between the first (1) and second (0) curve. Returns the table as arrays and the
+    steadiness figures (outflow vs feed, particle count drift)."""
+    from . import depth_averaged as da
+    inlet = chute_inlet(sim)
+    s = sim.series
+    t = s["time"]
+    span = min(window, 0.4 * float(t[-1]))
+    t0 = float(t[-1]) - span
+    rows = [st for (ts, st) in samples if ts >= t0 - 1e-9]
+    out: dict = {"window": (t0, float(t[-1]))}
+    print(f"summary: steady chute (seed 004): {inlet['inclination']:.1f} deg, inlet "
+          f"h0 = {inlet['h0'] * 1e3:.3g} mm x W = {inlet['width'] * 1e3:.3g} mm at u0 = "
+          f"{inlet['u0']:.4g} m/s, fed {inlet['mass_rate']:.4g} kg/s (inflow solid fraction "
+          f"{inlet['mass_rate'] / (inlet['density'] * inlet['h0'] * inlet['width'] * inlet['u0']):.3g})")
+    win = t >= t0 - 1e-9
+    count = s["particles/count"][win]
+    fed = s[f"factories/{inlet['name']}/mass"]
+    feed = float((fed[-1] - fed[win][0]) / max(t[-1] - t[win][0], 1e-30)) if win.sum() > 1 else float("nan")
+    key = f"sensors/{sensor}/mass_flow"
+    leaving = float(np.mean(s[key][win][1:])) if key in s and win.sum() > 1 else float("nan")
+    drift = float(np.polyfit(t[win], count, 1)[0] * span / max(np.mean(count), 1.0)) if win.sum() > 2 else float("nan")
+    behind = float(s[f"factories/{inlet['name']}/behind"][-1])
+    out.update(feed=feed, outflow=leaving, count=float(np.mean(count)), count_drift=drift,
+               behind=behind)
+    print(f"  over t = {t0:.3g} - {t[-1]:.3g} s: {np.mean(count):,.0f} spheres in the chute "
+          f"(drift {drift:+.1%} over the window), mass flow leaving {leaving:.4g} kg/s against "
+          f"{feed:.4g} kg/s fed ({leaving / feed - 1.0:+.1%}; the inlet is {behind * 1e3:.3g} g "
+          f"behind its schedule)")
+    if sim.factories is not None and sim.wall_seconds > 0:
+        n_fed = float(s[f"factories/{inlet['name']}/count"][-1])
+        print(f"  the sheet inlet inserted {n_fed:,.0f} spheres in {sim.factories.wall_seconds:.3g} s "
+              f"wall ({sim.factories.wall_seconds / sim.wall_seconds:.1%} of the run; "
+              f"{n_fed / max(sim.factories.wall_seconds, 1e-9):,.0f} spheres per wall second)")
+    if not rows:
+        print("  no profile samples in the window (run longer)")
+        return out
+    xs = np.array(sorted(stations))
+    keys = ("h", "u_mean", "u_surface", "u_base", "flux", "phi")
+    table = {k: np.array([np.nanmean([r[x][k] for r in rows if r.get(x)]) if any(r.get(x) for r in rows)
+                          else np.nan for x in xs]) for k in keys}
+    models = {}
+    for delta in frictions:
+        try:
+            models[delta] = da.steady_profile(np.concatenate([[0.0], xs]), inlet["h0"], inlet["u0"],
+                                              inlet["inclination"], delta, gravity=inlet["g"],
+                                              earth_pressure=earth_pressure)
+        except ValueError as e:
+            print(f"  depth-averaged model, delta = {delta:g} deg: {e}")
+    phi_in = inlet["mass_rate"] / (inlet["density"] * inlet["h0"] * inlet["width"] * inlet["u0"])
+    # the depth the DEM's solid would fill at the inflow's solid fraction: the model carries the
+    # inlet's bulk density unchanged, the DEM compacts or dilates along the chute
+    table["h_inflow_density"] = table["h"] * table["phi"] / phi_in
+    out.update(x=xs, **table, models={d: {"h": m["h"][1:], "u": m["u"][1:]} for d, m in models.items()})
+    d1, d2 = frictions
+    print(f"  profile (mean of {len(rows)} samples) beside the steady depth-averaged model (K = "
+          f"{earth_pressure:g}) from the inlet state, basal friction delta = {d1:g} and {d2:g} deg:")
+    print("    x mm | h mm DEM  d=%g  d=%g | u_mean m/s DEM  d=%g  d=%g | u_surf  u_base | flux kg/s  phi"
+          "  h phi/phi0 mm" % (d1, d2, d1, d2))
+    for i, x in enumerate(xs):
+        m1 = models.get(d1, {"h": [np.nan] * (len(xs) + 1), "u": [np.nan] * (len(xs) + 1)})
+        m2 = models.get(d2, m1)
+        print(f"  {x * 1e3:6.0f} | {table['h'][i] * 1e3:8.2f} {m1['h'][i + 1] * 1e3:5.2f} "
+              f"{m2['h'][i + 1] * 1e3:5.2f} | {table['u_mean'][i]:14.3f} {m1['u'][i + 1]:5.3f} "
+              f"{m2['u'][i + 1]:5.3f} | {table['u_surface'][i]:6.3f} {table['u_base'][i]:7.3f} | "
+              f"{table['flux'][i]:9.4f} {table['phi'][i]:5.3f} {table['h_inflow_density'][i] * 1e3:8.2f}")
+    if d1 in models and d2 in models:
+        lo = {k: models[d2][k][1:] for k in ("h", "u")}
+        hi = {k: models[d1][k][1:] for k in ("h", "u")}
+        pos = {"u_mean": da.position_between(table["u_mean"], lo["u"], hi["u"]),
+               "u_surface": da.position_between(table["u_surface"], lo["u"], hi["u"]),
+               "h": da.position_between(table["h"], lo["h"], hi["h"]),
+               "h_inflow_density": da.position_between(table["h_inflow_density"], lo["h"], hi["h"])}
+        out["position"] = pos
+        for k, label in (("u_mean", "depth-averaged velocity"), ("u_surface", "free-surface velocity"),
+                         ("h", "flow depth"),
+                         ("h_inflow_density", f"flow depth at the inflow's solid fraction {phi_in:.2f}")):
+            p = pos[k]
+            print(f"  {label}: position between delta = {d2:g} (0) and {d1:g} deg (1) curves "
+                  f"{np.nanmin(p):.2f} - {np.nanmax(p):.2f} along x (mean {np.nanmean(p):.2f})")
+    return out

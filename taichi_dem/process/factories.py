@@ -8,6 +8,16 @@ there, of walls and of body triangles at their current pose. When the region is 
 waits for the next insertion and the run says so once per episode - never a silent shortfall;
 ``/series/factories/<name>/behind`` is the mass behind schedule (kg).
 
+``pattern = "sheet"`` factories (an inlet that keeps up with a chute's feed, hundreds of
+thousands of particles per second) insert whole lattice layers through their face instead
+(:class:`~taichi_dem.scene.model.SheetInlet`): layer j, of mass M_j, is due at the time t_j
+the schedule reaches the mass before it plus half its own, C_j + M_j / 2, and goes in at the
+first whole step t >= t_j, already u_n (t - t_j) in front of its sites - where it would be had
+it gone in at t_j - so successive layers are u_n (M_{j-1} + M_j) / (2 mass_rate) apart along
+the normal and the stream carries exactly the scheduled mass (to half a layer). Layers are
+built with numpy (no per-particle Python); a site that overlaps a particle still there (a
+stream that backs up), a wall or a body is dropped, counted behind schedule and warned about.
+
 The particles go into free slots of the engine (``Engine.insert``); each gets a slot key not in
 use (``particle_id``, re-used after its particle is gone) and a run-wide ``serial`` id, its
 factory index and its birth time (for the residence time).
@@ -22,7 +32,8 @@ import time as time_module
 import numpy as np
 
 from ..bodies.kinematics import rotation_matrix
-from ..setup.placement import _Grid, _Triangles, _frame, _local_bounds, _valid, sample_radii
+from ..setup.placement import (_Grid, _Triangles, _conflicts, _frame, _local_bounds, _valid,
+                               sample_radii)
 
 # automatic interval: the time the particles need to clear their own diameter, within
 # [MIN_INTERVAL_STEPS steps, MAX_INTERVAL]; one batch is then at most 0.5 % of a second's feed
@@ -53,8 +64,22 @@ class FactorySet:
         self.next_radius = [self._sample_radius(k) for k in range(n)]
         dt = sim.dt
         g = float(np.linalg.norm(scene.simulation.gravity))
-        self.every = []                           # steps between insertions
-        for f in self.factories:
+        self.every = []                           # steps between insertions (None: sheet)
+        # sheet factories: layers done, mass of the layers done (kg), lattice sites per parity
+        self.layers = np.zeros(n, np.int64)
+        self.layer_mass_before = np.zeros(n)
+        self.sheet_sites: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        for k, f in enumerate(self.factories):
+            if f.pattern == "sheet":
+                sh = f.sheet
+                e_w = np.asarray(sh.width, float) / sh.extents[0]
+                e_d = np.asarray(sh.depth, float) / sh.extents[1]
+                front = np.asarray(sh.normal, float) * (sh.radius + sh.jitter_amplitude)
+                self.sheet_sites[k] = tuple(
+                    np.asarray(sh.point, float) + front + st[:, :1] * e_w + st[:, 1:] * e_d
+                    for st in (sh.sites(0), sh.sites(1)))
+                self.every.append(None)
+                continue
             if f.interval is not None:
                 interval = f.interval
             else:
@@ -91,10 +116,33 @@ class FactorySet:
     # ------------------------------------------------------------------ stepping
     def steps_to_next(self, step: int) -> int:
         """Steps from ``step`` to the next insertion of any factory (>= 1)."""
-        return min(e - (step % e) for e in self.every) if self.every else 1 << 62
+        nxt = [e - (step % e) for e in self.every if e is not None]
+        nxt += [max(1, self._sheet_step(k) - step) for k in self.sheet_sites
+                if math.isfinite(self._layer_time(k))]
+        return min(nxt) if nxt else 1 << 62
 
     def due(self, step: int) -> list[int]:
-        return [k for k, e in enumerate(self.every) if step % e == 0]
+        return [k for k, e in enumerate(self.every)
+                if (step % e == 0 if e is not None else self._sheet_step(k) <= step)]
+
+    # ------------------------------------------------------------------ sheets
+    def layer_mass(self, k: int, j: int) -> float:
+        """Mass (kg) of layer ``j`` of sheet factory ``k`` (parity j % 2)."""
+        return len(self.sheet_sites[k][j % 2]) * self.particle_mass(k, self.factories[k].sheet.radius)
+
+    def _layer_time(self, k: int) -> float:
+        """When the next layer of sheet factory k is due (s): the schedule has reached the mass
+        of the layers before it plus half its own."""
+        j = int(self.layers[k])
+        return self.factories[k].mass_rate.time_for_mass(
+            self.layer_mass_before[k] + 0.5 * self.layer_mass(k, j))
+
+    def _sheet_step(self, k: int) -> int:
+        """The first whole step at or after the next layer's due time (huge if never)."""
+        t = self._layer_time(k)
+        if not math.isfinite(t):
+            return 1 << 62
+        return int(math.ceil(t / self.sim.dt - 1e-9))
 
     def insert_due(self, step: int, time: float):
         """Insert for every factory due at ``step`` (state at a whole step, time s)."""
@@ -118,6 +166,16 @@ class FactorySet:
         keys_in_use = st.particle_id.to_numpy()[:n]
         batches = []
         for k in due:
+            if self.factories[k].pattern == "sheet":
+                new = []
+                while self._sheet_step(k) * self.sim.dt <= time + 0.5 * self.sim.dt:
+                    batch = self._sheet_layer(k, time, pos, rad)
+                    if batch is not None:
+                        new.append(batch)
+                        pos = np.concatenate([pos, batch["position"]])
+                        rad = np.concatenate([rad, batch["radius"]])
+                batches.extend(new)
+                continue
             batch = self._batch(k, time, pos, rad)
             if batch is not None:
                 batches.append(batch)
@@ -199,6 +257,81 @@ class FactorySet:
                   f"({self.behind[k]:.4g} kg behind schedule)", file=sys.stderr)
         if not len(radii):
             return None
+        return self._arrays(k, placed_pos, radii, masses)
+
+    def _sheet_layer(self, k: int, time: float, pos: np.ndarray, rad: np.ndarray):
+        """The next layer of sheet factory k at ``time`` (s), clear of ``pos``/``rad``."""
+        f = self.factories[k]
+        sh = f.sheet
+        j = int(self.layers[k])
+        t_due = self._layer_time(k)
+        m_one = self.particle_mass(k, sh.radius)
+        sites = self.sheet_sites[k][j % 2]
+        v = np.asarray(f.velocity, float)
+        # where the layer would be had it gone in at its due time (spacing exact, no drift)
+        shift = v * max(time - t_due, 0.0)
+        # jitter: uniform in the ball of radius jitter_amplitude
+        n = len(sites)
+        d = self.rng.normal(size=(n, 3))
+        d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+        d *= sh.jitter_amplitude * self.rng.uniform(size=(n, 1)) ** (1.0 / 3.0)
+        x = sites + shift + d
+        r = np.full(n, sh.radius)
+        ok = self._clear(x, r, time, pos, rad)
+        scheduled = len(sites) * m_one
+        self.layers[k] += 1
+        self.layer_mass_before[k] += scheduled
+        x, r = x[ok], r[ok]
+        masses = np.full(len(r), m_one)
+        self.inserted_mass[k] += float(np.sum(masses))
+        self.inserted_count[k] += len(r)
+        self.behind[k] = max(self.layer_mass_before[k] - self.inserted_mass[k], 0.0)
+        dropped = n - len(r)
+        # warned once per run (a stream near its limit drops a sphere now and then; the total
+        # is /series/factories/<name>/behind)
+        if dropped and not self.waiting[k]:
+            self.waiting[k] = True
+            print(f"taichi-dem: warning: at t = {time:.4g} s sheet factory '{f.name}' dropped "
+                  f"{dropped} of {n} spheres of a layer: they would overlap particles still in "
+                  f"front of the face (the stream backs up), a wall or a body "
+                  f"({self.behind[k]:.4g} kg behind schedule); check that the material leaves "
+                  f"the face, or lower mass_rate. Further drops are not reported: see "
+                  f"/series/factories/{f.name}/behind.", file=sys.stderr)
+        if not len(r):
+            return None
+        return self._arrays(k, x, r, masses)
+
+    def _clear(self, x: np.ndarray, r: np.ndarray, time: float, pos: np.ndarray,
+               rad: np.ndarray) -> np.ndarray:
+        """Mask of spheres (x, r) inside the domain, clear of plane walls, of body triangles at
+        their pose at ``time`` and of the spheres ``pos``/``rad`` (vectorised)."""
+        scene = self.scene
+        dlo, dhi = np.asarray(scene.domain.min, float), np.asarray(scene.domain.max, float)
+        ok = np.all((x - r[:, None] >= dlo) & (x + r[:, None] <= dhi), axis=1)
+        for w in scene.walls:
+            ok &= (x - np.asarray(w.point)) @ np.asarray(w.normal) >= r
+        r_max = float(r.max())
+        reach = r_max + (float(rad.max()) if len(rad) else 0.0)
+        lo, hi = x.min(axis=0) - reach, x.max(axis=0) + reach
+        tris = self._triangles(time, lo, hi, r_max)
+        if tris is not None and len(tris.tri) and ok.any():
+            idx = np.nonzero(ok)[0]
+            ok[idx[tris.hits(x[idx], r[idx])]] = False
+        if len(pos) and ok.any():
+            per = [ax in scene.domain.periodic for ax in "xyz"]
+            near = np.all((pos >= lo) & (pos <= hi), axis=1)
+            if per and any(per):
+                near[:] = True                 # images across a periodic face may reach
+            if near.any():
+                npos, nrad = pos[near], rad[near]
+                grid = _Grid(npos, 2.0 * max(r_max, float(nrad.max())), dlo, dhi, per)
+                idx = np.nonzero(ok)[0]
+                ok[idx[_conflicts(grid, nrad, x[idx], r[idx])]] = False
+        return ok
+
+    def _arrays(self, k: int, placed_pos: np.ndarray, radii: np.ndarray, masses: np.ndarray) -> dict:
+        """The engine's insert arrays for particles of factory k."""
+        f = self.factories[k]
         n = len(radii)
         out = {"position": placed_pos, "velocity": np.tile(np.asarray(f.velocity, float), (n, 1)),
                "radius": radii, "mass": masses,
@@ -304,6 +437,7 @@ class FactorySet:
         return {"inserted_mass": self.inserted_mass.copy(), "inserted_count": self.inserted_count.copy(),
                 "behind": self.behind.copy(), "waiting": np.array(self.waiting, bool),
                 "next_radius": np.array(self.next_radius), "next_serial": self.next_serial,
+                "layers": self.layers.copy(), "layer_mass_before": self.layer_mass_before.copy(),
                 "inserted_energy": self.inserted_energy,
                 "rng": str(self.rng.bit_generator.state)}
 
@@ -315,5 +449,8 @@ class FactorySet:
         self.waiting = [bool(x) for x in d["waiting"]]
         self.next_radius = [float(x) for x in d["next_radius"]]
         self.next_serial = int(d["next_serial"])
+        if "layers" in d:                      # (checkpoints from before sheet factories lack them)
+            self.layers = np.asarray(d["layers"], np.int64).copy()
+            self.layer_mass_before = np.asarray(d["layer_mass_before"], float).copy()
         self.inserted_energy = float(d.get("inserted_energy", 0.0))
         self.rng.bit_generator.state = ast.literal_eval(str(d["rng"]))

@@ -21,14 +21,19 @@ import numpy as np
 from ..errors import SceneError
 from .model import (Body, Domain, Factory, Interaction, Material, Motion, Outlet, Output,
                     ParticleFill, PlaneWall, RadiusDistribution, RateSchedule, Region, Scene,
-                    Sensor, SimulationSettings, SpeedSchedule, GasSettings, ThermalSettings)
+                    Sensor, SheetInlet, SimulationSettings, SpeedSchedule, GasSettings, ThermalSettings)
 from .units import MAX_MAGNITUDE, MIN_MAGNITUDE, parse_quantity, parse_vec3
 
 SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "bodies",
             "factories", "outlets", "sensors", "thermal", "output")
 PLANNED_SECTIONS = ("mobility",)
 FACTORY_KEYS = ("name", "material", "radius", "sizes", "region", "velocity", "temperature",
-                "moisture", "mass_rate", "interval")
+                "moisture", "mass_rate", "interval", "pattern", "face", "jitter")
+FACTORY_PATTERNS = ("random", "sheet")
+SHEET_ONLY_KEYS = ("face", "jitter")          # pattern = "sheet" only
+RANDOM_ONLY_KEYS = ("region", "sizes", "interval")   # pattern = "random" only
+FACE_KEYS = ("point", "width", "depth", "min", "max")
+MAX_SHEET_JITTER = 0.25                       # of the diameter
 OUTLET_KEYS = ("name", "region")
 SENSOR_KINDS = ("mass_flow", "residence_time", "contact_count")
 SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
@@ -345,7 +350,18 @@ class _Parser:
         return RateSchedule(points=tuple(points))
 
     def parse_factory(self, t: dict, key: str) -> Factory:
+        pattern = self.string(t["pattern"], f"{key}.pattern") if "pattern" in t else "random"
+        if pattern not in FACTORY_PATTERNS:
+            raise self.err(f"{key}.pattern", f"unknown pattern '{pattern}'; "
+                                             f"{_suggest(pattern, FACTORY_PATTERNS)}allowed: "
+                                             f"{', '.join(FACTORY_PATTERNS)}")
+        if pattern == "sheet":
+            return self.parse_sheet_factory(t, key)
         self.check_keys(t, key, FACTORY_KEYS, required=("name", "material", "region", "mass_rate"))
+        for k in SHEET_ONLY_KEYS:
+            if k in t:
+                raise self.err(f"{key}.{k}", 'only for pattern = "sheet" (this factory places '
+                                             "at random in its region)")
         kw: dict[str, Any] = {}
         if ("radius" in t) == ("sizes" in t):
             raise self.err(f"{key}.radius", "give exactly one of radius (a length or { mean, std, "
@@ -387,6 +403,128 @@ class _Parser:
             raise self.err(f"{key}.region", f"the region is narrower than one particle of radius "
                                             f"{f.largest_radius:g} m")
         return f
+
+    def parse_sheet_face(self, value: Any, key: str):
+        """``face = { point, width, depth }`` (a corner and two perpendicular edge vectors) or
+        ``{ min, max }`` (an axis-aligned rectangle: the box face with one zero extent).
+        Returns (point, width, depth) as numpy vectors, m."""
+        t = self.table(value, key, "a table { point, width, depth } or { min, max }")
+        self.check_keys(t, key, FACE_KEYS)
+        if set(t) == {"point", "width", "depth"}:
+            p = np.array(self.vec3(t["point"], "length", f"{key}.point"))
+            w = np.array(self.vec3(t["width"], "length", f"{key}.width"))
+            d = np.array(self.vec3(t["depth"], "length", f"{key}.depth"))
+            for k, v in (("width", w), ("depth", d)):
+                if not np.linalg.norm(v) > 0.0:
+                    raise self.err(f"{key}.{k}", "must be a nonzero edge vector (m)")
+            cos = abs(float(w @ d)) / (np.linalg.norm(w) * np.linalg.norm(d))
+            if cos > 1e-6:
+                raise self.err(f"{key}.depth", f"width and depth must be perpendicular edges of "
+                                               f"the rectangle; they make "
+                                               f"{math.degrees(math.acos(min(cos, 1.0))):.4g} deg")
+            return p, w, d
+        if set(t) == {"min", "max"}:
+            lo = np.array(self.vec3(t["min"], "length", f"{key}.min"))
+            hi = np.array(self.vec3(t["max"], "length", f"{key}.max"))
+            ext = hi - lo
+            if np.any(ext < 0.0):
+                raise self.err(f"{key}.max", f"max must not be below min on any axis; got "
+                                             f"min = {_fmt(lo)}, max = {_fmt(hi)}")
+            flat = np.nonzero(ext == 0.0)[0]
+            if len(flat) != 1:
+                raise self.err(f"{key}.max", f"a face is a box face: exactly one axis with "
+                                             f"min = max (the face's normal), got extents "
+                                             f"{_fmt(ext)}")
+            a, b = [i for i in range(3) if i != flat[0]]
+            w, d = np.zeros(3), np.zeros(3)
+            w[a], d[b] = ext[a], ext[b]
+            return lo, w, d
+        raise self.err(key, "give either point, width and depth (a corner and two perpendicular "
+                            "edge vectors) or min and max (an axis-aligned rectangle, one "
+                            f"extent zero); got keys {', '.join(sorted(t)) or 'none'}")
+
+    def parse_sheet_factory(self, t: dict, key: str) -> Factory:
+        """``pattern = "sheet"``: lattice layers through ``face`` at ``velocity``, one layer
+        whenever the stream has carried the previous one the spacing the mass rate implies."""
+        self.check_keys(t, key, FACTORY_KEYS)
+        for k in RANDOM_ONLY_KEYS:
+            if k in t:
+                reason = {"region": "a sheet inserts through its face; give face = { point, "
+                                    "width, depth } (or { min, max }) instead of a region",
+                          "sizes": "a sheet inserts one radius (its lattice is sized for it); "
+                                   "give radius",
+                          "interval": "a sheet inserts a layer whenever the previous one has "
+                                      "moved one layer spacing; the interval follows from the "
+                                      "mass rate and velocity"}[k]
+                raise self.err(f"{key}.{k}", f'not for pattern = "sheet": {reason}')
+        self.check_keys(t, key, FACTORY_KEYS,
+                        required=("name", "material", "face", "velocity", "mass_rate", "radius"))
+        radius = self.parse_radius(t["radius"], f"{key}.radius")
+        if radius.std != 0.0:
+            raise self.err(f"{key}.radius", "a sheet inserts one radius (its lattice is sized for "
+                                            "it): give a length, not a distribution")
+        point, width, depth = self.parse_sheet_face(t["face"], f"{key}.face")
+        velocity = self.vec3(t["velocity"], "speed", f"{key}.velocity")
+        jitter = 0.05
+        if "jitter" in t:
+            jitter = self.nonnegative(t["jitter"], "dimensionless", f"{key}.jitter")
+            if jitter > MAX_SHEET_JITTER:
+                raise self.err(f"{key}.jitter", f"at most {MAX_SHEET_JITTER} (a fraction of the "
+                                                f"diameter: the largest displacement from the "
+                                                f"lattice site), got {jitter:g}")
+        normal = np.cross(width, depth)
+        normal /= np.linalg.norm(normal)
+        v = np.asarray(velocity, float)
+        u_n = float(v @ normal)
+        if abs(u_n) < 1e-9 * max(float(np.linalg.norm(v)), 1e-30) or not np.linalg.norm(v) > 0.0:
+            raise self.err(f"{key}.velocity", f"the stream must cross its face: velocity "
+                                              f"{_fmt(v)} m/s has no component along the face's "
+                                              f"normal {_fmt(normal)}")
+        if u_n < 0.0:
+            normal, u_n = -normal, -u_n
+        sheet = SheetInlet(point=tuple(float(c) for c in point),
+                           width=tuple(float(c) for c in width),
+                           depth=tuple(float(c) for c in depth),
+                           normal=tuple(float(c) for c in normal),
+                           radius=radius.mean, jitter=jitter)
+        for k, extent in zip(("width", "depth"), sheet.extents):
+            need = sheet.pitch
+            if extent < need:
+                raise self.err(f"{key}.face", f"the face's {k} ({extent:g} m) is narrower than "
+                                              f"one jittered sphere, the lattice pitch 2 radius "
+                                              f"x 1.001 + 2 jitter x diameter = {need:g} m")
+        # the face and the first layer in front of it must lie inside the domain
+        lo, hi = np.asarray(self.domain.min, float), np.asarray(self.domain.max, float)
+        front = normal * 2.0 * (radius.mean + sheet.jitter_amplitude)
+        for corner in (point, point + width, point + depth, point + width + depth):
+            for c in (corner, corner + front):
+                if np.any(c < lo - 1e-12) or np.any(c > hi + 1e-12):
+                    raise self.err(f"{key}.face", f"the face (and one layer in front of it) must "
+                                                  f"lie inside the domain; corner {_fmt(c)} is "
+                                                  f"outside [{_fmt(lo)}, {_fmt(hi)}]")
+        rate = self.parse_rate(t["mass_rate"], f"{key}.mass_rate")
+        material = self.material_name(t["material"], f"{key}.material")
+        density = self.materials[material].density
+        limit = sheet.max_mass_rate(density, u_n)
+        if rate.max_rate > limit * (1.0 + 1e-9):
+            w_len, d_len = sheet.extents
+            need = rate.max_rate / (density * w_len * d_len * u_n)
+            can = limit / (density * w_len * d_len * u_n)
+            raise self.err(f"{key}.mass_rate",
+                           f"{rate.max_rate:.4g} kg/s through a {w_len:g} x {d_len:g} m face at "
+                           f"{u_n:.4g} m/s needs an inflow solid fraction of {need:.3g} "
+                           f"(mass_rate / (density x width x depth x normal speed)); the "
+                           f"jittered sheet lattice carries at most {can:.3g}, i.e. "
+                           f"{limit:.4g} kg/s. Lower mass_rate or jitter, or raise the face's "
+                           f"depth or the velocity")
+        kw: dict[str, Any] = {}
+        if "temperature" in t:
+            kw["temperature"] = self.positive(t["temperature"], "temperature", f"{key}.temperature")
+        if "moisture" in t:
+            kw["moisture"] = self.nonnegative(t["moisture"], "dimensionless", f"{key}.moisture")
+        return Factory(key=key, name=self.name(t, key), material=material, region=None,
+                       mass_rate=rate, radius=radius, velocity=velocity, pattern="sheet",
+                       sheet=sheet, **kw)
 
     def parse_outlet(self, t: dict, key: str) -> Outlet:
         self.check_keys(t, key, OUTLET_KEYS, required=OUTLET_KEYS)

@@ -246,17 +246,107 @@ class RateSchedule:
             total += rate * (min(time, end) - start)
         return total
 
+    def time_for_mass(self, mass: float) -> float:
+        """The earliest time (s) at which ``mass_until`` reaches ``mass`` (kg); inf if never."""
+        if mass <= 0.0:
+            return 0.0
+        total = 0.0
+        for k, (start, rate) in enumerate(self.points):
+            end = self.points[k + 1][0] if k + 1 < len(self.points) else math.inf
+            seg = rate * (end - start) if rate > 0.0 else 0.0
+            if rate > 0.0 and total + seg >= mass:
+                return start + (mass - total) / rate
+            total += seg
+        return math.inf
+
+    @property
+    def max_rate(self) -> float:
+        """The largest scheduled rate, kg/s."""
+        return max(r for _, r in self.points)
+
+
+@dataclass(frozen=True)
+class SheetInlet:
+    """The face of a ``pattern = "sheet"`` factory: the rectangle ``point + a width + b depth``
+    (0 <= a, b <= 1; ``width`` and ``depth`` perpendicular edge vectors, m) that the stream
+    crosses along the unit ``normal`` (the side the factory's velocity points to).
+
+    Each layer is a square lattice of pitch ``pitch`` in the face, every other layer shifted by
+    half a pitch along both edges (the hollows of the one before), the centres ``radius +
+    jitter_amplitude`` in front of the face and half a pitch from its edges (so a face that
+    spans a periodic axis keeps its spheres clear across it too), each displaced at random by at
+    most ``jitter_amplitude`` (= ``jitter`` x diameter). The pitch is the contact distance plus
+    twice the jitter (and a 1e-3 clearance), so no two spheres of one layer can touch; two
+    successive layers are then clear of each other while their spacing along the normal is at
+    least ``min_layer_spacing`` = sqrt(pitch^2 - pitch^2/2) = pitch / sqrt(2) (the shifted
+    neighbour lies pitch/sqrt(2) away in the face). The spacing itself follows from the
+    requested mass rate: a layer of mass M is due when the stream has carried the previous
+    one M u_n / mass_rate further (see process/factories.py), so the inflow's bulk density is
+    mass_rate / (u_n |width| |depth|) whatever the lattice."""
+    point: Vec3                          # m, a corner of the face
+    width: Vec3                          # m, edge vector
+    depth: Vec3                          # m, edge vector, perpendicular to width
+    normal: Vec3                         # unit, along the stream
+    radius: float                        # m, the one particle radius
+    jitter: float = 0.05                 # fraction of the diameter (largest displacement)
+
+    @property
+    def jitter_amplitude(self) -> float:
+        """Largest displacement of a centre from its lattice site, m."""
+        return self.jitter * 2.0 * self.radius
+
+    @property
+    def pitch(self) -> float:
+        """Lattice pitch in the face, m."""
+        return 2.0 * self.radius * (1.0 + 1e-3) + 2.0 * self.jitter_amplitude
+
+    @property
+    def min_layer_spacing(self) -> float:
+        """Closest two successive (mutually shifted) layers may be along the normal, m."""
+        return self.pitch / math.sqrt(2.0)
+
+    @property
+    def extents(self) -> tuple[float, float]:
+        """|width|, |depth| (m)."""
+        return float(np.linalg.norm(self.width)), float(np.linalg.norm(self.depth))
+
+    def sites(self, parity: int) -> np.ndarray:
+        """(n, 2) lattice sites of a layer of ``parity`` 0 or 1 as (a, b) distances (m) along the
+        width and depth edges from ``point``."""
+        margin = 0.5 * self.pitch
+        axes = []
+        for extent in self.extents:
+            span = extent - 2.0 * margin - 0.5 * self.pitch * parity
+            if span < 0.0:
+                return np.empty((0, 2))
+            n = int(math.floor(span / self.pitch + 1e-9)) + 1
+            axes.append(margin + 0.5 * self.pitch * parity + self.pitch * np.arange(n))
+        a, b = np.meshgrid(axes[0], axes[1], indexing="ij")
+        return np.stack([a.ravel(), b.ravel()], axis=1)
+
+    def layer_counts(self) -> tuple[int, int]:
+        """Spheres in a layer of parity 0 and 1."""
+        return len(self.sites(0)), len(self.sites(1))
+
+    def max_mass_rate(self, density: float, speed: float) -> float:
+        """The largest mass rate (kg/s) the lattice can carry at normal speed ``speed`` (m/s):
+        two successive layers (one of each parity) per 2 x min_layer_spacing."""
+        n0, n1 = self.layer_counts()
+        m = 4.0 / 3.0 * math.pi * self.radius ** 3 * density
+        return 0.5 * (n0 + n1) * m * speed / self.min_layer_spacing
+
 
 @dataclass(frozen=True, eq=False)
 class Factory:
-    """Continuous insertion at a scheduled mass rate into ``region`` without overlap.
+    """Continuous insertion at a scheduled mass rate into ``region`` without overlap
+    (``pattern = "random"``), or as lattice layers through the face ``sheet`` (``"sheet"``).
 
     Radii: a truncated normal (``radius``) sampled by number, or ``sizes`` = ((radius m, mass
     fraction), ...) sampled so each size gets its fraction of the inserted mass."""
     key: str                             # "factories[0]"
     name: str
     material: str
-    region: Region
+    region: Optional[Region]             # None for pattern "sheet"
     mass_rate: RateSchedule
     radius: Optional[RadiusDistribution] = None
     sizes: Optional[tuple[tuple[float, float], ...]] = None
@@ -264,6 +354,8 @@ class Factory:
     temperature: Optional[float] = None  # K
     moisture: Optional[float] = None     # kg water per kg dry solid; None = dry
     interval: Optional[float] = None     # s between insertions; None = automatic
+    pattern: str = "random"              # "random" (in region) | "sheet" (layers through a face)
+    sheet: Optional[SheetInlet] = None   # the face, for pattern "sheet"
 
     @property
     def largest_radius(self) -> float:
