@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from ..scene.model import Scene
 from .base import Effect
+from .drag import Drag
 from .gravity import Gravity
 from .hertz_mindlin import HertzMindlin
 from .rolling import RollingConstantTorque, RollingEPSD
@@ -22,6 +23,12 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
                                     "velocity_verlet", "integrate")]
     if any(abs(g) > 0 for g in scene.simulation.gravity):
         effects.append(Gravity("uniform gravity", scene.simulation.gravity))
+    if scene.drag is not None:
+        d = scene.drag
+        speed = sum(c * c for c in d.velocity) ** 0.5
+        effects.append(Drag(f"gas drag ({d.model.replace('_', '-')}"
+                            + (", local voidage from the cell grid" if d.model == "di_felice" else "")
+                            + f"), superficial gas velocity {speed:.3g} m/s, one-way", d))
     effects.append(HertzMindlin("Hertz-Mindlin no-slip, tangential history, Coulomb limit"))
     models = {i.rolling_model for i in scene.interactions.values() if i.rolling_friction > 0}
     if "constant_torque" in models:

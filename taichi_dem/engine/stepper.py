@@ -100,6 +100,7 @@ class Engine:
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
         self.reduction = t.add("reduction", real, Reduction.SIZE)   # named slots: Reduction
         self.gas_stream = None
+        self.drag = None            # the Drag effect, when enabled (it sets itself here)
         if self.thermal:
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
             # f64 sums over the particles: sum m c T (J), sum m c (J/K), water (kg), dry solid

@@ -21,11 +21,12 @@ import numpy as np
 from ..errors import SceneError
 from .model import (Body, Domain, Factory, Interaction, Material, Motion, Outlet, Output,
                     ParticleFill, PlaneWall, RadiusDistribution, RateSchedule, Region, Scene,
-                    Sensor, SheetInlet, SimulationSettings, SpeedSchedule, GasSettings, ThermalSettings)
+                    Sensor, SheetInlet, SimulationSettings, SpeedSchedule, GasSettings, ThermalSettings,
+                    DragSettings)
 from .units import MAX_MAGNITUDE, MIN_MAGNITUDE, parse_quantity, parse_vec3
 
 SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "bodies",
-            "factories", "outlets", "sensors", "thermal", "output")
+            "factories", "outlets", "sensors", "thermal", "output", "gas")
 PLANNED_SECTIONS = ("mobility",)
 FACTORY_KEYS = ("name", "material", "radius", "sizes", "region", "velocity", "temperature",
                 "moisture", "mass_rate", "interval", "pattern", "face", "jitter")
@@ -43,7 +44,9 @@ THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_ra
                 "radiation_to", "radiation_region", "evaporation_temperature", "latent_heat",
                 "water_heat_capacity", "gas_gap", "gap_gas_conductivity", "gas_gap_lens",
                 "gas_gap_min_gap", "gas_gap_pairs", "time_scale", "gas_gap_model")
-GAS_KEYS = ("model", "temperature", "velocity", "correlation", "porosity", "density",
+DRAG_MODELS = ("di_felice", "schiller_naumann")
+MECHANICS_GAS_KEYS = ("velocity", "density", "viscosity", "drag")
+GAS_KEYS = ("drag", "model", "temperature", "velocity", "correlation", "porosity", "density",
             "viscosity", "conductivity", "heat_capacity", "axis_point", "axis_direction",
             "length", "cells", "flow_area", "radius", "mass_flow", "inlet_temperature", "flow")
 FIXED_GAS_ONLY = ("temperature", "velocity")
@@ -278,10 +281,38 @@ class _Parser:
                 if f.moisture is not None:
                     raise self.err(f"{f.key}.moisture", "drying needs heat transfer: add a "
                                                         "[thermal] section (and a gas to dry in)")
+        drag = self.parse_drag(doc, thermal)
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
                      walls=walls, bodies=bodies, output=output, thermal=thermal,
-                     factories=factories, outlets=outlets, sensors=sensors)
+                     factories=factories, outlets=outlets, sensors=sensors, drag=drag)
+
+    def parse_drag(self, doc: dict, thermal) -> "DragSettings | None":
+        """Drag from the mechanics-only [gas] section (velocity, density, viscosity, drag) or
+        from [thermal.gas] with drag = "di_felice" | "schiller_naumann"; not both."""
+        heat_gas = thermal.gas if thermal is not None else None
+        if "gas" in doc:
+            if heat_gas is not None:
+                raise self.err("gas", "the scene has a [thermal.gas] already: give its drag "
+                                      "there (drag = \"di_felice\"), not a second gas")
+            g = self.table(doc["gas"], "gas")
+            self.check_keys(g, "gas", MECHANICS_GAS_KEYS)
+            model = self.string(g.get("drag", "di_felice"), "gas.drag")
+            if model not in DRAG_MODELS:
+                raise self.err("gas.drag", f"must be \"di_felice\" or \"schiller_naumann\", "
+                                           f"got \"{model}\"")
+            if "velocity" not in g:
+                raise self.err("gas.velocity", "required: the gas's superficial velocity, m/s")
+            return DragSettings(
+                model=model, velocity=self.vec3(g["velocity"], "speed", "gas.velocity"),
+                density=(self.positive(g["density"], "density", "gas.density")
+                         if "density" in g else GasSettings.density),
+                viscosity=(self.positive(g["viscosity"], "viscosity", "gas.viscosity")
+                           if "viscosity" in g else GasSettings.viscosity))
+        if heat_gas is not None and heat_gas.drag != "none":
+            return DragSettings(model=heat_gas.drag, velocity=heat_gas.velocity,
+                                density=heat_gas.density, viscosity=heat_gas.viscosity)
+        return None
 
     def check_particle_total(self, simulation: SimulationSettings, fills, factories) -> None:
         """The fills, and the factories' schedules until end_time (unless max_particles caps
@@ -1212,6 +1243,12 @@ class _Parser:
         if model not in ("fixed", "axial_plug_flow"):
             raise self.err(f"{key}.model", f"must be \"fixed\" or \"axial_plug_flow\", got \"{model}\"")
         gk["model"] = model
+        if "drag" in g:
+            drag = self.string(g["drag"], f"{key}.drag")
+            if drag not in DRAG_MODELS + ("none",):
+                raise self.err(f"{key}.drag", f"must be \"none\", \"di_felice\" or "
+                                              f"\"schiller_naumann\", got \"{drag}\"")
+            gk["drag"] = drag
         if model == "fixed":
             for k in PLUG_FLOW_KEYS:
                 if k in g:

@@ -141,6 +141,18 @@ class PlaneWall:
 
 
 @dataclass(frozen=True)
+class DragSettings:
+    """Drag from a gas on the particles (effects/drag.py), one-way coupled: ``model``
+    "di_felice" (local voidage from the cell grid) or "schiller_naumann" (dilute); the gas's
+    superficial ``velocity`` m/s (uniform), ``density`` kg/m^3 and ``viscosity`` Pa s. From
+    the mechanics-only [gas] section or from [thermal.gas] with ``drag``."""
+    model: str
+    velocity: Vec3
+    density: float
+    viscosity: float
+
+
+@dataclass(frozen=True)
 class GasSettings:
     """The gas particles exchange heat with by convection (air at 300 K by default).
 
@@ -167,6 +179,7 @@ class GasSettings:
     flow_area: float = 0.0               # m^2, the gas's free cross-section
     mass_flow: float = 0.0               # kg/s
     flow: str = "along_axis"             # "along_axis" | "against_axis"
+    drag: str = "none"                   # "none" | "di_felice" | "schiller_naumann"
 
     @property
     def plug_flow(self) -> bool:
@@ -419,6 +432,7 @@ class Scene:
     factories: tuple[Factory, ...] = ()
     outlets: tuple[Outlet, ...] = ()
     sensors: tuple[Sensor, ...] = ()
+    drag: Optional[DragSettings] = None
 
     def interaction(self, a: str, b: str) -> Interaction:
         return self.interactions[frozenset((a, b))]

@@ -1,0 +1,138 @@
+"""Drag from a gas on the particles (one-way coupled: the gas is given, the particles do not
+push it back). PHYSICS.md "Drag"; issue 15 item 3.
+
+With u the gas's interstitial velocity (its superficial velocity U over the local voidage
+eps), v the particle's, w = u - v the slip, d the diameter:
+
+    F = 1/2 C_D rho_g pi d^2/4 |w| w f(eps)
+
+    schiller_naumann (a dilute particle, f = 1):
+        C_D = 24/Re (1 + 0.15 Re^0.687) for Re < 1000, 0.44 above;   Re = rho_g |w| d / mu
+    di_felice (Di Felice 1994, a particle in a suspension or bed):
+        C_D = (0.63 + 4.8 / sqrt(Re))^2,  Re = rho_g eps |w| d / mu,
+        f = eps^(2 - chi),  chi = 3.7 - 0.65 exp(-(1.5 - log10 Re)^2 / 2)
+
+That F is the drag proper. The gas's pressure gradient, which in a steady flow through the
+particles balances the drag on them, -grad p = n F / eps (n particles per volume), pushes
+each particle too, with V_p (-grad p) = F (1 - eps)/eps: the particle feels F / eps in all
+("model B" of Zhou, Kuang, Chu & Yu 2010, J. Fluid Mech. 661:482; the hydrostatic part of
+the gas's weight, rho_g/rho_p ~ 5e-4 of gravity, is left out). Summed over a packed bed per
+unit volume this is the bed's pressure gradient, compared with Ergun in
+tests/verification/test_drag.py. The local voidage is the grid's: the solid volume
+of the particles whose centres lie in the 3 x 3 x 3 block of contact cells around the
+particle's cell (cells are >= one diameter, so the block spans >= 3 diameters and holds tens of
+particles in a bed), over the block's volume, clamped to [0.1, 1]. It is recomputed every step
+(the cell stage) from the cells assigned at the last rebuild (particles have moved less than
+half the skin since).
+"""
+import math
+
+import taichi as ti
+
+from .base import Effect
+
+
+class Drag(Effect):
+    name = "drag"
+    stage = "particle"
+
+    def __init__(self, description, drag):
+        super().__init__(description)
+        self.drag = drag
+
+    def allocate(self, engine, tree):
+        g = engine.grid
+        self.cell_solid = tree.add("drag_cell_solid", engine.real, g.n_cells)      # m^3
+        # the force on each particle in the last step, N (for the sensors; not state)
+        self.force = tree.add("drag_force", engine.real, engine.state.capacity, vector=True)
+        engine.drag = self
+        self._compile_cells(engine)
+
+    def _compile_cells(self, engine):
+        s = engine.state
+        cell_solid = self.cell_solid
+
+        @ti.kernel
+        def solid_per_cell(n: ti.i32):
+            for c in cell_solid:
+                cell_solid[c] = 0.0
+            for i in range(n):
+                if s.alive[i] != 0:
+                    r = s.radius[i]
+                    ti.atomic_add(cell_solid[s.cell[i]], 4.0 / 3.0 * math.pi * r * r * r)
+
+        self._solid_per_cell = solid_per_cell
+
+    def after_pairs(self, engine, n, dt):
+        """The cell stage: solid volume per contact cell (m^3)."""
+        self._solid_per_cell(n)
+
+    def particle_func(self, engine):
+        s = engine.state
+        g = engine.grid
+        d = self.drag
+        dims = ti.Vector(list(g.dims))
+        periodic = g.periodic
+        cell_volume = float(g.cell_size[0] * g.cell_size[1] * g.cell_size[2])
+        cell_solid = self.cell_solid
+        force_field = self.force
+        superficial = ti.Vector(list(d.velocity))
+        rho, mu = d.density, d.viscosity
+        di_felice = d.model == "di_felice"
+
+        @ti.func
+        def voidage(i):
+            c = s.cell[i]
+            cz = c % dims[2]
+            cy = (c // dims[2]) % dims[1]
+            cx = c // (dims[1] * dims[2])
+            solid = 0.0 * s.radius[i]
+            cells = 0
+            for offset in range(27):
+                nb = ti.Vector([cx + offset // 9 - 1, cy + (offset // 3) % 3 - 1,
+                                cz + offset % 3 - 1])
+                inside = True
+                for k in ti.static(range(3)):
+                    if ti.static(periodic[k]):
+                        nb[k] = (nb[k] + dims[k]) % dims[k]
+                    elif nb[k] < 0 or nb[k] >= dims[k]:
+                        inside = False
+                if inside:
+                    solid += cell_solid[(nb[0] * dims[1] + nb[1]) * dims[2] + nb[2]]
+                    cells += 1
+            return ti.min(ti.max(1.0 - solid / (cells * ti.static(cell_volume)), 0.1), 1.0)
+
+        @ti.func
+        def drag(i, load):
+            diameter = 2.0 * s.radius[i]
+            eps = 1.0 + 0.0 * diameter
+            if ti.static(di_felice):
+                eps = voidage(i)
+            slip = superficial / eps - s.velocity[i]
+            speed = slip.norm()
+            force = slip * 0.0
+            if speed > 0.0:
+                area = 0.25 * math.pi * diameter * diameter
+                if ti.static(di_felice):
+                    reynolds = ti.static(rho / mu) * eps * speed * diameter
+                    c_d = (0.63 + 4.8 / ti.sqrt(reynolds)) ** 2
+                    lg = ti.log(reynolds) / ti.log(10.0)
+                    chi = 3.7 - 0.65 * ti.exp(-0.5 * (1.5 - lg) ** 2)
+                    # drag, and the pressure gradient that balances it: F / eps (docstring)
+                    force = 0.5 * c_d * ti.static(rho) * area * speed * slip * eps ** (1.0 - chi)
+                else:
+                    reynolds = ti.static(rho / mu) * speed * diameter
+                    c_d = 0.44 + 0.0 * reynolds
+                    if reynolds < 1000.0:
+                        c_d = 24.0 / reynolds * (1.0 + 0.15 * reynolds ** 0.687)
+                    force = 0.5 * c_d * ti.static(rho) * area * speed * slip
+            force_field[i] = force
+            load.acceleration += force * s.inverse_mass[i]
+            return load
+
+        return drag
+
+    def total_force(self, n: int):
+        """The drag on all particles in the last step (N, a 3-vector)."""
+        import numpy as np
+        return self.force.to_numpy()[:n].astype(np.float64).sum(axis=0)
