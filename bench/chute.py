@@ -25,13 +25,16 @@ sys.path.insert(0, str(HERE))
 from chute_scene import write_chute_scene  # noqa: E402
 from lammps_chute import LammpsMissing, run_lammps  # noqa: E402
 
-SIZES = {"8k": dict(max_particles=8000), "32k": dict(copies=1), "128k": dict(copies=4)}
+SIZES = {"8k": dict(max_particles=8000), "32k": dict(copies=1), "128k": dict(copies=4),
+         "512k": dict(copies=16)}
 
 
-def run_taichi_dem(scene_path: str, steps: int, warmup: int, threads=None, precision="f32") -> dict:
+def run_taichi_dem(scene_path: str, steps: int, warmup: int, threads=None, precision="f32",
+                   arch: str = "cpu") -> dict:
     """One timed run of the chute scene: particle-steps per second after ``warmup`` steps."""
     import taichi_dem as td
-    sim = td.Simulation.from_toml(scene_path, threads=threads, precision=precision, h5="")
+    sim = td.Simulation.from_toml(scene_path, threads=threads, precision=precision, h5="",
+                                  arch=arch)
     try:
         sim.step(warmup)
         rebuilds0 = sim.engine.broadphase.rebuilds
@@ -60,6 +63,7 @@ def main(argv=None) -> int:
     p.add_argument("--no-lammps", action="store_true")
     p.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
     p.add_argument("--json", help="write all runs here")
+    p.add_argument("--arch", default="cpu", help="cpu or cuda (bench/gpu_check.sh)")
     a = p.parse_args(argv)
     if a.copies:
         a.sizes = ["32k" if a.copies == 1 else ("128k" if a.copies == 4 else "8k")]
@@ -69,7 +73,8 @@ def main(argv=None) -> int:
             scene = write_chute_scene(Path(tmp) / size, **SIZES[size])
             runs = []
             for r in range(a.repeats):
-                res = run_taichi_dem(str(scene), a.steps, a.warmup, a.threads, a.precision)
+                res = run_taichi_dem(str(scene), a.steps, a.warmup, a.threads, a.precision,
+                                     a.arch)
                 runs.append(res)
                 print(f"taichi_dem {size:>4s} run {r + 1}: {res['particle_steps_per_s'] / 1e6:6.2f} "
                       f"M particle-steps/s ({res['particles']} particles, {res['rebuilds']} "
