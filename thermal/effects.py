@@ -15,10 +15,13 @@ integrate stage:
 """
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import taichi as ti
 
 from taichi_dem.effects.base import Effect
+from taichi_dem.errors import DivergenceError
 from taichi_dem.effects.regions import region_test
 from taichi_dem.engine.precision import make_compensated_add
 
@@ -321,6 +324,22 @@ class Temperature(Effect):
                                 "inverse_thermal_mass": (False, "real")}
         if compensated:
             self.particle_fields["temperature_residual"] = (False, "f64")
+
+    def check(self, sim, measured: dict) -> None:
+        """The explicit update T += dt sum(Q)/(m c) is stable while dt sum(h)/(m c) < 1 for
+        every particle (h the conductances of its contacts, gas gap, convection, linearised
+        radiation; dt the thermal step S x simulation.dt): stop beyond 1, warn once past 0.5."""
+        ratio = measured["thermal_step_ratio"]
+        if ratio >= 1.0:
+            raise DivergenceError(
+                f"the temperature update is unstable at t = {sim.time:.6g} s: dt sum(h)/(m c) = "
+                f"{ratio:.3g} >= 1 for some particle (dt the thermal step, thermal.time_scale x "
+                f"simulation.dt). Reduce simulation.dt or thermal.time_scale (by {ratio:.2g}x at "
+                f"least), or raise heat_capacity/lower thermal_conductivity if they are scaled")
+        if ratio >= 0.5 and not getattr(sim, "_warned_thermal", False):
+            sim._warned_thermal = True
+            print(f"taichi-dem: warning: at t = {sim.time:.4g} s dt sum(h)/(m c) = {ratio:.3g}: "
+                  f"the temperature update is near its stability limit (1)", file=sys.stderr)
 
     def integrate_func(self, engine, drying_effect):
         """ti.func (i, heat W, conductance W/K, dt s): the particle's new temperature (and

@@ -23,7 +23,8 @@ contact; zeroed when the contact opens and on insertion), ``pair_fields`` (per n
 the partner's share of a pair effect's output). They are allocated only when an effect that
 declares them is enabled, permuted with the particles, carried across rebuilds and saved in
 checkpoints by name. ``tables``: material-pair tables (M x M) by name, uploaded from
-``table_values``. ``margin``: a contact margin (fraction of the particle radius) within which
+``table_values``. ``check(sim, measured)``: the effect's stability check at each output sample
+(the explicit temperature update's limit). ``margin``: a contact margin (fraction of the particle radius) within which
 non-touching contacts are handed to the law (heat through the gas near a contact).
 """
 from __future__ import annotations
@@ -56,6 +57,11 @@ class Effect:
 
     def allocate(self, engine, tree) -> None:
         """Allocate what the effect holds beyond its declared fields (e.g. a gas stream)."""
+
+    def check(self, sim, measured: dict) -> None:
+        """A stability check at every output sample (``measured``: Engine.measure()): raise
+        taichi_dem.DivergenceError to stop the run, or warn. Effects that have one override
+        it; the run driver attaches only those (run/simulation.py)."""
 
     def contact_func(self, engine):
         raise NotImplementedError(f"{self.name} is not a contact effect")

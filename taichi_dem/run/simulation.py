@@ -9,6 +9,7 @@ as long as they use the same arch and precision; ``close()`` frees a simulation'
 """
 from __future__ import annotations
 
+import functools
 import math
 import sys
 import time as _time
@@ -18,6 +19,7 @@ import numpy as np
 
 from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
+from ..effects.base import Effect
 from ..engine import backend
 from ..errors import DivergenceError, SceneError, StaleSimulationError
 from ..scene.loader import load_scene, parse_scene
@@ -207,6 +209,10 @@ class Simulation:
         self.divergence = DivergenceGuard(self)
         self.checkpointer = Checkpointer(self)
         self.checks += [self.divergence, self._check_state]
+        # the stability checks the enabled effects contribute (effects/base.py: Effect.check)
+        for effect in self.engine.effect_list:
+            if type(effect).check is not Effect.check:
+                self.checks.append(functools.partial(effect.check, self))
         self.after_sample.append(self.checkpointer.after_sample)
         self.on_divergence.append(self.checkpointer.diverged)
 
@@ -392,8 +398,6 @@ class Simulation:
                 f"Likely cause: a time step too large for the stiffest contact; reduce "
                 f"simulation.dt or rayleigh_fraction")
         self._check_contact_resolution(measured["max_speed"])
-        if self.engine.thermal:
-            self._check_thermal_step(measured["thermal_step_ratio"])
         if self.engine.mesh is not None:
             self._check_pinching(self.engine.mesh.deepest_overlaps(self.engine.count))
 
@@ -434,20 +438,6 @@ class Simulation:
             print(f"taichi-dem: warning: Biot number {worst:.2g} > 0.1: the particles' insides are "
                   f"not at one temperature, and the lumped model overestimates their heating rate",
                   file=sys.stderr)
-
-    def _check_thermal_step(self, ratio: float):
-        """Explicit temperature update: T += dt sum(Q)/(m c) is stable while dt sum(h)/(m c)
-        < 1 for every particle (h the conductances of its contacts and convection)."""
-        if ratio >= 1.0:
-            raise DivergenceError(
-                f"the temperature update is unstable at t = {self.time:.6g} s: dt sum(h)/(m c) = "
-                f"{ratio:.3g} >= 1 for some particle (dt the thermal step, thermal.time_scale x "
-                f"simulation.dt). Reduce simulation.dt or thermal.time_scale (by {ratio:.2g}x at "
-                f"least), or raise heat_capacity/lower thermal_conductivity if they are scaled")
-        if ratio >= 0.5 and not getattr(self, "_warned_thermal", False):
-            self._warned_thermal = True
-            print(f"taichi-dem: warning: at t = {self.time:.4g} s dt sum(h)/(m c) = {ratio:.3g}: "
-                  f"the temperature update is near its stability limit (1)", file=sys.stderr)
 
     def thermal_energy(self) -> float:
         """sum m c T over the particles, J (thermal scenes)."""

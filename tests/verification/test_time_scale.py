@@ -114,3 +114,12 @@ def test_time_scale_below_one_is_refused(tmp_path):
     text = _scene(tmp_path, 0.5)
     with pytest.raises(taichi_dem.SceneError, match="thermal.time_scale.*at least 1"):
         taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64")
+
+
+def test_a_time_scale_past_the_thermal_stability_limit_stops_the_run(tmp_path):
+    # x = S H dt/(m c) = 33 for S = 1e9: the explicit update would blow up; the temperature
+    # effect's check (thermal/effects.py) stops the run with the remedy
+    text = _scene(tmp_path, 1.0e9)
+    with pytest.raises(taichi_dem.DivergenceError, match="temperature update is unstable.*time_scale"):
+        with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
+            sim.run()
