@@ -205,3 +205,50 @@ def chute_station(p: dict, x0: float, x1: float, width: float, dz: float = 2.5e-
             "u_surface": float(u[top].mean()) if top.any() else float("nan"),
             "u_base": float(u[zc < d].mean()) if np.any(zc < d) else float("nan"),
             "flux": float(np.sum(mm * u) / (x1 - x0)), "phi": phi_body, "count": int(sel.sum())}
+
+
+def axial_profile(sim, sections: int, axis_point, axis_direction, length: float) -> dict:
+    """The solids along a drum's axis now: per section of ``length``/``sections`` (m) from
+    ``axis_point`` along unit ``axis_direction``, the particle count, the mass-weighted mean
+    temperature (K) and moisture (kg/kg, when drying) and the section centres (m)."""
+    p = sim.particles()
+    axis = np.asarray(axis_direction, float)
+    s = (p["position"] - np.asarray(axis_point, float)) @ axis
+    k = np.floor(s / length * sections).astype(int)
+    inside = (k >= 0) & (k < sections)
+    mass = p["mass"] if "mass" in p else p["radius"] ** 3
+    out = {"centre": (np.arange(sections) + 0.5) * length / sections,
+           "count": np.bincount(k[inside], minlength=sections)}
+    weight = np.bincount(k[inside], weights=mass[inside], minlength=sections)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if "temperature" in p:
+            out["temperature"] = np.bincount(k[inside], weights=(mass * p["temperature"])[inside],
+                                             minlength=sections) / weight
+        if "moisture" in p:
+            out["moisture"] = np.bincount(k[inside], weights=(mass * p["moisture"])[inside],
+                                          minlength=sections) / weight
+    return out
+
+
+def counter_current_gas_temperature(solids_temperature, solids_moisture, outlet_temperature,
+                                    outlet_moisture, solids_flow, gas_flow, solids_heat_capacity,
+                                    gas_heat_capacity, gas_inlet_temperature, latent_heat,
+                                    water_heat_capacity, evaporation_temperature):
+    """The steady 1-D heat balance of a counter-current dryer, section by section: the gas
+    temperature (K) at a cross-section where the solids are at ``solids_temperature`` (K) with
+    ``solids_moisture`` (kg/kg), from the balance of the part between it and the solids'
+    outlet (where the gas enters at ``gas_inlet_temperature``):
+
+        m_g c_g (T_g,in - T_g) = m_s [(c_s + X_out c_w) T_out - (c_s + X c_w) T_s]
+                                 + m_s (X - X_out) (L + c_w T_e)
+
+    m_s the dry solids' flow, m_g the gas's (kg/s), c in J/(kg K), L J/kg; the vapour leaves
+    with L + c_w T_e per kg (thermal/moisture.py). No heat from elsewhere (a burner's
+    radiation, walls) enters it: where the DEM's gas is hotter than this, the solids got heat
+    the gas did not give."""
+    t = np.asarray(solids_temperature, float)
+    x = np.asarray(solids_moisture, float)
+    gain = solids_flow * ((solids_heat_capacity + outlet_moisture * water_heat_capacity) * outlet_temperature
+                          - (solids_heat_capacity + x * water_heat_capacity) * t)
+    gain += solids_flow * (x - outlet_moisture) * (latent_heat + water_heat_capacity * evaporation_temperature)
+    return gas_inlet_temperature - gain / (gas_flow * gas_heat_capacity)

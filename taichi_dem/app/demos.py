@@ -293,6 +293,53 @@ class PaddleCoolerOptimised(Process):
 class DryerDrum(Process):
     name, scene = "dryer_drum", "dryer_drum.toml"
 
+    def summary(self, sim):
+        """The process summary, then the solids and the gas along the drum beside the steady
+        1-D counter-current heat balance dryer designers use (analysis.py)."""
+        super().summary(sim)
+        th = sim.scene.thermal
+        gas = th.gas if th is not None else None
+        if gas is None or not gas.plug_flow or not sim.scene.factories:
+            return
+        prof = analysis.axial_profile(sim, gas.cells, gas.axis_point, gas.axis_direction, gas.length)
+        s = sim.series
+        t_gas = np.asarray(s["gas/temperature"][-1], float)        # leaving each cell, along the axis
+        feed = sim.scene.factories[0]
+        material = sim.scene.materials[feed.material]
+        solids_flow = feed.mass_rate.at(sim.time)          # kg/s of dry solids
+        outlet = sim.scene.outlets[0].name if sim.scene.outlets else None
+        window = s["time"] >= 0.75 * s["time"][-1]
+        def mean_of(key, default):
+            if key not in s:
+                return default
+            v = np.asarray(s[key], float)[window]
+            v = v[np.isfinite(v)]
+            return float(np.mean(v)) if len(v) else default
+        last = np.nanmax(np.nonzero(prof["count"])[0]) if np.any(prof["count"]) else 0
+        t_out = mean_of(f"outlets/{outlet}/mean_temperature", float(prof["temperature"][last]))
+        x_out = mean_of(f"outlets/{outlet}/mean_moisture", float(prof.get("moisture", np.zeros(1))[last]))
+        x = prof.get("moisture", np.zeros(gas.cells))
+        balance = analysis.counter_current_gas_temperature(
+            prof["temperature"], np.nan_to_num(x), t_out, x_out, solids_flow, gas.mass_flow,
+            material.heat_capacity, gas.heat_capacity, gas.temperature, th.latent_heat,
+            th.water_heat_capacity, th.evaporation_temperature)
+        # the gas at a section's upstream face (it flows against the axis): leaving the cell
+        # behind it, i.e. entering this one
+        entering = np.append(t_gas[1:], gas.temperature) if gas.flow == "against_axis" else t_gas
+        print(f"summary: along the drum at t = {sim.time:.4g} s (solids {solids_flow * 3.6:.3g} t/h, "
+              f"leaving at {t_out:.4g} K, {x_out:.3g} kg/kg; gas {gas.mass_flow:g} kg/s in at "
+              f"{gas.temperature:.4g} K):")
+        print("  x m    particles  solids K  moisture  gas K (DEM)  gas K (1-D balance)  difference K")
+        for k in range(gas.cells):
+            if prof["count"][k] == 0:
+                continue
+            print(f"  {prof['centre'][k]:5.2f}  {prof['count'][k]:9d}  {prof['temperature'][k]:8.2f}  "
+                  f"{x[k]:8.4f}  {entering[k]:11.2f}  {balance[k]:19.2f}  {entering[k] - balance[k]:12.2f}")
+        print("  (the balance assumes a steady state and no heat but the gas's; the burner's "
+              "radiation heats the solids near the gas inlet and makes the DEM's gas hotter than "
+              "the balance there; before the bed has filled the drum the solids' profile is not "
+              "steady)")
+
 
 DEMOS: dict[str, type[Demo]] = {d.name: d for d in (PaddleCooler, PaddleCoolerOptimised,
                                                      DryerDrum, Pile, Hopper, Chute,
