@@ -66,3 +66,18 @@ def test_rates_and_beverloo():
     assert w == pytest.approx(0.58 * 1500 * math.sqrt(9.81) * 0.055 ** 2.5)
     n, a = analysis.fit_power_law(np.array([1.0, 2.0, 4.0]), 3.0 * np.array([1.0, 2.0, 4.0]) ** 2.5)
     assert n == pytest.approx(2.5) and a == pytest.approx(3.0)
+
+
+def test_counter_current_balance_closes():
+    # dry solids warming 300 -> 400 K at 1 kg/s (c 800) take 80 kW; gas at 2 kg/s (c 1000)
+    # entering at 900 K must leave 40 K cooler where the solids enter; where they are at
+    # 350 K, half of that. With evaporation the latent heat comes on top.
+    from taichi_dem.app.analysis import counter_current_gas_temperature
+    t = counter_current_gas_temperature([300.0, 350.0, 400.0], [0.0, 0.0, 0.0], 400.0, 0.0,
+                                        1.0, 2.0, 800.0, 1000.0, 900.0, 2.26e6, 4186.0, 373.15)
+    np.testing.assert_allclose(t, [860.0, 880.0, 900.0], rtol=1e-12)
+    wet = counter_current_gas_temperature([300.0], [0.01], 400.0, 0.0, 1.0, 2.0, 800.0, 1000.0,
+                                          900.0, 2.26e6, 4186.0, 373.15)
+    sensible = 1.0 * (800.0 * 400.0 - (800.0 + 0.01 * 4186.0) * 300.0)
+    latent = 0.01 * (2.26e6 + 4186.0 * 373.15)
+    assert wet[0] == pytest.approx(900.0 - (sensible + latent) / 2000.0, rel=1e-12)

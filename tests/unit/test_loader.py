@@ -728,3 +728,65 @@ def test_output_defaults():
     del d["output"]
     o = load(d).output
     assert o.interval == 0.05 and o.rrd is None and o.h5 is None and o.checkpoint_interval is None
+
+
+# --- issue 10 / 15 keys: gas gap model, time scale, drag ------------------------------------
+
+def _thermal_base():
+    d = base()
+    for m in d["materials"].values():
+        m.update(thermal_conductivity=0.3, heat_capacity=900.0)
+    d["walls"][0]["temperature"] = 300.0
+    d["particles"][0]["temperature"] = 700.0
+    d["thermal"] = {"conduction": True, "wall_conduction": True, "gas_gap": True}
+    return d
+
+
+def test_gas_gap_and_time_scale_keys_load():
+    d = _thermal_base()
+    d["thermal"].update(gas_gap_model="isothermal", gas_gap_pairs=False, time_scale=50.0)
+    th = load(d).thermal
+    assert (th.gas_gap_model, th.gas_gap_pairs, th.time_scale) == ("isothermal", False, 50.0)
+    assert load(_thermal_base()).thermal.gas_gap_model == "solid_resistance"
+
+
+@pytest.mark.parametrize("key, value, frag", [
+    ("gas_gap_model", "lumped", "\"isothermal\" or \"solid_resistance\""),
+    ("time_scale", 0.5, "at least 1"),
+    ("time_scale", -2.0, "must be > 0"),
+    ("gas_gap_pairs", "yes", "true or false"),
+])
+def test_gas_gap_and_time_scale_errors(key, value, frag):
+    d = _thermal_base()
+    d["thermal"][key] = value
+    error(d, f"thermal.{key}", frag)
+
+
+def test_gas_gap_keys_without_gas_gap():
+    d = _thermal_base()
+    d["thermal"].update(gas_gap=False, gas_gap_model="isothermal")
+    error(d, "thermal.gas_gap_model", "gas_gap is off")
+
+
+def test_mechanics_gas_drag_loads_and_refuses():
+    d = base()
+    d["gas"] = {"velocity": [0.0, 0.0, 1.5], "drag": "schiller_naumann", "density": 1.2}
+    g = load(d).drag
+    assert g.model == "schiller_naumann" and g.velocity == (0.0, 0.0, 1.5) and g.density == 1.2
+    d["gas"]["drag"] = "ergun"
+    error(d, "gas.drag", "\"di_felice\" or \"schiller_naumann\"")
+    d["gas"] = {"drag": "di_felice"}
+    error(d, "gas.velocity", "required")
+    d["gas"] = {"velocity": [0, 0, 1], "temperature": 300.0}
+    error(d, "gas.temperature", "unknown key")
+
+
+def test_thermal_gas_drag():
+    d = _thermal_base()
+    d["thermal"]["gas"] = {"model": "fixed", "velocity": [1.0, 0.0, 0.0], "drag": "di_felice"}
+    g = load(d).drag
+    assert g.model == "di_felice" and g.velocity == (1.0, 0.0, 0.0)
+    d["thermal"]["gas"]["drag"] = "stokes"
+    error(d, "thermal.gas.drag", "\"none\", \"di_felice\" or \"schiller_naumann\"")
+    d["thermal"]["gas"]["drag"] = "none"
+    assert load(d).drag is None
