@@ -7,6 +7,8 @@ the shaft's mean axial torque over [T0, UNTIL] and the median residence time of 
 that left by UNTIL. The test pins the seed-1 values with a tolerance from the scatter over
 seeds printed here.
 """
+from __future__ import annotations
+
 import sys
 from pathlib import Path
 
@@ -19,7 +21,10 @@ SCENE = ROOT / "demos" / "paddle_cooler.toml"
 T0, UNTIL = 6.0, 12.0
 
 
-def run(seed: int) -> tuple[float, float, int]:
+def run(seed: int, heat: dict | None = None) -> tuple[float, float, int]:
+    """(mean axial torque N m over [T0, UNTIL], median residence s, particles that left);
+    ``heat``, when given, receives the energy balance: the heat the ash lost and the heat into
+    the shell (J) and the shell's mean heat flow over [T0, UNTIL] (W)."""
     text = SCENE.read_text().replace("seed = 1", f"seed = {seed}")
     sim = td.Simulation.from_text(text, base_dir=str(SCENE.parent), arch="cpu")
     try:
@@ -29,6 +34,10 @@ def run(seed: int) -> tuple[float, float, int]:
         torque = float(np.mean(s["bodies/shaft/axial_torque"][window]))
         rec = sim.residence_times("residence")
         residence = float(np.median(rec[:, 2] - rec[:, 1]))
+        if heat is not None:
+            heat["particle_heat_loss"] = float(s["thermal/particle_heat_loss"][-1])
+            heat["wall_heat"] = float(s["thermal/wall_heat"][-1])
+            heat["shell_heat_flow"] = float(np.mean(s["bodies/shell/heat_flow"][window]))
         return torque, residence, len(rec)
     finally:
         sim.close()
