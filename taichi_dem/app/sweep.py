@@ -238,6 +238,7 @@ def _run_here(run_dir: str) -> int:
     ck_s = ck.write_seconds + ck.snapshot_seconds
     steps = sim.step_count               # from t = 0, also when continued from a checkpoint
     ck.save(sim=sim)                 # the final state: `taichi-dem resume` continues the run
+    _write_json(wall_file, {"step_s": step_s, "time": sim.time})   # (a kill now: resume from it)
     sim.close()
     facts = run_facts(str(h5))
     outputs = key_outputs(str(h5))
