@@ -40,8 +40,8 @@ from . import overrides as ov
 
 RESULTS_CSV = "results.csv"
 RESULTS_MD = "sweep.md"
-FIXED_COLUMNS = ("id", "status", "seed", "wall_s", "build_s", "step_s", "dt", "particles",
-                 "particle_steps_per_s", "resumed")
+FIXED_COLUMNS = ("id", "status", "seed", "wall_s", "build_s", "compile_s", "step_s", "cpu_s",
+                 "dt", "particles", "particle_steps_per_s", "resumed")
 
 
 @dataclass
@@ -65,7 +65,8 @@ def _slug(overrides: dict, seed: int) -> str:
     parts = []
     for k, v in overrides.items():
         leaf = k.split(".")[-1]
-        parts.append(f"{leaf}={ov._show(v)}")
+        shown = f"{v:.4g}" if isinstance(v, float) else ov._show(v)
+        parts.append(f"{leaf}={shown}")
     parts.append(f"seed={seed}")
     s = re.sub(r"[^A-Za-z0-9_.=+-]+", "-", "_".join(parts)).strip("-")
     return s[:60]
@@ -217,36 +218,59 @@ def _run_here(run_dir: str) -> int:
         return 3
     build_s = time.perf_counter() - t0
     prior_step = prior["step_s"] if prior else 0.0
+    prior_cpu = prior.get("cpu_s", 0.0) if prior else 0.0
     ck = sim.checkpointer
-    state = {"written": ck.written}
-    t_step = time.perf_counter()
+    start_steps = sim.step_count
+    state = {"written": ck.written, "first": None}
+    t_step, c_step = time.perf_counter(), time.process_time()
 
-    def note_checkpoint(sim):
+    def rates(now_wall, now_cpu, steps_now):
+        """(stepping wall s, stepping CPU s) of this segment's steps so far, kernel compilation
+        left out: Taichi compiles the step's kernels at their first launch, and dt and the
+        pair constants are compile-time constants, so a run whose dt no other run used pays
+        seconds of compilation inside its first output interval. The rate measured after the
+        first sample is applied to all of the segment's steps."""
+        n = steps_now - start_steps
+        first = state["first"]
+        if first is None or steps_now <= first[2]:
+            return now_wall - t_step, now_cpu - c_step
+        k = n / (steps_now - first[2])
+        ck_after = ck.write_seconds + ck.snapshot_seconds - first[3]
+        return (max(now_wall - first[0] - ck_after, 0.0) * k, max(now_cpu - first[1], 0.0) * k)
+
+    def after_sample(sim):
+        if state["first"] is None and sim.step_count > start_steps:
+            state["first"] = (time.perf_counter(), time.process_time(), sim.step_count,
+                              ck.write_seconds + ck.snapshot_seconds)
         # after each periodic checkpoint: the stepping time so far, for a resumed run's total
         if ck.written != state["written"]:
             state["written"] = ck.written
-            _write_json(wall_file, {"step_s": prior_step + time.perf_counter() - t_step,
+            w, c = rates(time.perf_counter(), time.process_time(), sim.step_count)
+            _write_json(wall_file, {"step_s": prior_step + w, "cpu_s": prior_cpu + c,
                                     "time": sim.time})
-    sim.after_sample.append(note_checkpoint)
+    sim.after_sample.append(after_sample)
     try:
         sim.run(spec["until"])
     except DivergenceError as err:
         sim.close()
         print(f"taichi-dem: {err}", file=sys.stderr)
         return 3
-    step_s = prior_step + time.perf_counter() - t_step
+    run_s = time.perf_counter() - t_step
+    w, c = rates(time.perf_counter(), time.process_time(), sim.step_count)
+    step_s, cpu_s = prior_step + w, prior_cpu + c
     ck_s = ck.write_seconds + ck.snapshot_seconds
     steps = sim.step_count               # from t = 0, also when continued from a checkpoint
     ck.save(sim=sim)                 # the final state: `taichi-dem resume` continues the run
-    _write_json(wall_file, {"step_s": step_s, "time": sim.time})   # (a kill now: resume from it)
+    _write_json(wall_file, {"step_s": step_s, "cpu_s": cpu_s, "time": sim.time})
     sim.close()
     facts = run_facts(str(h5))
     outputs = key_outputs(str(h5))
     rec = {"id": spec["id"], "status": "done", "overrides": spec["overrides"], "seed": spec["seed"],
            "labels": spec.get("labels", {}), "wall_s": prior_step + time.perf_counter() - t0,
-           "build_s": build_s, "step_s": step_s - ck_s, "checkpoint_s": ck_s, "steps": steps,
-           "dt": facts["dt"], "particles": facts["mean_particles"],
-           "particle_steps_per_s": steps * facts["mean_particles"] / max(step_s - ck_s, 1e-9),
+           "build_s": build_s, "compile_s": max(run_s - w - ck_s, 0.0), "step_s": step_s,
+           "cpu_s": cpu_s, "checkpoint_s": ck_s, "steps": steps, "dt": facts["dt"],
+           "particles": facts["mean_particles"],
+           "particle_steps_per_s": steps * facts["mean_particles"] / max(step_s, 1e-9),
            "precision": facts["precision"], "resumed": prior is not None, "outputs": outputs}
     _write_json(d / "done.json", rec)
     return 0
@@ -258,7 +282,11 @@ def make_client(scheduler: Optional[str] = None, workers: Optional[int] = None):
     ``workers`` processes (default: the number of cores), one thread each."""
     from distributed import Client, LocalCluster
     if scheduler:
-        return Client(scheduler)
+        try:
+            return Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError, ValueError) as err:
+            raise SceneError("--scheduler", scheduler,
+                             f"cannot reach the Dask scheduler ({type(err).__name__}: {err})") from None
     n = workers or os.cpu_count() or 1
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                            dashboard_address=None)
@@ -407,8 +435,11 @@ def write_table(records: list[dict], out_dir: str, title: str, command: str) -> 
     md = [f"# {title}", "", f"`{command}`", "",
           f"{sum(r['status'] == 'done' for r in records)} of {len(records)} runs finished"
           f" ({sum(bool(r.get('reused')) for r in records)} from an earlier sweep). "
-          "wall_s: the whole run (start-up, kernel compilation, stepping); step_s: stepping "
-          "only; particle-steps/s over step_s; outputs: means over the last 25 % of the run "
+          "wall_s: the whole run (start-up, building, stepping, reading the outputs back); "
+          "build_s: building the simulation; compile_s: kernel compilation at the first "
+          "steps (a new dt compiles anew); step_s, cpu_s: stepping wall and CPU seconds, "
+          "compilation left out (the rate after the first output sample times all steps); "
+          "particle-steps/s over step_s; outputs: means over the last 25 % of the run "
           "(taichi_dem/app/outputs.py).", "",
           "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     md += ["| " + " | ".join(_fmt(v).replace("|", "/") for v in row) + " |" for row in rows]
@@ -479,7 +510,8 @@ def _print_summary(records: list[dict]) -> None:
         o = " ".join(f"{k}={ov._show(v)}" for k, v in r.get("overrides", {}).items())
         if r["status"] == "done":
             outs = ", ".join(f"{k} {v:.4g}" for k, v in r.get("outputs", {}).items())
-            print(f"{r['id']}: {o} seed {r['seed']}: {r['step_s']:.2f} s stepping, {outs}")
+            print(f"{r['id']}: {o} seed {r['seed']}: {r['step_s']:.2f} s stepping "
+                  f"({r.get('cpu_s', math.nan):.2f} s CPU), {outs}")
         else:
             print(f"{r['id']}: {o} seed {r['seed']}: FAILED: {r.get('message', '')}")
 

@@ -4,8 +4,10 @@ The **reference** is the scene as written at the most accurate precision (``simu
 = "f64"``), run with ``--seeds N`` placement seeds; its seed-to-seed scatter says how large a
 difference the study can resolve at all. Each **variant** is the reference with one knob
 changed, run with the same seeds. Per variant: the median stepping wall time over the seeds
-(``step_s``: kernel compilation and start-up left out, they do not grow with the run), the
-speed-up against the reference's median, and per key output (``outputs.py``) the relative
+(``step_s``: kernel compilation and start-up left out, they do not grow with the run) and
+CPU time (``cpu_s``, likewise), the speed-up in CPU time against the reference's median (CPU
+seconds of a one-thread run are what its wall time would be on an idle core; on a shared
+machine the wall time also counts the other jobs' turns), and per key output (``outputs.py``) the relative
 error of the variant's median against the reference's median. The recommended setting of a
 knob is its fastest setting (the reference's included) whose error stays within
 ``--tolerance`` on every output.
@@ -237,11 +239,12 @@ class Row:
     failed: list
     dt: float
     particles: float
-    step_s: float            # median stepping wall time over the seeds, s
+    step_s: float            # median stepping wall time over the seeds, s (compilation left out)
     wall_s: float            # median whole-run wall time, s
-    speedup: float           # reference step_s / this step_s
+    speedup: float           # reference cpu_s / this cpu_s
     values: dict             # output -> median over seeds
     errors: dict             # output -> (median - reference median) / |reference median|
+    cpu_s: float = math.nan  # median stepping CPU time over the seeds, s (compilation left out)
 
     @property
     def worst(self) -> float:
@@ -274,7 +277,7 @@ def aggregate(records: list[dict]) -> tuple[Row, list[Row], dict]:
         xs = xs[np.isfinite(xs)]
         m = abs(float(np.mean(xs))) if len(xs) else math.nan
         scatter[o] = float(np.std(xs, ddof=1) / m) if len(xs) > 1 and m > 0 else math.nan
-    ref_step = _median([r["step_s"] for r in ref_ok])
+    ref_cpu = _median([r.get("cpu_s", math.nan) for r in ref_ok])
 
     def row(knob, setting, recs):
         ok = [r for r in recs if r["status"] == "done"]
@@ -282,13 +285,14 @@ def aggregate(records: list[dict]) -> tuple[Row, list[Row], dict]:
         errs = {o: ((vals[o] - ref_vals[o]) / abs(ref_vals[o])
                     if ref_vals[o] and math.isfinite(ref_vals[o]) else math.nan) for o in outs}
         step = _median([r["step_s"] for r in ok])
+        cpu = _median([r.get("cpu_s", math.nan) for r in ok])
         return Row(knob=knob, setting=setting, runs=len(ok),
                    failed=[r.get("message", "") for r in recs if r["status"] != "done"],
                    dt=_median([r.get("dt") for r in ok]),
                    particles=_median([r.get("particles") for r in ok]), step_s=step,
                    wall_s=_median([r.get("wall_s") for r in ok]),
-                   speedup=ref_step / step if step and math.isfinite(step) else math.nan,
-                   values=vals, errors=errs)
+                   speedup=ref_cpu / cpu if cpu and math.isfinite(cpu) else math.nan,
+                   values=vals, errors=errs, cpu_s=cpu)
     ref = row("reference", "reference", ref_recs)
     return ref, [row(k, s, recs) for (k, s), recs in groups.items()], scatter
 
@@ -298,7 +302,7 @@ def recommend(ref: Row, rows: list[Row], tolerance: float) -> Row:
     is within ``tolerance`` (the reference itself when none is)."""
     best = ref
     for r in rows:
-        if r.runs and not r.failed and r.worst <= tolerance and r.step_s < best.step_s:
+        if r.runs and not r.failed and r.worst <= tolerance and r.cpu_s < best.cpu_s:
             best = r
     return best
 
@@ -323,8 +327,9 @@ def write_report(out_dir: str, scene_path: str, command: str, ref: Row, rows: li
              f"`{command}`", "",
              f"Reference: the scene's own settings at f64 (`simulation.precision = \"f64\"`), "
              f"{seeds} seed(s). Every variant changes one knob from the reference and runs with "
-             f"the same seeds. Times are medians over the seeds of the stepping wall time "
-             f"(start-up and kernel compilation left out); errors compare the median of each "
+             f"the same seeds. Times are medians over the seeds of the stepping CPU and wall "
+             f"time (start-up and kernel compilation left out); speed-ups are in CPU time "
+             f"(one thread per run: an idle core's wall time); errors compare the median of each "
              f"output over the seeds with the reference's median. Scatter: the reference's "
              f"seed-to-seed relative standard deviation; an error below it is not resolved. "
              f"Recommended: the fastest setting within {tolerance:.0%} of the reference on "
@@ -332,22 +337,26 @@ def write_report(out_dir: str, scene_path: str, command: str, ref: Row, rows: li
              f"times carry the noise of whatever else runs.", "",
              "## Reference", "",
              f"dt {_g(ref.dt)} s, {_g(ref.particles)} particles (mean over the run), stepping "
-             f"{_g(ref.step_s, 3)} s (whole run {_g(ref.wall_s, 3)} s), {ref.runs} run(s)", "",
+             f"{_g(ref.cpu_s, 3)} s CPU, {_g(ref.step_s, 3)} s wall (whole run "
+             f"{_g(ref.wall_s, 3)} s), {ref.runs} run(s)", "",
              "| output | reference (median) | seed-to-seed scatter |", "|---|---|---|"]
     for o in outs:
         u = unit(o)
         lines.append(f"| {o} | {_g(ref.values[o])} {u} | {_pct(scatter.get(o, math.nan)).lstrip('+')} |")
-    header = (["setting", "dt [s]", "particles", "step [s]", "speed-up"] + [f"{o} error" for o in outs])
+    header = (["setting", "dt [s]", "particles", "cpu [s]", "wall [s]", "speed-up"]
+              + [f"{o} error" for o in outs])
     for knob in dict.fromkeys(r.knob for r in rows):
         krows = [r for r in rows if r.knob == knob]
         lines += ["", f"## {knob}", "", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-        lines.append("| reference | " + " | ".join([_g(ref.dt), _g(ref.particles, 5), _g(ref.step_s, 3), "1"]
+        lines.append("| reference | " + " | ".join([_g(ref.dt), _g(ref.particles, 5), _g(ref.cpu_s, 3),
+                                                    _g(ref.step_s, 3), "1"]
                                                    + ["0" for _ in outs]) + " |")
         for r in krows:
             if not r.runs:
                 lines.append(f"| {r.setting} | failed: {'; '.join(r.failed)[:300]} |" + " |" * (len(header) - 2))
                 continue
-            cells = [r.setting, _g(r.dt), _g(r.particles, 5), _g(r.step_s, 3), _g(r.speedup, 3)]
+            cells = [r.setting, _g(r.dt), _g(r.particles, 5), _g(r.cpu_s, 3), _g(r.step_s, 3),
+                     _g(r.speedup, 3)]
             cells += [_pct(r.errors[o]) for o in outs]
             lines.append("| " + " | ".join(cells) + " |")
         best = recommend(ref, krows, tolerance)
@@ -376,7 +385,7 @@ def write_report(out_dir: str, scene_path: str, command: str, ref: Row, rows: li
 
 def plot(out_dir: str, ref: Row, rows: list[Row], scatter: dict, tolerance: float) -> list[str]:
     """Per output a PNG ``tradeoffs_<output>.png``: |relative error| (%) against the stepping
-    wall time (s), one curve per knob through its settings in the knob's order, the reference
+    CPU time (s), one curve per knob through its settings in the knob's order, the reference
     as a star at zero error, its seed-to-seed scatter as a band, the tolerance as a line."""
     import matplotlib
     matplotlib.use("Agg")
@@ -389,12 +398,12 @@ def plot(out_dir: str, ref: Row, rows: list[Row], scatter: dict, tolerance: floa
         if math.isfinite(sc):
             ax.axhspan(0, 100 * sc, color="0.85", label="reference seed-to-seed scatter")
         ax.axhline(100 * tolerance, color="0.4", ls="--", lw=1, label=f"tolerance {tolerance:.0%}")
-        ax.plot([ref.step_s], [0.0], "k*", ms=12, label="reference", zorder=5)
+        ax.plot([ref.cpu_s], [0.0], "k*", ms=12, label="reference", zorder=5)
         for knob in dict.fromkeys(r.knob for r in rows):
             # in the knob's own order (dt x0.5, x1.5, ...), not sorted by time
-            pts = [(r.step_s, 100 * abs(r.errors[o]), r.setting) for r in rows
+            pts = [(r.cpu_s, 100 * abs(r.errors[o]), r.setting) for r in rows
                    if r.knob == knob and r.runs and math.isfinite(r.errors[o])
-                   and math.isfinite(r.step_s)]
+                   and math.isfinite(r.cpu_s)]
             if not pts:
                 continue
             line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=knob)
@@ -402,7 +411,7 @@ def plot(out_dir: str, ref: Row, rows: list[Row], scatter: dict, tolerance: floa
                 ax.annotate(s, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7,
                             color=line.get_color())
         ax.set_xscale("log")
-        ax.set_xlabel("stepping wall time per run, s (median over seeds; log)")
+        ax.set_xlabel("stepping CPU time per run, s (median over seeds; compilation left out; log)")
         ax.set_ylabel(f"|relative error| of {o}, %")
         ax.set_title(f"{o} [{unit(o)}]: error against cost, one knob at a time")
         ax.legend(fontsize=8)
@@ -475,7 +484,7 @@ def cmd_tradeoffs(args) -> int:
         print(f"taichi-dem: {err}", file=sys.stderr)
         return 1
     ref = res["reference"]
-    print(f"reference: step {ref.step_s:.3g} s; " + ", ".join(f"{o} {v:.4g}" for o, v in ref.values.items()))
+    print(f"reference: stepping {ref.cpu_s:.3g} s CPU; " + ", ".join(f"{o} {v:.4g}" for o, v in ref.values.items()))
     for r in res["rows"]:
         print(f"{r.knob:10s} {r.setting:28s} speed-up {_g(r.speedup, 3):>6s}  worst error "
               f"{_pct(r.worst).lstrip('+')}" + (f"  ({len(r.failed)} failed)" if r.failed else ""))
