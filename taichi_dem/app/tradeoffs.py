@@ -56,6 +56,7 @@ from . import overrides as ov
 REFERENCE_OVERRIDES = {"simulation.precision": "f64"}
 KNOB_NAMES = ("timestep", "precision", "modulus", "skin", "size", "mobility", "time_scale")
 DEFAULT_TOLERANCE = 0.05
+MIN_SPEEDUP = 1.05     # a setting must beat the reference by this factor to be recommended
 
 
 @dataclass
@@ -297,12 +298,14 @@ def aggregate(records: list[dict]) -> tuple[Row, list[Row], dict]:
     return ref, [row(k, s, recs) for (k, s), recs in groups.items()], scatter
 
 
-def recommend(ref: Row, rows: list[Row], tolerance: float) -> Row:
-    """The fastest of ``rows`` and the reference whose worst relative error over the outputs
-    is within ``tolerance`` (the reference itself when none is)."""
+def recommend(ref: Row, rows: list[Row], tolerance: float, min_speedup: float = MIN_SPEEDUP) -> Row:
+    """The fastest of ``rows`` whose worst relative error over the outputs is within
+    ``tolerance`` and which is at least ``min_speedup`` times faster than the reference (in
+    CPU time; a smaller gain is within the timing noise); the reference itself when none is."""
     best = ref
     for r in rows:
-        if r.runs and not r.failed and r.worst <= tolerance and r.cpu_s < best.cpu_s:
+        if (r.runs and not r.failed and r.worst <= tolerance and r.speedup >= min_speedup
+                and r.cpu_s < best.cpu_s):
             best = r
     return best
 
@@ -333,7 +336,7 @@ def write_report(out_dir: str, scene_path: str, command: str, ref: Row, rows: li
              f"output over the seeds with the reference's median. Scatter: the reference's "
              f"seed-to-seed relative standard deviation; an error below it is not resolved. "
              f"Recommended: the fastest setting within {tolerance:.0%} of the reference on "
-             f"every output. Runs share the machine's cores (one run per worker at a time), so "
+             f"every output and at least {MIN_SPEEDUP:g}x faster than it (less is timing noise). Runs share the machine's cores (one run per worker at a time), so "
              f"times carry the noise of whatever else runs.", "",
              "## Reference", "",
              f"dt {_g(ref.dt)} s, {_g(ref.particles)} particles (mean over the run), stepping "
@@ -361,8 +364,8 @@ def write_report(out_dir: str, scene_path: str, command: str, ref: Row, rows: li
             lines.append("| " + " | ".join(cells) + " |")
         best = recommend(ref, krows, tolerance)
         if best is ref:
-            lines += ["", f"Recommended: the reference setting (no {knob} setting is faster within "
-                          f"{tolerance:.0%} on every output)."]
+            lines += ["", f"Recommended: the reference setting (no {knob} setting is at least "
+                          f"{MIN_SPEEDUP:g}x faster within {tolerance:.0%} on every output)."]
         else:
             lines += ["", f"Recommended: **{best.setting}**, {best.speedup:.3g}x faster, worst "
                           f"error {100 * best.worst:.1f} % (within {tolerance:.0%})."]
@@ -408,7 +411,7 @@ def plot(out_dir: str, ref: Row, rows: list[Row], scatter: dict, tolerance: floa
                 continue
             line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=knob)
             for x, y, s in pts:
-                ax.annotate(s, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7,
+                ax.annotate(s.split(" (")[0], (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7,
                             color=line.get_color())
         ax.set_xscale("log")
         ax.set_xlabel("stepping CPU time per run, s (median over seeds; compilation left out; log)")

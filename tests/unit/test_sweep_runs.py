@@ -185,7 +185,9 @@ def test_recommend_picks_the_fastest_within_tolerance():
         return tradeoffs.Row("k", setting, 2, [], 1e-5, 10, step_s=2 * step, wall_s=3 * step,
                              speedup=1.0 / step, values={"a": 1.0}, errors={"a": err}, cpu_s=step)
     ref = row("reference", 1.0, 0.0)
-    rows = [row("x", 0.5, 0.03), row("y", 0.2, 0.2), row("z", 0.4, -0.04), row("w", 2.0, 0.0)]
+    rows = [row("x", 0.5, 0.03), row("y", 0.2, 0.2), row("z", 0.4, -0.04), row("w", 2.0, 0.0),
+            row("v", 0.98, 0.0)]
     assert tradeoffs.recommend(ref, rows, 0.05).setting == "z"
-    assert tradeoffs.recommend(ref, rows, 0.01).setting == "reference"
+    assert tradeoffs.recommend(ref, rows, 0.01).setting == "reference"     # v: 2 %, noise
+    assert tradeoffs.recommend(ref, rows, 0.01, min_speedup=1.0).setting == "v"
     assert tradeoffs.recommend(ref, rows, 0.5).setting == "y"
