@@ -1,7 +1,8 @@
 """Command line: ``taichi-dem run|check|resume|demo|bench|sweep|tradeoffs`` (CONTRACT.md).
 
 Exit status: 0 success; 2 bad input (one paragraph naming file, key and reason, never a
-traceback); 3 the simulation diverged.
+traceback); 3 the simulation diverged; ``sweep``: 1 when some of its runs failed (the table
+lists them with their messages).
 """
 from __future__ import annotations
 
