@@ -258,9 +258,11 @@ def _median(xs) -> float:
     return float(np.median(xs)) if xs else math.nan
 
 
-def aggregate(records: list[dict]) -> tuple[Row, list[Row], dict]:
+def aggregate(records: list[dict], outputs: Optional[list[str]] = None) -> tuple[Row, list[Row], dict]:
     """(reference row, variant rows in planned order, reference scatter {output: relative
-    sample standard deviation over the seeds, NaN with one seed}) from sweep records."""
+    sample standard deviation over the seeds, NaN with one seed}) from sweep records, over
+    ``outputs`` (default every output the reference reported; a name it did not report is a
+    SceneError listing those it did)."""
     groups: dict[tuple, list[dict]] = {}
     for r in records:
         lab = r.get("labels", {})
@@ -271,6 +273,12 @@ def aggregate(records: list[dict]) -> tuple[Row, list[Row], dict]:
         msgs = "; ".join(r.get("message", "") for r in ref_recs)
         raise RuntimeError(f"the reference runs failed: {msgs}")
     outs = list(dict.fromkeys(k for r in ref_ok for k in r["outputs"]))
+    if outputs:
+        for o in outputs:
+            if o not in outs:
+                raise SceneError("--outputs", o, f"not an output of this scene; it has: "
+                                                 f"{', '.join(outs)}")
+        outs = list(outputs)
     ref_vals = {o: _median([r["outputs"].get(o, math.nan) for r in ref_ok]) for o in outs}
     scatter = {}
     for o in outs:
@@ -438,6 +446,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="placement seeds per setting (default 2; the reference's scatter needs >= 2)")
     p.add_argument("--duration", type=float, metavar="S", help="simulated time per run, s "
                                                                "(default the scene's end_time)")
+    p.add_argument("--outputs", nargs="+", metavar="NAME",
+                   help="the outputs the errors and the recommendation are about (default all "
+                        "the scene reports, e.g. drum/axial_torque particles/kinetic_energy)")
     p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
                    help=f"relative error a recommended setting may have (default {DEFAULT_TOLERANCE})")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT")
@@ -450,6 +461,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run_tradeoffs(scene_path: str, out_dir: str, knobs: list[str], seeds: int,
                   duration: Optional[float], tolerance: float, client=None, *, command: str = "",
+                  outputs: Optional[list[str]] = None,
                   scheduler=None, workers=None, threads: int = 1, arch: str = "cpu",
                   progress: bool = True, timeout=None) -> dict:
     """Plan, run (on the sweep), aggregate, write ``tradeoffs.md``, the sweep's tables and the
@@ -463,7 +475,7 @@ def run_tradeoffs(scene_path: str, out_dir: str, knobs: list[str], seeds: int,
     records = run_sweep(ref_specs + variants, out_dir, client, scheduler=scheduler,
                         workers=workers, progress=progress, timeout=timeout)
     write_table(records, out_dir, f"Tradeoff runs of {scene_path}", command)
-    ref, rows, scatter = aggregate(records)
+    ref, rows, scatter = aggregate(records, outputs)
     plots = plot(out_dir, ref, rows, scatter, tolerance)
     report = write_report(out_dir, scene_path, command, ref, rows, scatter, skipped, tolerance,
                           seeds, plots)
@@ -480,7 +492,8 @@ def cmd_tradeoffs(args) -> int:
         f"taichi-dem tradeoffs {args.scene}"
     try:
         res = run_tradeoffs(args.scene, args.out, knobs, args.seeds, args.duration, args.tolerance,
-                            command=command, scheduler=args.scheduler, workers=args.workers,
+                            command=command, outputs=args.outputs, scheduler=args.scheduler,
+                            workers=args.workers,
                             threads=threads_per_run(args.workers, args.threads), arch=args.arch,
                             progress=not args.quiet, timeout=args.timeout)
     except RuntimeError as err:

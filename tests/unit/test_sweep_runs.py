@@ -171,6 +171,12 @@ def test_tradeoffs_report_numbers(client, tmp_path):
         assert f"| {row.speedup:.3g} |" in line
     assert "## size" in md and "Recommended" in md
     assert "mobility" in md.split("## Skipped")[1]
+    # the study restricted to one output: same numbers, one plot; an unknown name exits 2
+    ref1, rows1, _ = tradeoffs.aggregate(recs, ["floor/load"])
+    assert list(ref1.values) == ["floor/load"]
+    assert rows1[0].errors["floor/load"] == rows[rows1[0].setting].errors["floor/load"]
+    with pytest.raises(tradeoffs.SceneError, match="particles/kinetic_energy"):
+        tradeoffs.aggregate(recs, ["drum/axial_torque"])
     import matplotlib.image
     assert len(res["plots"]) == len(ref.values)
     for p in res["plots"]:
