@@ -22,7 +22,8 @@ does not apply, is skipped and the report says why):
                 the Rayleigh time) is skipped with its message.
 ``precision``   f32 against the f64 reference.
 ``modulus``     Young's modulus of every particle material (those of fills and factories)
-                divided by 10, 100, 1000 (the time step grows as sqrt of that). In a thermal
+                divided by 10, 100, 1000 (the automatic time step grows with it; an explicit
+                dt is scaled as the Hertz contact time, by factor^0.4). In a thermal
                 scene each twice: with the conduction correction (``real_youngs_modulus`` =
                 the unsoftened value, the scene's own when it gives one, else the reference's
                 modulus; ``contact_radius_correction`` as the scene has it) and without it
@@ -31,7 +32,8 @@ does not apply, is skipped and the report says why):
 ``size``        coarse graining: every fill's and factory's radii (constant, distribution, or
                 sizes table) times 1.5 and 2; fill counts divided by the factor cubed (same
                 fill mass); factory mass rates unchanged (the particle rate falls by the cube),
-                so the mass flows match. Interactions, materials and geometry are unchanged.
+                so the mass flows match; an explicit dt is scaled by the factor (the contact
+                time grows as the radius). Interactions, materials and geometry are unchanged.
 ``mobility``    ``mobility.enabled = true`` (mobility skipping; the loader refuses it until it
                 exists, then the knob runs).
 ``time_scale``  ``thermal.time_scale`` 10, 100 (thermal scenes; likewise a hook until the key
@@ -94,9 +96,19 @@ def knob_precision(doc: dict, info: dict):
     return [Variant("precision", "f32", {"simulation.precision": "f32"})]
 
 
+def _explicit_dt(doc: dict) -> Optional[float]:
+    """The scene's explicit ``simulation.dt`` (s), or None when it is automatic."""
+    from ..scene.units import parse_quantity
+    dt = doc.get("simulation", {}).get("dt")
+    if dt is None or (isinstance(dt, str) and dt.strip().lower() == "auto"):
+        return None
+    return parse_quantity(dt, "time")
+
+
 def knob_modulus(doc: dict, info: dict):
     from ..scene.units import parse_quantity
     mats = _particle_materials(doc)
+    fixed_dt = _explicit_dt(doc)
     if not mats:
         return "no particle material (no fill and no factory)"
     materials = doc.get("materials", {})
@@ -110,6 +122,10 @@ def knob_modulus(doc: dict, info: dict):
             given = materials[m].get("real_youngs_modulus")
             real[f"materials.{m}.real_youngs_modulus"] = (parse_quantity(given, "pressure")
                                                           if given is not None else e)
+        if fixed_dt is not None:
+            # an explicit dt would not follow the softer contacts: scale it as the Hertz
+            # contact time, t_c ~ E*^(-2/5), so the steps per contact stay the scene's
+            base["simulation.dt"] = fixed_dt * factor ** 0.4
         if thermal:
             out.append(Variant("modulus", f"E/{factor}, corrected", {**base, **real}))
             out.append(Variant("modulus", f"E/{factor}, uncorrected",
@@ -157,9 +173,10 @@ def knob_size(doc: dict, info: dict):
         return "a fill is read from a particle file (its positions cannot be coarse-grained here)"
     if not fills and not factories:
         return "no fill and no factory"
+    fixed_dt = _explicit_dt(doc)
     out = []
     for f in (1.5, 2.0):
-        o = {}
+        o = {} if fixed_dt is None else {"simulation.dt": fixed_dt * f}   # t_c ~ R
         for i, t in enumerate(fills):
             o[f"particles.{i}.radius"] = _scaled_radius(t["radius"], f)
             o[f"particles.{i}.count"] = max(1, int(round(int(t["count"]) / f ** 3)))

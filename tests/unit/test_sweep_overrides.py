@@ -212,3 +212,24 @@ def test_tradeoff_planning_timestep_modulus_and_hooks():
                 assert glass.real_youngs_modulus == pytest.approx(1e7)
         # thermal.time_scale: the loader does not know the key yet -> skipped, with its message
         assert any(k.startswith("time_scale") for k in skipped)
+
+
+def test_explicit_dt_follows_softening_and_coarse_graining():
+    """The cooler gives dt = 1.2e-4 s explicitly: a softer modulus scales it as the Hertz
+    contact time (factor^0.4), coarser particles by the radius factor; with an automatic dt
+    (the box) no dt is set."""
+    cooler = str(DEMOS / "paddle_cooler.toml")
+    _, variants, skipped = tradeoffs.plan_study(cooler, ["modulus", "size"], 1, 1.0)
+    assert not skipped
+    got = {v.labels["setting"]: parse_scene(v.text, source=cooler) for v in variants}
+    assert got["E/100, corrected"].simulation.dt == pytest.approx(1.2e-4 * 100 ** 0.4)
+    assert got["E/10, uncorrected"].simulation.dt == pytest.approx(1.2e-4 * 10 ** 0.4)
+    assert got["radius x2"].simulation.dt == pytest.approx(2.4e-4)
+    assert got["radius x2"].factories[0].radius.mean == pytest.approx(0.03)
+    # the cooler gives no real_youngs_modulus: the correction refers to the reference's E
+    ref_e = load_scene(cooler).materials["ash"].youngs_modulus
+    assert got["E/100, corrected"].materials["ash"].real_youngs_modulus == pytest.approx(ref_e)
+    assert got["E/100, corrected"].materials["ash"].youngs_modulus == pytest.approx(ref_e / 100)
+    assert got["E/100, uncorrected"].thermal.contact_radius_correction == "none"
+    _, variants, _ = tradeoffs.plan_study(str(BOX), ["modulus", "size"], 1, 0.02)
+    assert all("simulation.dt" not in v.overrides for v in variants)
