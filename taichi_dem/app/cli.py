@@ -1,7 +1,8 @@
-"""Command line: ``taichi-dem run|check|resume|demo|bench`` (CONTRACT.md).
+"""Command line: ``taichi-dem run|check|resume|demo|bench|sweep|tradeoffs`` (CONTRACT.md).
 
 Exit status: 0 success; 2 bad input (one paragraph naming file, key and reason, never a
-traceback); 3 the simulation diverged.
+traceback); 3 the simulation diverged; ``sweep``: 1 when some of its runs failed (the table
+lists them with their messages).
 """
 from __future__ import annotations
 
@@ -57,6 +58,11 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--copies", type=float, default=1.0, help="chute size in units of 32k particles")
     b.add_argument("--threads", type=int)
     b.add_argument("--precision", default="f32", choices=["f32", "f64"])
+    from . import sweep, tradeoffs
+    sw = sub.add_parser("sweep", help="many runs of a scene with keys changed, on Dask")
+    sweep.add_arguments(sw)
+    tr = sub.add_parser("tradeoffs", help="what accuracy costs in time: one knob at a time")
+    tradeoffs.add_arguments(tr)
     return p
 
 
@@ -83,6 +89,12 @@ def _main(argv=None) -> int:
             return cmd_resume(args)
         if args.command == "bench":
             return cmd_bench(args)
+        if args.command == "sweep":
+            from .sweep import cmd_sweep
+            return cmd_sweep(args)
+        if args.command == "tradeoffs":
+            from .tradeoffs import cmd_tradeoffs
+            return cmd_tradeoffs(args)
     except SceneError as err:
         return _fail(str(err), 2)
     except KeyboardInterrupt:

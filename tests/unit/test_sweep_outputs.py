@@ -1,0 +1,42 @@
+"""The sweep's key outputs read back from an HDF5 results file (taichi_dem/app/outputs.py)
+are the numbers the demo summary prints (app/summaries.process_summary) for the same run:
+residence time, mass flows of a sensor and an outlet, outlet temperature. The scene is
+tests/verification/test_process.py's free fall (spheres inserted too sparsely to touch), with
+heat on so the outlet temperature is recorded."""
+import math
+import sys
+from pathlib import Path
+
+import pytest
+
+import taichi_dem as td
+from taichi_dem.app.outputs import key_outputs, unit
+from taichi_dem.app.summaries import process_summary
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "verification"))
+from test_process import scene  # noqa: E402
+
+
+def test_outputs_from_hdf5_match_the_summary(tmp_path, capsys):
+    h5 = tmp_path / "r.h5"
+    text = scene(thermal=True, rate='"0.2 kg/s"').replace("[thermal]", "[thermal]\nconduction = false")
+    text = text.replace("temperature = 450.0", "temperature = 350.0")
+    sim = td.Simulation.from_text(text, arch="cpu", h5=str(h5))
+    sim.run(0.8)
+    summary = process_summary(sim)
+    sim.close()
+    capsys.readouterr()
+    out = key_outputs(str(h5))
+    assert out["res/residence_mean"] == pytest.approx(summary["res/mean"], rel=1e-12)
+    assert out["res/residence_median"] == pytest.approx(summary["res/median"], rel=1e-12)
+    for k in ("mid/mass_flow", "drain/mass_flow", "drain/temperature"):
+        assert out[k] == pytest.approx(summary[k], rel=1e-12), k
+    # what the numbers must be: the fed 0.2 kg/s crosses the plane and leaves by the drain
+    # once the stream is established; nothing exchanges heat, so the ash leaves at 350 K
+    assert out["mid/mass_flow"] == pytest.approx(0.2, rel=0.25)
+    assert out["drain/mass_flow"] == pytest.approx(0.2, rel=0.25)
+    assert out["drain/temperature"] == pytest.approx(350.0, abs=1e-9)
+    assert out["particles/mean_temperature"] == pytest.approx(350.0, abs=1e-9)
+    assert 0.0 < out["particles/kinetic_energy"] and math.isfinite(out["particles/kinetic_energy"])
+    assert unit("drain/temperature") == "K" and unit("mid/mass_flow") == "kg/s"
+    assert unit("res/residence_mean") == "s"
