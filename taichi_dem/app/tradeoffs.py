@@ -36,8 +36,8 @@ does not apply, is skipped and the report says why):
                 time grows as the radius). Interactions, materials and geometry are unchanged.
 ``mobility``    ``mobility.enabled = true`` (mobility skipping; the loader refuses it until it
                 exists, then the knob runs).
-``time_scale``  ``thermal.time_scale`` 10, 100 (thermal scenes; likewise a hook until the key
-                exists).
+``time_scale``  ``thermal.time_scale`` 10, 100 (thermal scenes: heat capacities divided by S,
+                issue 10).
 """
 from __future__ import annotations
 
