@@ -143,6 +143,15 @@ def test_without_gas_gap_a_near_pair_exchanges_nothing(tmp_path):
     q_cold, q_hot, names, drift = _heat_flows(tmp_path, (R, R), 2.0002 * R, gas=False)
     assert "gas_gap_pair" not in names
     assert q_cold == 0.0
+    # nothing of it is allocated or listed: no margin on the pair reach, no model table
+    text = _scene(tmp_path, (R, R), 2.0002 * R, gas=False)
+    with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
+        assert sim.engine.pair_margin == 0.0
+        assert "gas_over_solid" not in sim.engine.table
+    text = _scene(tmp_path, (R, R), 2.0002 * R, model="solid_resistance")
+    with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
+        assert sim.engine.pair_margin == pytest.approx(LENS)
+        assert "gas_over_solid" in sim.engine.table
 
 
 def test_gas_gap_pairs_false_keeps_only_the_walls(tmp_path):
