@@ -82,13 +82,11 @@ def _gas_over_solid(scene, tables, k_gas):
     return out
 
 
-class GasGapWall(Effect):
-    """Particle-fluid-wall conduction (gas_gap.py): through the gas between a particle and a
-    wall or body within the fluid lens, touching or not; isothermal surfaces."""
+class _GasGap(Effect):
+    """What the two gas-gap effects share: k_g (W/(m K)), the lens (radii, also the contact
+    margin), the minimum gap (m), the model and, for the series model, the k_g/k_s table."""
 
-    name = "gas_gap_wall"
     stage = "contact"
-    kinds = ("plane", "surface")
 
     def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance"):
         super().__init__(description)
@@ -101,6 +99,15 @@ class GasGapWall(Effect):
         if self.model != "solid_resistance":
             return {}
         return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
+
+
+class GasGapWall(_GasGap):
+    """Particle-fluid-wall conduction (gas_gap.py): through the gas between a particle and a
+    wall or body within the fluid lens, touching or not; isothermal surfaces."""
+
+    name = "gas_gap_wall"
+    kinds = ("plane", "surface")
+
 
     def contact_func(self, engine):
         k_gas, lens, min_gap = self.parameters
@@ -121,28 +128,16 @@ class GasGapWall(Effect):
         return gas_gap_wall
 
 
-class GasGapPair(Effect):
+class GasGapPair(_GasGap):
     """Particle-fluid-particle conduction (Rong & Horio 1999 as extended by Musser 2011;
     gas_gap.py): through the gas in the fluid lens around the pair, touching or not (pairs
     up to ``lens`` radii of the larger sphere apart are handed to the law); isothermal
     surfaces. The partner's share rides on the pair fields the contact conduction declares."""
 
     name = "gas_gap_pair"
-    stage = "contact"
     kinds = ("pair",)
     pair_fields = Conduction.pair_fields
 
-    def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance"):
-        super().__init__(description)
-        self.parameters = (float(conductivity), float(lens), float(min_gap))
-        self.margin = float(lens)
-        self.model = model
-        self.tables = ("gas_over_solid",) if model == "solid_resistance" else ()
-
-    def table_values(self, scene, tables):
-        if self.model != "solid_resistance":
-            return {}
-        return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
 
     def contact_func(self, engine):
         k_gas, lens, min_gap = self.parameters

@@ -68,30 +68,40 @@ def _pair_gap(w, distance, ri2, rj2):
 
 
 @ti.func
-def pair_gap_integral(radius_i, radius_j, distance, lens, min_gap):
-    """Int 2 pi r dr / max(S, gap) between two spheres of radii ``radius_i``, ``radius_j`` (m)
-    whose centres are ``distance`` (m) apart, in the fluid lens (``lens`` radii of the larger
-    sphere) with the minimum gap ``min_gap`` (m). Returns m; 0 when the lens does not reach
-    the smaller sphere."""
+def _pair_lens(radius_i, radius_j, distance, lens):
+    """The fluid lens between two spheres ``distance`` (m) apart: (larger radius, smaller
+    radius, their squares, w = r^2 where the surfaces overlap (0 apart), w where the lens of
+    the larger sphere meets the smaller one, whether it reaches it at all)."""
     big = ti.max(radius_i, radius_j)
     small = ti.min(radius_i, radius_j)
     ri2 = big * big
     rj2 = small * small
     lens_radius = big * (1.0 + lens)
-    result = 0.0 * distance
     # where the lens sphere (about the larger centre) meets the smaller sphere: law of cosines;
     # a smaller sphere wholly inside the lens (a large size ratio) faces it with its whole disk
     # (MFiX's des_thermo_cond counts nothing there)
     cos_out = (lens_radius * lens_radius - rj2 + distance * distance) / (2.0 * lens_radius * distance)
     engulfed = distance + small <= lens_radius
-    if cos_out < 1.0 or engulfed:
-        out2 = rj2
-        if not engulfed:
-            out2 = ti.min(lens_radius * lens_radius * (1.0 - cos_out * cos_out), rj2)
-        in2 = 0.0 * distance
-        if distance < big + small:
-            cos_in = (ri2 - rj2 + distance * distance) / (2.0 * big * distance)
-            in2 = ri2 * ti.max(1.0 - cos_in * cos_in, 0.0)
+    reaches = cos_out < 1.0 or engulfed
+    out2 = rj2
+    if not engulfed:
+        out2 = ti.min(lens_radius * lens_radius * ti.max(1.0 - cos_out * cos_out, 0.0), rj2)
+    in2 = 0.0 * distance
+    if distance < big + small:
+        cos_in = (ri2 - rj2 + distance * distance) / (2.0 * big * distance)
+        in2 = ri2 * ti.max(1.0 - cos_in * cos_in, 0.0)
+    return big, small, ri2, rj2, in2, out2, reaches
+
+
+@ti.func
+def pair_gap_integral(radius_i, radius_j, distance, lens, min_gap):
+    """Int 2 pi r dr / max(S, gap) between two spheres of radii ``radius_i``, ``radius_j`` (m)
+    whose centres are ``distance`` (m) apart, in the fluid lens (``lens`` radii of the larger
+    sphere) with the minimum gap ``min_gap`` (m). Returns m; 0 when the lens does not reach
+    the smaller sphere."""
+    big, small, ri2, rj2, in2, out2, reaches = _pair_lens(radius_i, radius_j, distance, lens)
+    result = 0.0 * distance
+    if reaches:
         # w_gap: r^2 where the gap reaches min_gap (the gap grows with r); Newton from the
         # parabolic estimate, clamped to [in2, out2]
         r_eff = big * small / (big + small)
@@ -195,25 +205,12 @@ def pair_solid_gap_integral(radius_i, radius_j, distance, lens, min_gap, gas_ove
                             gas_over_solid_j):
     """As ``pair_gap_integral`` with each particle's own resistance in series
     (``gas_over_solid_*`` = k_g / k_s of particle i, j). Returns m (times k_g: W/K)."""
-    big = ti.max(radius_i, radius_j)
-    small = ti.min(radius_i, radius_j)
     g_big, g_small = gas_over_solid_i, gas_over_solid_j
     if radius_j > radius_i:
         g_big, g_small = gas_over_solid_j, gas_over_solid_i
-    ri2 = big * big
-    rj2 = small * small
-    lens_radius = big * (1.0 + lens)
+    big, small, ri2, rj2, in2, out2, reaches = _pair_lens(radius_i, radius_j, distance, lens)
     result = 0.0 * distance
-    cos_out = (lens_radius * lens_radius - rj2 + distance * distance) / (2.0 * lens_radius * distance)
-    engulfed = distance + small <= lens_radius
-    if cos_out < 1.0 or engulfed:
-        out2 = rj2
-        if not engulfed:
-            out2 = ti.min(lens_radius * lens_radius * (1.0 - cos_out * cos_out), rj2)
-        in2 = 0.0 * distance
-        if distance < big + small:
-            cos_in = (ri2 - rj2 + distance * distance) / (2.0 * big * distance)
-            in2 = ri2 * ti.max(1.0 - cos_in * cos_in, 0.0)
+    if reaches:
         result = _solid_integral(in2, out2, distance, ri2, rj2, g_big, g_small, min_gap)
     return result
 
