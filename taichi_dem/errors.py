@@ -43,3 +43,8 @@ class CheckpointError(RuntimeError):
 
 class WindowError(RuntimeError):
     """The window cannot be opened here (no display, no Vulkan)."""
+
+
+class ResultsFileError(Exception):
+    """A results file that cannot be read as one (``taichi-dem plot``): missing, not HDF5, a
+    checkpoint, or without /series/time. The message names the file and the reason."""

@@ -1,4 +1,4 @@
-"""Command line: ``taichi-dem run|check|resume|demo|bench|sweep|tradeoffs`` (CONTRACT.md).
+"""Command line: ``taichi-dem run|check|resume|demo|bench|sweep|tradeoffs|plot`` (CONTRACT.md).
 
 Exit status: 0 success; 2 bad input (one paragraph naming file, key and reason, never a
 traceback); 3 the simulation diverged; ``sweep``: 1 when some of its runs failed (the table
@@ -36,6 +36,10 @@ def _common_outputs(p: argparse.ArgumentParser):
     p.add_argument("--window", "--gui", action="store_true", dest="window",
                    help="a live window (Taichi GGUI): space pauses, up/down change the speed "
                         "of the first rotating body, Esc stops; needs a display")
+    p.add_argument("--plots", action=argparse.BooleanOptionalAction, default=None,
+                   help="write PNG plots of the results (as `taichi-dem plot`) into "
+                        "<results stem>_plots/ beside the results file (default: on for "
+                        "`demo`, off for `run` and `resume`)")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -63,6 +67,10 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_arguments(sw)
     tr = sub.add_parser("tradeoffs", help="what accuracy costs in time: one knob at a time")
     tradeoffs.add_arguments(tr)
+    from . import plots
+    pl = sub.add_parser("plot", help="PNG plots of a results file (torque, residence time, "
+                                     "mass flows, temperatures, heat flows)")
+    plots.add_arguments(pl)
     return p
 
 
@@ -95,6 +103,9 @@ def _main(argv=None) -> int:
         if args.command == "tradeoffs":
             from .tradeoffs import cmd_tradeoffs
             return cmd_tradeoffs(args)
+        if args.command == "plot":
+            from .plots import cmd_plot
+            return cmd_plot(args)
     except SceneError as err:
         return _fail(str(err), 2)
     except KeyboardInterrupt:
@@ -334,7 +345,23 @@ def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> in
               f"({recorder.wall_seconds / max(wall, 1e-9):.1%} of the run)"
               + (f" -> {rrd}" if rrd else ""))
     sim.close()
+    if h5 and getattr(args, "plots", None):
+        _write_plots(h5)
     return 0
+
+
+def _write_plots(h5: str) -> None:
+    """The PNGs of ``h5`` beside it (plots.default_dir); a failure is a note, not an error:
+    the run's results are written already."""
+    from .plots import PlotError, default_dir, plot_results
+    t0 = time.perf_counter()
+    try:
+        made = plot_results(h5)
+    except (PlotError, OSError, ValueError) as err:
+        print(f"taichi-dem: note: no plots ({err})", file=sys.stderr)
+        return
+    print(f"plots: {default_dir(h5)}/ ({len(made)} PNG{'s' if len(made) != 1 else ''}: "
+          f"{', '.join(Path(f.path).name for f in made)}; {time.perf_counter() - t0:.1f} s)")
 
 
 # ---------------------------------------------------------------------------------- demo
@@ -353,6 +380,8 @@ def cmd_demo(args) -> int:
                      f"source checkout)")
     if not args.out and not args.h5:
         args.out = "out"
+    if args.plots is None:
+        args.plots = True        # cheap next to the run; `--no-plots` skips them
     return cmd_run(args, str(demo.path), summary=demo.summary, setup=demo.attach)
 
 

@@ -2,17 +2,22 @@
 speed, or temperature when thermal is on) and the bodies moving with their motion.
 
 Keys: space pauses and resumes; up / down raise / lower the speed of the first rotating body
-by 10 % (at least 1 rpm) through ``sim.set_speed``; Esc stops the run (the results so far
-are kept). One output interval is simulated per drawn frame.
+by 10 % (at least 1 rpm) through ``sim.set_speed``; w draws the bodies as wireframes (to see
+the bed inside a closed drum) and back; Esc stops the run (the results so far are kept). One
+output interval is simulated per drawn frame.
 
-GGUI needs a display (and Vulkan); without one the CLI says so in one line and exits 2.
+GGUI needs a display (and Vulkan); without one the CLI says so in one line and exits 2. With
+no screen it runs under Xvfb with Mesa's software Vulkan driver (lavapipe; Debian packages
+``xvfb`` and ``mesa-vulkan-drivers``): ``xvfb-run -s "-screen 0 1280x1024x24" taichi-dem run
+SCENE --window``. tests/unit/test_window.py does that, takes screenshots and presses keys with
+``xdotool``.
 """
 from __future__ import annotations
 
 import math
 import os
 import sys
-from typing import Optional
+from typing import Callable, Optional
 
 import numpy as np
 
@@ -36,8 +41,40 @@ def _first_rotating(sim) -> Optional[int]:
     return None
 
 
-def run_window(sim, until: float) -> None:
-    """Show ``sim`` while it runs to ``until`` (s); returns when done or the window closes."""
+class Keys:
+    """What the keys do: space pauses, up / down change the speed of the first rotating body
+    by 10 % (at least 1 rpm), w toggles wireframe bodies, Esc stops. ``press(key)`` is what
+    the window calls for each key pressed; it returns False for Esc."""
+
+    def __init__(self, sim):
+        self.sim = sim
+        self.driven = _first_rotating(sim)
+        self.paused = False
+        self.wireframe = False
+
+    def press(self, key: str) -> bool:
+        import taichi as ti
+        sim = self.sim
+        if key == ti.ui.ESCAPE:
+            return False
+        if key == " ":
+            self.paused = not self.paused
+        elif key in ("w", "W"):
+            self.wireframe = not self.wireframe
+        elif key in (ti.ui.UP, ti.ui.DOWN) and self.driven is not None:
+            name = sim.scene.bodies[self.driven].name
+            w = sim.engine.kinematics.speed(self.driven, sim.time)
+            step = max(0.1 * abs(w), 2.0 * math.pi / 60.0)
+            sim.set_speed(name, w + (step if key == ti.ui.UP else -step))
+        return True
+
+
+def run_window(sim, until: float, *, size=(1280, 800), vsync: bool = True,
+               on_frame: Optional[Callable] = None) -> None:
+    """Show ``sim`` while it runs to ``until`` (s); returns when done, on Esc or when the
+    window closes. ``on_frame(window, camera, frame, keys)``, if given, is called for every
+    frame after it is drawn and before it is shown (the moment ``window.save_image`` and
+    ``window.get_image_buffer_as_numpy`` capture it); it returns False to stop."""
     problem = display_problem()
     if problem:
         raise WindowError(problem)
@@ -45,7 +82,7 @@ def run_window(sim, until: float) -> None:
     from ..bodies.kinematics import rotation_matrix
 
     try:
-        window = ti.ui.Window("taichi-dem", (1280, 800), vsync=True)
+        window = ti.ui.Window("taichi-dem", tuple(size), vsync=vsync)
     except Exception as err:  # noqa: BLE001  (GGUI reports a missing Vulkan in many ways)
         raise WindowError(f"--window: cannot open a GGUI window here ({str(err).splitlines()[0]}); "
                           f"run without --window, or record with --rrd FILE") from None
@@ -72,20 +109,15 @@ def run_window(sim, until: float) -> None:
         body_vertices.append(v)
         body_indices.append(i)
 
-    driven = _first_rotating(sim)
-    paused = False
+    keys = Keys(sim)
+    driven = keys.driven
     rpm = 60.0 / (2.0 * math.pi)
+    frame = 0
     while window.running and sim.time < until - 0.5 * sim.dt:
         for event in window.get_events(ti.ui.PRESS):
-            if event.key == ti.ui.ESCAPE:
+            if not keys.press(event.key):
                 return
-            if event.key == " ":
-                paused = not paused
-            elif event.key in (ti.ui.UP, ti.ui.DOWN) and driven is not None:
-                name = sim.scene.bodies[driven].name
-                w = sim.engine.kinematics.speed(driven, sim.time)
-                step = max(0.1 * abs(w), 1.0 / rpm)
-                sim.set_speed(name, w + (step if event.key == ti.ui.UP else -step))
+        paused = keys.paused
         if not paused:
             steps = min(sim.output_every, int(round((until - sim.time) / sim.dt)))
             sim.step(max(steps, 1))
@@ -116,11 +148,13 @@ def run_window(sim, until: float) -> None:
             ap = np.asarray(m.axis_point, float)
             v = (b.vertices - ap) @ rot.T + ap + np.asarray(m.velocity, float) * sim.time
             body_vertices[k].from_numpy(v.astype(np.float32))
-            scene.mesh(body_vertices[k], body_indices[k], color=(0.6, 0.6, 0.65), two_sided=True)
+            scene.mesh(body_vertices[k], body_indices[k], color=(0.6, 0.6, 0.65), two_sided=True,
+                       show_wireframe=keys.wireframe)
         canvas.scene(scene)
         gui = window.get_gui()
         with gui.sub_window("taichi-dem", 0.01, 0.01, 0.3, 0.16):
-            gui.text(f"t = {sim.time:.3f} s   {'PAUSED' if paused else 'running'} (space)")
+            gui.text(f"t = {sim.time:.3f} s   {'PAUSED' if paused else 'running'} (space; "
+                     f"w: wireframe)")
             if driven is not None:
                 name = sim.scene.bodies[driven].name
                 w = sim.engine.kinematics.speed(driven, sim.time)
@@ -128,4 +162,7 @@ def run_window(sim, until: float) -> None:
                 gui.text(f"{name}: {w * rpm:.1f} rpm (up/down)")
                 if torque is not None and len(torque):
                     gui.text(f"axial torque {float(torque[-1]):.4g} N m")
+        if on_frame is not None and on_frame(window, camera, frame, keys) is False:
+            return
         window.show()
+        frame += 1
