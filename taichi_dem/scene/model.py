@@ -211,6 +211,25 @@ class ThermalSettings:
 
 
 @dataclass(frozen=True)
+class MobilitySettings:
+    """[mobility]: skip the contacts and the integration of particles that do not move
+    (effects/mobility.py). Cells of the mobility grid (blocks of contact cells about
+    ``cell_size`` across) are judged at every neighbour rebuild: *mobile* when the granular
+    temperature of their particles (velocity fluctuation about the cell mean, (m/s)^2) or the
+    squared mean velocity exceeds ``granular_temperature_threshold``, when their solid
+    fraction is below ``solid_fraction_threshold`` or when they touch an empty cell; *active*
+    within one cell of a mobile one; *inactive* otherwise. Velocities are taken relative to
+    the rigid motion of ``body`` in mode "body_frame" (drums, coolers), to rest in mode
+    "at_rest"."""
+    granular_temperature_threshold: float    # (m/s)^2 (resolved: "auto" = scale x g d_max)
+    solid_fraction_threshold: float = 0.4
+    cell_size: float = 0.0                   # m (resolved: "auto" = 3 d_max)
+    mode: str = "at_rest"                    # "at_rest" | "body_frame"
+    body: Optional[str] = None               # the body whose frame "body_frame" uses
+    threshold_is_auto: bool = False
+
+
+@dataclass(frozen=True)
 class Output:
     interval: float = 0.05               # s
     rrd: Optional[str] = None
@@ -323,6 +342,7 @@ class Scene:
     factories: tuple[Factory, ...] = ()
     outlets: tuple[Outlet, ...] = ()
     sensors: tuple[Sensor, ...] = ()
+    mobility: Optional[MobilitySettings] = None
 
     def interaction(self, a: str, b: str) -> Interaction:
         return self.interactions[frozenset((a, b))]
