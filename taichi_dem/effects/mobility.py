@@ -285,12 +285,16 @@ class Mobility(Effect):
         axis = ti.Vector(list(motion.axis_direction))
         points = tuple(motion.speed.points) if motion.speed is not None else ((0.0, 0.0),)
 
+        # the piecewise-constant schedule as a sum of steps: speed(t) = sum_k dv_k [t >= t_k]
+        steps = [(points[0][0], points[0][1])] + [
+            (points[k][0], points[k][1] - points[k - 1][1]) for k in range(1, len(points))]
+        real = engine.real
+
         @ti.func
         def spin(t):
-            speed = 0.0
-            for k in ti.static(range(len(points))):
-                if t >= ti.static(points[k][0]):
-                    speed = ti.static(points[k][1])
+            speed = ti.cast(0.0, real)
+            for k in ti.static(range(len(steps))):
+                speed += ti.select(t >= steps[k][0], ti.cast(steps[k][1], real), ti.cast(0.0, real))
             return speed * axis
         return spin
 
