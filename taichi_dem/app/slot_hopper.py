@@ -33,7 +33,8 @@ def geometry(width_d=56.0, slot_d=11.2, depth_d=4.0):
 
 
 def scene_text(*, phase="fill", count=7700, width_d=56.0, slot_d=11.2, depth_d=4.0,
-               end_time=0.45, mobility=True, particles_file=None, interval=0.01, h5=None):
+               end_time=0.45, mobility=True, particles_file=None, interval=0.01, h5=None,
+               threshold="auto"):
     """The TOML text of one phase: "fill" (closed floor, a fill region above it) or
     "discharge" (the slot open; ``particles_file`` a CSV of the settled bed)."""
     half, half_slot, depth = geometry(width_d, slot_d, depth_d)
@@ -71,7 +72,8 @@ def scene_text(*, phase="fill", count=7700, width_d=56.0, slot_d=11.2, depth_d=4
     else:
         lines += ["[[particles]]", 'material = "glass"', f'file = "{particles_file}"', ""]
     if mobility:
-        lines += ["[mobility]", "enabled = true", 'granular_temperature_threshold = "auto"',
+        value = f'"{threshold}"' if isinstance(threshold, str) else f"{threshold:g}"
+        lines += ["[mobility]", "enabled = true", f"granular_temperature_threshold = {value}",
                   "solid_fraction_threshold = 0.4", ""]
     lines += ["[output]", f"interval = {interval}"] + ([f'h5 = "{h5}"'] if h5 else []) + [""]
     return "\n".join(lines)
