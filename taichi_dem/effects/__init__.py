@@ -60,8 +60,11 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
         effects.append(Mobility(
             f"mobility: contacts between inactive particles frozen, their integration skipped "
             f"(granular temperature > {m.granular_temperature_threshold:.3g} (m/s)^2"
-            f"{' (auto: 5e-3 g d_max)' if m.threshold_is_auto else ''}, solid fraction < "
-            f"{m.solid_fraction_threshold:g}, cells of {m.cell_size * 1e3:.3g} mm, {frame})", m))
+            f"{' (auto: 1e-5 g d_max)' if m.threshold_is_auto else ''}, solid fraction < "
+            f"{m.solid_fraction_threshold:g}"
+            + (f", rms acceleration > {m.acceleration_threshold:.3g} m/s^2"
+               if m.acceleration_threshold < float("inf") else "")
+            + f", cells of {m.cell_size * 1e3:.3g} mm, {frame})", m))
     if any(f.fixed for f in scene.fills):
         effects.append(Effect("fixed (frozen) particles", "fixed_particles", "integrate"))
     return tuple(effects)

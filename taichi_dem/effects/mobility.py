@@ -15,9 +15,12 @@ it:
 with v taken relative to the rigid motion of ``body`` in mode "body_frame" (a drum's shell), to
 rest in mode "at_rest". A cell is **mobile** when T_g or |u|^2 / 3 exceeds the threshold (so a
 bed carried along at low T_g is never frozen in mode "at_rest"), when phi is below the solid
-fraction threshold (free surfaces, thin flows), when it touches an empty cell (openings, free
-surfaces), or when one of its particles has a candidate triangle on a moving body (other than
-the frame's body: a paddle about to sweep through a resting bed). Cells within one cell of a
+fraction threshold (free surfaces, thin flows), when the mean squared acceleration of its
+particles (relative to the frame's centripetal one) exceeds the square of the acceleration
+threshold (a bed that still rings after it landed is quiet in velocity but not in equilibrium:
+frozen then, it would keep the forces of that instant), when it touches an empty cell
+(openings, free surfaces), or when one of its particles has a candidate triangle on a moving
+body (other than the frame's body: a paddle about to sweep through a resting bed). Cells within one cell of a
 mobile cell are **active**; the rest **inactive** (periodic axes wrap, cells beyond a
 non-periodic face do not count).
 
@@ -34,13 +37,20 @@ Still computed: its contacts with active particles (both sides: the active partn
 force), with plane walls and mesh bodies (the wall and body loads and torques stay complete),
 and all heat effects and the temperature update.
 
-Defaults (scene/loader.py): the threshold is 5e-3 g d_max, i.e. fluctuations of 0.07 sqrt(g d):
-for the seed's 2.24 mm beads 1.1e-4 (m/s)^2, the order Lethe uses (1e-4). A bed settled by
-gravity jitters at ~g t_contact ~ 1e-4 m/s (T_g ~ 1e-8); a flowing region of a hopper fluctuates
-at ~0.1 sqrt(g d) and more (T_g ~ 1e-3): the threshold sits decades from both. Solid fraction
-0.4: below random loose packing (0.55) by a margin that the cell-edge noise of a 3 d cell
-(about 30 particles) does not reach, above a dilute flow's. Without gravity "auto" has no scale
-and the loader asks for a value.
+Defaults (scene/loader.py): the threshold is 1e-5 g d_max, i.e. fluctuations of 0.3 % of
+sqrt(g d): for the seed's 2.24 mm beads 2.2e-7 (m/s)^2. A frozen cell keeps the contact forces
+of the instant it froze, so the threshold decides how far from equilibrium a bed may be when it
+freezes. Measured on the slot hopper (BENCHMARKS.md, 0.4 s of fill and settle, one run each):
+at 5e-3 g d (1.1e-4, the order of Lethe's default 1e-4) the bed froze while it still compacted
+and the floor carried 37 % of its weight; at 1e-4 g d 118 %; at 1e-5 g d 99.9 %; the discharge
+flow was within 0.1 % at 5e-3 g d already, the settled speed-up 5x at both. A flowing region of a
+hopper fluctuates at ~0.1 sqrt(g d) (T_g ~ 1e-3): decades above any of these. Solid fraction
+0.4: below random loose packing (0.55) by a margin that the noise of a 3 d cell (about 30
+particles) does not reach, above a dilute flow's. Without gravity "auto" has no scale and the
+loader asks for a value. ``acceleration_threshold`` (opt-in, m/s^2): also mobile when the rms
+acceleration of a cell exceeds it (a bed that still rings is quiet in velocity but not in
+equilibrium); at 0.05 g the seed's bed (e = 0.94, little damping) was still ringing above it
+after 0.4 s, so it is not on by default.
 """
 # (no postponed annotations: Taichi reads the kernels' argument types)
 
@@ -122,6 +132,9 @@ class Mobility(Effect):
         periodic = g.periodic
         nbx, nby, nbz = blocks
         threshold = st.granular_temperature_threshold
+        # mean squared acceleration above which a cell is not in equilibrium, (m/s^2)^2
+        acceleration_sq = st.acceleration_threshold ** 2 if math.isfinite(st.acceleration_threshold) else -1.0
+        check_acceleration = acceleration_sq >= 0.0
         phi_min = st.solid_fraction_threshold
         counts = self.counts
         active = self.particle_active
@@ -141,6 +154,19 @@ class Mobility(Effect):
         moving_flags = tuple(1 if b in moving else 0 for b in range(len(engine.scene.bodies)))
         check_bodies = mesh is not None and len(moving) > 0
         rigid_velocity = self.make_rigid_velocity(engine)
+        rigid_spin_ = self.make_rigid_spin(engine)
+        rigid_frame = frame >= 0
+        centre_of = self.make_rigid_centre(engine) if rigid_frame else None
+
+        @ti.func
+        def rigid_acceleration(x, t):
+            """The frame's centripetal acceleration at x (m/s^2; constant spin between
+            schedule steps), zero at rest."""
+            a = ti.Vector([0.0, 0.0, 0.0]) * x[0]
+            if ti.static(rigid_frame):
+                w = rigid_spin_(t)
+                a = w.cross(w.cross(x - centre_of(t)))
+            return a
         n_blocks = self.n_blocks
         four_thirds_pi = 4.0 / 3.0 * math.pi
 
@@ -166,6 +192,7 @@ class Mobility(Effect):
                 number = 0
                 velocity_sum = ti.Vector([0.0, 0.0, 0.0])
                 solid = 0.0
+                acceleration = 0.0
                 touches_moving = 0
                 for cx in range(first_cell(bx, nbx, dims[0]), first_cell(bx + 1, nbx, dims[0])):
                     for cy in range(first_cell(by, nby, dims[1]), first_cell(by + 1, nby, dims[1])):
@@ -175,6 +202,9 @@ class Mobility(Effect):
                                 number += 1
                                 velocity_sum += s.velocity[i] - rigid_velocity(s.position[i], t)
                                 solid += four_thirds_pi * s.radius[i] ** 3
+                                if ti.static(check_acceleration):
+                                    a = s.acceleration[i] - rigid_acceleration(s.position[i], t)
+                                    acceleration += a.dot(a)
                                 if ti.static(check_bodies):
                                     for q in range(mesh.mesh_start[i], mesh.mesh_start[i] + mesh.mesh_count[i]):
                                         body = mesh.tri_body[mesh.mesh_tri[q]]
@@ -196,6 +226,9 @@ class Mobility(Effect):
                 speed_sq[b] = mean.dot(mean) / 3.0
                 phi[b] = solid / volume[b]
                 flag[b] = touches_moving
+                if ti.static(check_acceleration):
+                    if acceleration > acceleration_sq * number:
+                        flag[b] = 1
             for b in range(n_blocks):
                 bz = b % nbz
                 by = (b // nbz) % nby
@@ -272,6 +305,18 @@ class Mobility(Effect):
             centre = point + velocity * ti.cast(t, real)
             return velocity + spin(t).cross(x - centre)
         return body_velocity
+
+    def make_rigid_centre(self, engine):
+        """ti.func t -> the frame body's axis point at t (m)."""
+        motion = engine.scene.bodies[engine.mobility_frame].motion
+        point = ti.Vector(list(motion.axis_point))
+        velocity = ti.Vector(list(motion.velocity))
+        real = engine.real
+
+        @ti.func
+        def centre(t):
+            return point + velocity * ti.cast(t, real)
+        return centre
 
     def make_rigid_spin(self, engine):
         """ti.func t -> the frame body's angular velocity vector (rad/s); zero in "at_rest"."""

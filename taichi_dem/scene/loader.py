@@ -28,10 +28,10 @@ SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "w
             "factories", "outlets", "sensors", "thermal", "mobility", "output")
 PLANNED_SECTIONS: tuple[str, ...] = ()
 MOBILITY_KEYS = ("enabled", "granular_temperature_threshold", "solid_fraction_threshold",
-                 "cell_size", "mode", "body")
+                 "acceleration_threshold", "cell_size", "mode", "body")
 MOBILITY_MODES = ("at_rest", "body_frame")
 # "auto" threshold: this fraction of g d_max, (m/s)^2 (effects/mobility.py says why)
-MOBILITY_THRESHOLD_SCALE = 5.0e-3
+MOBILITY_THRESHOLD_SCALE = 1.0e-5
 MOBILITY_CELL_DIAMETERS = 3.0       # "auto" cell_size: this many largest diameters
 FACTORY_KEYS = ("name", "material", "radius", "sizes", "region", "velocity", "temperature",
                 "moisture", "mass_rate", "interval")
@@ -340,6 +340,10 @@ class _Parser:
                 raise self.err(k, f"must be in [0, 0.74) (0.74: the densest packing of equal "
                                   f"spheres; 0.4 typical), got {x:g}")
             kw["solid_fraction_threshold"] = x
+        if "acceleration_threshold" in t:
+            # opt-in: an rms acceleration (m/s^2) above which a cell is not in equilibrium
+            kw["acceleration_threshold"] = self.positive(t["acceleration_threshold"], "acceleration",
+                                                         f"{key}.acceleration_threshold")
         value_c = t.get("cell_size", "auto")
         k = f"{key}.cell_size"
         if isinstance(value_c, str) and value_c.strip().lower() == "auto":

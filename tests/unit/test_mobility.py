@@ -28,7 +28,8 @@ def error_of(text):
 def test_defaults_scale_with_the_scene():
     m = parse_scene(small("\n[mobility]\nenabled = true\n")).mobility
     d = 2 * 0.004
-    assert m.granular_temperature_threshold == pytest.approx(5e-3 * 9.81 * d, rel=1e-12)
+    assert m.granular_temperature_threshold == pytest.approx(1e-5 * 9.81 * d, rel=1e-12)
+    assert m.acceleration_threshold == math.inf
     assert m.threshold_is_auto and m.cell_size == pytest.approx(3 * d)
     assert m.solid_fraction_threshold == 0.4 and m.mode == "at_rest"
     assert parse_scene(small("\n[mobility]\nenabled = false\n")).mobility is None
