@@ -34,7 +34,7 @@ def geometry(width_d=56.0, slot_d=11.2, depth_d=4.0):
 
 def scene_text(*, phase="fill", count=7700, width_d=56.0, slot_d=11.2, depth_d=4.0,
                end_time=0.45, mobility=True, particles_file=None, interval=0.01, h5=None,
-               threshold="auto"):
+               threshold="auto", seed=1):
     """The TOML text of one phase: "fill" (closed floor, a fill region above it) or
     "discharge" (the slot open; ``particles_file`` a CSV of the settled bed)."""
     half, half_slot, depth = geometry(width_d, slot_d, depth_d)
@@ -46,7 +46,7 @@ def scene_text(*, phase="fill", count=7700, width_d=56.0, slot_d=11.2, depth_d=4
         f"# Seed 000's slot hopper ({phase}): {count} glass beads of 2.24 mm, floor 56 d with a "
         f"slot of 11.2 d, periodic depth {depth_d:g} d",
         "[simulation]", f"end_time = {end_time}", "gravity = [0.0, 0.0, -9.81]",
-        'precision = "f32"', "seed = 1", "",
+        'precision = "f32"', f"seed = {seed}", "",
         "[domain]", f"min = [{-half:.6g}, 0.0, {bottom:.6g}]",
         f"max = [{half:.6g}, {depth:.6g}, {top:.6g}]", 'periodic = ["y"]', "",
         "[materials.glass]", f"density = {RHO}", "youngs_modulus = 5.0e6", "poisson_ratio = 0.25", "",

@@ -7,7 +7,8 @@ settle with mobility on (0.25 s), then from that one settled bed the slot opens 
 mobility off and on, for 0.35 s.
 
 Checks:
-* the settled bed is mostly inactive (more than half of the particles), i.e. the knob acts;
+* the settled bed is largely inactive (more than 30 % of the particles: the bed is only ~7 d
+  high and its top two mobility cells stay active), i.e. the knob acts;
   (the speed-up itself is measured in BENCHMARKS.md, never asserted: the machine is shared);
 * the discharge mass flow with mobility on is within 3 % of the flow with it off. Why 3 %: the
   two runs start from the same bed but diverge chaotically, so their difference is the
@@ -38,10 +39,12 @@ def test_slot_hopper_flow_with_and_without_mobility(tmp_path):
         sh.write_bed(sim, tmp_path / "bed.csv")
         n = sim.particle_count
     assert n == COUNT
-    assert stats["inactive_particles"] > 0.5 * n, stats
+    assert stats["inactive_particles"] > 0.3 * n, stats
     rate_off, _, total, window = sh.discharge(tmp_path / "bed.csv", mobility=False, end_time=0.35,
                                               count=n, depth_d=DEPTH_D)
     rate_on, _, _, _ = sh.discharge(tmp_path / "bed.csv", mobility=True, end_time=0.35,
                                     count=n, depth_d=DEPTH_D)
+    print(f"\n  settled: {stats}; discharge {rate_off * 1e3:.2f} g/s off, {rate_on * 1e3:.2f} g/s on "
+          f"({rate_on / rate_off - 1:+.2%}), fit window {window[0]:.3f} - {window[1]:.3f} s")
     assert rate_off > 0.0
     assert rate_on == pytest.approx(rate_off, rel=0.03), (rate_on, rate_off, window)
