@@ -320,3 +320,59 @@ def test_body_frame_carries_a_bed_that_turns_with_its_drum(tmp_path, mode):
         r = p["position"][always]
         assert np.allclose(p["velocity"][always][:, :2], np.column_stack([-omega * r[:, 1], omega * r[:, 0]]),
                            atol=1e-12)
+
+
+# --------------------------------------------------------------------------------- heat
+def test_frozen_pairs_conduct_through_their_kept_conductance(tmp_path):
+    """1000 fixed spheres on a periodic cubic lattice, overlapping by 0.1 % of the diameter,
+    the left half at 400 K and the right half at 300 K, conducting. Every cell is inactive, so
+    after the first step each pair's heat is its conductance kept from the rebuild step times
+    today's temperature difference: the temperatures after 300 steps equal those of the run
+    without mobility to 1e-12 K (f64; the geometry, hence the conductance, does not change)."""
+    r, n = 0.002, 10
+    spacing = 2 * r * (1 - 1e-3)
+    side = n * spacing
+    ax = (np.arange(n) + 0.5) * spacing
+    x = np.array(np.meshgrid(ax, ax, ax, indexing="ij")).reshape(3, -1).T
+    hot = x[:, 0] < side / 2
+    fills = ""
+    for name, sel, temp in (("hot", hot, 400.0), ("cold", ~hot, 300.0)):
+        np.savetxt(tmp_path / f"{name}.csv", np.column_stack([x[sel], np.full(sel.sum(), r)]),
+                   delimiter=",", header="x,y,z,radius", comments="")
+        fills += (f'[[particles]]\nmaterial = "glass"\nfixed = true\ntemperature = {temp}\n'
+                  f'file = "{name}.csv"\n\n')
+    text = f"""
+[simulation]
+end_time = 1.0
+gravity = [0.0, 0.0, 0.0]
+precision = "f64"
+dt = 1e-4
+[domain]
+min = [0, 0, 0]
+max = [{side}, {side}, {side}]
+periodic = ["x", "y", "z"]
+[materials.glass]
+density = 2500.0
+youngs_modulus = 1e7
+poisson_ratio = 0.25
+thermal_conductivity = 1.0
+heat_capacity = 800.0
+[[interactions]]
+pair = ["glass", "glass"]
+restitution = 0.5
+friction = 0.5
+[thermal]
+conduction = true
+{fills}"""
+    temperatures = {}
+    for mobility in ("", "[mobility]\ngranular_temperature_threshold = 1e-6\nsolid_fraction_threshold = 0.2\n"):
+        with td.Simulation.from_text(text + mobility, base_dir=str(tmp_path)) as sim:
+            if mobility:
+                m = sim.engine.mobility
+                assert m.statistics()["inactive_particles"] == n ** 3, (m.statistics(), m.blocks, m.block_solid_fraction.to_numpy(), m.block_temperature.to_numpy().max(), m.block_mean_speed_sq.to_numpy().max())
+            sim.step(300)
+            p = sim.particles()
+            temperatures[bool(mobility)] = p["temperature"]
+    moved = np.max(np.abs(temperatures[False] - np.where(hot, 400.0, 300.0)))
+    assert moved > 1e-3                     # heat did flow
+    assert np.max(np.abs(temperatures[True] - temperatures[False])) < 1e-12
