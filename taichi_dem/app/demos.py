@@ -341,9 +341,19 @@ class DryerDrum(Process):
               "steady)")
 
 
+class SlotHopper(Demo):
+    """Seed 000's slot hopper: fill and settle (the scene), then in the summary the settled bed
+    and the discharge with [mobility] on and off (app/slot_hopper.py)."""
+    name, scene = "slot_hopper", "slot_hopper.toml"
+
+    def summary(self, sim):
+        from .slot_hopper import report
+        report(sim, discharge_time=0.7)
+
+
 DEMOS: dict[str, type[Demo]] = {d.name: d for d in (PaddleCooler, PaddleCoolerOptimised,
                                                      DryerDrum, Pile, Hopper, Chute,
-                                                     ChuteRelease, AngleOfRepose)}
+                                                     ChuteRelease, AngleOfRepose, SlotHopper)}
 
 
 def get(name: str) -> Demo:

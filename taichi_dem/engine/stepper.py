@@ -62,6 +62,12 @@ class Engine:
         self.plug_flow = "plug_flow_gas" in self.effects
         self.radiation = "radiation" in self.effects
         self.moisture = "drying" in self.effects
+        # [mobility] (effects/mobility.py): inactive particles skip mutual contacts and their
+        # integration; "body_frame" carries them with that body (its index, else -1)
+        self.mobility = by_name.get("mobility")
+        self.mobility_frame = -1
+        if self.mobility is not None and scene.mobility.mode == "body_frame":
+            self.mobility_frame = [b.name for b in scene.bodies].index(scene.mobility.body)
         self.trees: list[FieldTree] = []
         self.walls = scene.walls
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
@@ -133,6 +139,8 @@ class Engine:
             from ..bodies.mesh_contacts import MeshContacts
             self.kinematics = BodyKinematics(scene.bodies)
             self.mesh = MeshContacts(self, self.kinematics)
+        if self.mobility is not None:
+            self.mobility.compile(self)
         self._compile_particle_kernels()
         if scene.factories:
             self._compile_insert()
@@ -185,19 +193,38 @@ class Engine:
         has_process = self.process is not None
         after_drift = self.process.make_funcs(self) if has_process else None
         from ..process.outlets import PARKED
+        mobility = self.mobility is not None
+        active = self.mobility.particle_active if mobility else None
+        body_frame = self.mobility_frame >= 0
+        rigid_drift = self.mobility.make_rigid_drift(self) if body_frame else None
+        rigid_velocity = self.mobility.make_rigid_velocity(self) if body_frame else None
 
         @ti.func
         def drift_particle(i, dt, t_new):
             """First half of a velocity Verlet step for particle i: half kick, then drift.
             A particle that leaves the domain (or enters an outlet) is removed: marked dead
             and parked far away until the next rebuild drops it. ``t_new``: time after the
-            step, s."""
-            if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
-                v = s.velocity[i] + 0.5 * dt * s.acceleration[i]
-                s.velocity[i] = v
-                s.angular_velocity[i] += 0.5 * dt * s.angular_acceleration[i]
+            step, s. [mobility]: an inactive particle is held ("at_rest") or carried rigidly
+            by the frame's body ("body_frame")."""
+            moves = s.inverse_mass[i] > 0.0 and s.alive[i] != 0
+            frozen = False
+            if ti.static(mobility):
+                frozen = active[i] == 0
+                if ti.static(not body_frame):
+                    if frozen:
+                        moves = False
+            if moves:
                 x_old = s.position[i]
-                x_new = x_old + dt * v
+                x_new = x_old
+                if ti.static(body_frame):
+                    if frozen:
+                        x_new = rigid_drift(x_old, dt, t_new)
+                        s.velocity[i] = rigid_velocity(x_new, t_new)
+                if not frozen:
+                    v = s.velocity[i] + 0.5 * dt * s.acceleration[i]
+                    s.velocity[i] = v
+                    s.angular_velocity[i] += 0.5 * dt * s.angular_acceleration[i]
+                    x_new = x_old + dt * v
                 x = x_new
                 inside = True
                 for k in ti.static(range(3)):
@@ -324,8 +351,14 @@ class Engine:
                 t = s.temperature[i]
             return t
 
+        mobility = self.mobility is not None
+        active = self.mobility.particle_active if mobility else None
+
         @ti.kernel
-        def pair_forces(n: ti.i32, dt: real):
+        def pair_forces(n: ti.i32, dt: real, full: ti.i32):
+            """``full`` = 1 (the step of a rebuild): every pair; 0: [mobility] pairs of two
+            inactive particles keep their force, torque and history (their heat flows through
+            the kept conductance)."""
             for i in range(n):
                 xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
                 ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
@@ -334,8 +367,22 @@ class Engine:
                 owned_torque = vec0
                 owned_heat = 0.0
                 owned_conductance = 0.0
+                frozen_i = False
+                if ti.static(mobility):
+                    frozen_i = full == 0 and active[i] == 0
                 for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                     j = p.neighbour[k]
+                    if ti.static(mobility):
+                        if frozen_i and active[j] == 0:
+                            # both inactive: the contact is frozen as it was at the rebuild
+                            if ti.static(pair_heat):
+                                if p.contact[k] != 0:
+                                    h = p.pair_conductance[k]
+                                    q = h * (temperature_of(j) - temperature_i)
+                                    owned_heat += q
+                                    owned_conductance += h
+                                    p.partner_heat[k] = -q
+                            continue
                     d = minimum_image(xi - s.position[j])
                     rj = s.radius[j]
                     distance_sq = d.dot(d)
@@ -387,12 +434,16 @@ class Engine:
                     continue          # removed since the last rebuild: parked, inert
                 force = s.owned_force[i]
                 torque = s.owned_torque[i]
-                for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
-                    m = p.mirror[k]
-                    if m >= 0:
-                        if p.contact[m] != 0:
-                            force += p.partner_force[m]
-                            torque += p.partner_torque[m]
+                integrates = True
+                if ti.static(mobility):
+                    integrates = active[i] != 0      # inactive: held or carried, not integrated
+                if integrates:
+                    for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
+                        m = p.mirror[k]
+                        if m >= 0:
+                            if p.contact[m] != 0:
+                                force += p.partner_force[m]
+                                torque += p.partner_torque[m]
                 heat = 0.0           # W into the particle
                 conductance = 0.0    # W/K, for the stability check
                 if ti.static(thermal):
@@ -458,7 +509,7 @@ class Engine:
                     if s.alive[i] != 0:
                         # explicit update; stable while dt sum(h) / (m c) < 1 (checked per sample)
                         update_temperature(i, load.heat, load.conductance, dt)
-                if inv_m > 0.0 and s.alive[i] != 0:
+                if inv_m > 0.0 and s.alive[i] != 0 and integrates:
                     a = force * inv_m + load.acceleration
                     alpha = torque * s.inverse_inertia[i]
                     s.acceleration[i] = a
@@ -477,7 +528,9 @@ class Engine:
         if self.mesh is not None:
             self.mesh.update_frames(self.time)
         self.count = self.broadphase.rebuild(n)
-        self._pair_forces(self.count, 0.0)
+        if self.mobility is not None:
+            self.mobility.update(self, self.count, self.time)
+        self._pair_forces(self.count, 0.0, 1)
         for e in self.cell_effects:
             e.after_pairs(self, self.count, 0.0)
         self._gather(self.count, 0.0, 0, 0, self.time)
@@ -492,6 +545,8 @@ class Engine:
                 self.removed_batches.append(batch)
         self.count = self.broadphase.rebuild(n)
         self.flags[Flag.DEAD_IN_SLOTS] = 0
+        if self.mobility is not None:
+            self.mobility.update(self, self.count, self.time)
 
     def advance(self, steps: int, record_last: bool = False):
         """Advance ``steps`` time steps of ``self.dt``."""
@@ -515,7 +570,7 @@ class Engine:
                 self.wall_force.fill(0.0)
                 if self.thermal:
                     self.wall_heat.fill(0.0)
-            self._pair_forces(self.count, dt)
+            self._pair_forces(self.count, dt, 1 if rebuild else 0)
             for e in self.cell_effects:
                 e.after_pairs(self, self.count, dt)     # the gas sees this step's particles
             # the state is left at a whole step (no pending drift) when advance returns
@@ -597,6 +652,8 @@ class Engine:
         compensated = s.compensated
         real = self.real
         compensated_add, split_f64 = make_compensated_add(real)
+        mobility = self.mobility is not None
+        active = self.mobility.particle_active if mobility else None
 
         @ti.kernel
         def insert(start: ti.i32, k: ti.i32, position: ti.types.ndarray(),
@@ -625,6 +682,8 @@ class Engine:
                 s.material[i] = material[q]
                 s.particle_id[i] = key[q]
                 s.alive[i] = 1
+                if ti.static(mobility):
+                    active[i] = 1     # until the rebuild this insertion flags judges it
                 if ti.static(process):
                     s.serial[i] = serial[q]
                     s.origin[i] = origin[q]

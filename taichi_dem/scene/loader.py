@@ -20,14 +20,20 @@ import numpy as np
 
 from ..errors import SceneError
 from .model import (Body, Domain, Factory, Interaction, Material, Motion, Outlet, Output,
-                    ParticleFill, PlaneWall, RadiusDistribution, RateSchedule, Region, Scene,
+                    MobilitySettings, ParticleFill, PlaneWall, RadiusDistribution, RateSchedule, Region, Scene,
                     Sensor, SheetInlet, SimulationSettings, SpeedSchedule, GasSettings, ThermalSettings,
                     DragSettings)
 from .units import MAX_MAGNITUDE, MIN_MAGNITUDE, parse_quantity, parse_vec3
 
 SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "bodies",
-            "factories", "outlets", "sensors", "thermal", "output", "gas")
-PLANNED_SECTIONS = ("mobility",)
+            "factories", "outlets", "sensors", "thermal", "mobility", "output", "gas")
+PLANNED_SECTIONS: tuple[str, ...] = ()
+MOBILITY_KEYS = ("enabled", "granular_temperature_threshold", "solid_fraction_threshold",
+                 "acceleration_threshold", "cell_size", "mode", "body")
+MOBILITY_MODES = ("at_rest", "body_frame")
+# "auto" threshold: this fraction of g d_max, (m/s)^2 (effects/mobility.py says why)
+MOBILITY_THRESHOLD_SCALE = 1.0e-5
+MOBILITY_CELL_DIAMETERS = 3.0       # "auto" cell_size: this many largest diameters
 FACTORY_KEYS = ("name", "material", "radius", "sizes", "region", "velocity", "temperature",
                 "moisture", "mass_rate", "interval", "pattern", "face", "jitter")
 FACTORY_PATTERNS = ("random", "sheet")
@@ -282,10 +288,13 @@ class _Parser:
                     raise self.err(f"{f.key}.moisture", "drying needs heat transfer: add a "
                                                         "[thermal] section (and a gas to dry in)")
         drag = self.parse_drag(doc, thermal)
+        mobility = (self.parse_mobility(doc["mobility"], simulation, sources, bodies)
+                    if "mobility" in doc else None)
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
                      walls=walls, bodies=bodies, output=output, thermal=thermal,
-                     factories=factories, outlets=outlets, sensors=sensors, drag=drag)
+                     factories=factories, outlets=outlets, sensors=sensors, drag=drag,
+                     mobility=mobility)
 
     def parse_drag(self, doc: dict, thermal) -> "DragSettings | None":
         """Drag from the mechanics-only [gas] section (velocity, density, viscosity, drag) or
@@ -313,6 +322,76 @@ class _Parser:
             return DragSettings(model=heat_gas.drag, velocity=heat_gas.velocity,
                                 density=heat_gas.density, viscosity=heat_gas.viscosity)
         return None
+
+    def parse_mobility(self, value: Any, simulation, sources, bodies) -> Optional[MobilitySettings]:
+        """[mobility] (effects/mobility.py). ``enabled = false`` (or no section) means absent.
+        "auto" thresholds scale with the scene: granular temperature MOBILITY_THRESHOLD_SCALE
+        x g d_max, cell size MOBILITY_CELL_DIAMETERS x d_max (d_max the largest diameter of
+        the fills and factories)."""
+        key = "mobility"
+        t = self.table(value, key)
+        self.check_keys(t, key, MOBILITY_KEYS)
+        if "enabled" in t and not self.boolean(t["enabled"], f"{key}.enabled"):
+            return None
+        radii = [f.largest_radius for f in sources]
+        d_max = 2.0 * max(radii) if radii else 0.0
+        kw: dict[str, Any] = {}
+        mode = t.get("mode", "at_rest")
+        if mode not in MOBILITY_MODES:
+            raise self.err(f"{key}.mode", f"unknown mode {_type_name(mode)}; "
+                                          f"{_suggest(str(mode), MOBILITY_MODES)}allowed: "
+                                          + ", ".join(MOBILITY_MODES))
+        kw["mode"] = mode
+        if mode == "body_frame":
+            if "body" not in t:
+                raise self.err(f"{key}.body", "required for mode \"body_frame\": the name of the "
+                                              "body whose rigid motion the bed follows (a drum's shell)")
+            name = self.string(t["body"], f"{key}.body")
+            names = [b.name for b in bodies]
+            if name not in names:
+                raise self.err(f"{key}.body", f"unknown body '{name}'; {_suggest(name, names)}"
+                                              f"bodies: {', '.join(names) or 'none'}")
+            kw["body"] = name
+        elif "body" in t:
+            raise self.err(f"{key}.body", "only used with mode = \"body_frame\"")
+        k = f"{key}.granular_temperature_threshold"
+        value_t = t.get("granular_temperature_threshold", "auto")
+        if isinstance(value_t, str) and value_t.strip().lower() == "auto":
+            g = float(np.linalg.norm(simulation.gravity))
+            if g == 0.0 or d_max == 0.0:
+                raise self.err(k, "\"auto\" scales with g d (gravity x the largest diameter), "
+                                  "but this scene has " + ("no gravity" if g == 0.0 else "no particles")
+                                  + ": give a value in (m/s)^2, e.g. 1e-3 x (a reference speed)^2")
+            kw["granular_temperature_threshold"] = MOBILITY_THRESHOLD_SCALE * g * d_max
+            kw["threshold_is_auto"] = True
+        else:
+            try:
+                kw["granular_temperature_threshold"] = self.positive(value_t, "specific_energy", k)
+            except SceneError as e:
+                raise self.err(e.key, f"{e.reason}; a granular temperature in (m/s)^2 "
+                                      "(e.g. 1e-4 or \"1e-4 m^2/s^2\"), or \"auto\"") from None
+        if "solid_fraction_threshold" in t:
+            k = f"{key}.solid_fraction_threshold"
+            x = self.q(t["solid_fraction_threshold"], "dimensionless", k)
+            if not 0.0 <= x < 0.74:
+                raise self.err(k, f"must be in [0, 0.74) (0.74: the densest packing of equal "
+                                  f"spheres; 0.4 typical), got {x:g}")
+            kw["solid_fraction_threshold"] = x
+        if "acceleration_threshold" in t:
+            # opt-in: an rms acceleration (m/s^2) above which a cell is not in equilibrium
+            kw["acceleration_threshold"] = self.positive(t["acceleration_threshold"], "acceleration",
+                                                         f"{key}.acceleration_threshold")
+        value_c = t.get("cell_size", "auto")
+        k = f"{key}.cell_size"
+        if isinstance(value_c, str) and value_c.strip().lower() == "auto":
+            kw["cell_size"] = MOBILITY_CELL_DIAMETERS * d_max
+        else:
+            kw["cell_size"] = self.positive(value_c, "length", k)
+            if d_max > 0 and kw["cell_size"] < 2.0 * d_max:
+                raise self.err(k, f"{kw['cell_size']:.3g} m is less than two largest diameters "
+                                  f"({2 * d_max:.3g} m): too few particles per cell for a granular "
+                                  "temperature or a solid fraction")
+        return MobilitySettings(**kw)
 
     def check_particle_total(self, simulation: SimulationSettings, fills, factories) -> None:
         """The fills, and the factories' schedules until end_time (unless max_particles caps

@@ -228,6 +228,28 @@ class ThermalSettings:
 
 
 @dataclass(frozen=True)
+class MobilitySettings:
+    """[mobility]: skip the contacts and the integration of particles that do not move
+    (effects/mobility.py). Cells of the mobility grid (blocks of contact cells about
+    ``cell_size`` across) are judged at every neighbour rebuild: *mobile* when the granular
+    temperature of their particles (velocity fluctuation about the cell mean, (m/s)^2) or the
+    squared mean velocity exceeds ``granular_temperature_threshold``, when their solid
+    fraction is below ``solid_fraction_threshold``, when the rms acceleration of their
+    particles exceeds ``acceleration_threshold`` (a bed still ringing after an impact is not
+    in equilibrium: freezing it would freeze its forces) or when they touch an empty cell; *active*
+    within one cell of a mobile one; *inactive* otherwise. Velocities are taken relative to
+    the rigid motion of ``body`` in mode "body_frame" (drums, coolers), to rest in mode
+    "at_rest"."""
+    granular_temperature_threshold: float    # (m/s)^2 (resolved: "auto" = 1e-5 g d_max)
+    solid_fraction_threshold: float = 0.4
+    cell_size: float = 0.0                   # m (resolved: "auto" = 3 d_max)
+    mode: str = "at_rest"                    # "at_rest" | "body_frame"
+    acceleration_threshold: float = math.inf  # m/s^2, rms acceleration; inf = not checked
+    body: Optional[str] = None               # the body whose frame "body_frame" uses
+    threshold_is_auto: bool = False
+
+
+@dataclass(frozen=True)
 class Output:
     interval: float = 0.05               # s
     rrd: Optional[str] = None
@@ -433,6 +455,7 @@ class Scene:
     outlets: tuple[Outlet, ...] = ()
     sensors: tuple[Sensor, ...] = ()
     drag: Optional[DragSettings] = None
+    mobility: Optional[MobilitySettings] = None
 
     def interaction(self, a: str, b: str) -> Interaction:
         return self.interactions[frozenset((a, b))]

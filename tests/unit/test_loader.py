@@ -260,11 +260,11 @@ def test_unknown_radius_table_key():
     error(d, "particles[0].radius.sigma", "unknown key 'sigma'")
 
 
-@pytest.mark.parametrize("section", ["mobility"])
-def test_planned_sections_are_clear_errors(section):
+def test_mobility_section_is_read():
+    # [mobility] is no longer a planned section (issue 12): tests/unit/test_mobility.py
     d = base()
-    d[section] = {"enabled": True}
-    error(d, section, "not supported yet by this version of taichi_dem (planned)")
+    d["mobility"] = {"enabled": True}
+    assert load(d).mobility is not None
 
 
 # --- [simulation] ---------------------------------------------------------------------------------

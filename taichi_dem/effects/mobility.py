@@ -1,0 +1,375 @@
+"""Mobility ([mobility]): skip the mutual contacts and the integration of particles that do not
+move (the "adaptive sparse contacts" idea of seed 000 and of Lethe; written here from the
+description, not from their code).
+
+At every neighbour rebuild the particles, already sorted by contact cell (broadphase.py), are
+judged per *mobility cell*: a block of contact cells about ``cell_size`` across (3 largest
+diameters by default; a contact cell of ~1.1 d holds about one particle, too few for a
+fluctuation or a solid fraction). For each mobility cell, over the particles whose centres lie in
+it:
+
+  mean velocity       u = sum v / n                                  m/s
+  granular temperature T_g = sum |v - u|^2 / (3 n)                    (m/s)^2
+  solid fraction      phi = sum (4/3 pi r^3) / (the cell's volume inside the domain)
+
+with v taken relative to the rigid motion of ``body`` in mode "body_frame" (a drum's shell), to
+rest in mode "at_rest". A cell is **mobile** when T_g or |u|^2 / 3 exceeds the threshold (so a
+bed carried along at low T_g is never frozen in mode "at_rest"), when phi is below the solid
+fraction threshold (free surfaces, thin flows), when the mean squared acceleration of its
+particles (relative to the frame's centripetal one) exceeds the square of the acceleration
+threshold (a bed that still rings after it landed is quiet in velocity but not in equilibrium:
+frozen then, it would keep the forces of that instant), when it touches an empty cell
+(openings, free surfaces), or when one of its particles has a candidate triangle on a moving
+body (other than the frame's body: a paddle about to sweep through a resting bed). Cells within one cell of a
+mobile cell are **active**; the rest **inactive** (periodic axes wrap, cells beyond a
+non-periodic face do not count).
+
+What an inactive particle skips (engine/stepper.py):
+  * contacts with another inactive particle: computed once at the rebuild step (where the
+    pair lists, the partner shares and the conductances are new) and then frozen: force,
+    torque and tangential history are kept, heat flows through the frozen conductance with the
+    current temperatures (so conduction stays exact for a frozen geometry);
+  * its integration: in "at_rest" its velocity, spin and accelerations are set to zero at the
+    rebuild and its position is held; in "body_frame" it moves rigidly with the body
+    (position rotated about the body's axis, velocity = the body's velocity there);
+  * its partners' shares in the gather.
+Still computed: its contacts with active particles (both sides: the active partner feels the
+force), with plane walls and mesh bodies (the wall and body loads and torques stay complete),
+and all heat effects and the temperature update.
+
+Defaults (scene/loader.py): the threshold is 1e-5 g d_max, i.e. fluctuations of 0.3 % of
+sqrt(g d): for the seed's 2.24 mm beads 2.2e-7 (m/s)^2. A frozen cell keeps the contact forces
+of the instant it froze, so the threshold decides how far from equilibrium a bed may be when it
+freezes. Measured on the slot hopper (BENCHMARKS.md, 0.4 s of fill and settle, one run each):
+at 5e-3 g d (1.1e-4, the order of Lethe's default 1e-4) the bed froze while it still compacted
+and the floor carried 37 % of its weight; at 1e-4 g d 118 %; at 1e-5 g d 99.9 %; the discharge
+flow was within 0.1 % at 5e-3 g d already, the settled speed-up 5x at both. A flowing region of a
+hopper fluctuates at ~0.1 sqrt(g d) (T_g ~ 1e-3): decades above any of these. Solid fraction
+0.4: below random loose packing (0.55) by a margin that the noise of a 3 d cell (about 30
+particles) does not reach, above a dilute flow's. Without gravity "auto" has no scale and the
+loader asks for a value. ``acceleration_threshold`` (opt-in, m/s^2): also mobile when the rms
+acceleration of a cell exceeds it (a bed that still rings is quiet in velocity but not in
+equilibrium); at 0.05 g the seed's bed (e = 0.94, little damping) was still ringing above it
+after 0.4 s, so it is not on by default.
+"""
+# (no postponed annotations: Taichi reads the kernels' argument types)
+
+import math
+
+import numpy as np
+import taichi as ti
+
+from .base import Effect
+
+INACTIVE, ACTIVE, MOBILE, EMPTY = 0, 1, 2, 3
+
+
+class Mobility(Effect):
+    """One [mobility] section (scene.model.MobilitySettings); status per mobility cell, an
+    ``particle_active`` flag per particle (1 active, 0 inactive), refreshed by ``update``."""
+
+    name, stage = "mobility", "detect"
+
+    def __init__(self, description: str, settings):
+        super().__init__(description)
+        self.settings = settings
+
+    # ------------------------------------------------------------------ layout
+    def layout(self, grid):
+        """Mobility cells per axis (``blocks``) over the contact grid; contact cell c of an
+        axis lies in mobility cell c * blocks // dims."""
+        target = self.settings.cell_size
+        blocks = []
+        for k in range(3):
+            n = int(round(grid.dims[k] * grid.cell_size[k] / target)) if target > 0 else grid.dims[k]
+            blocks.append(max(1, min(grid.dims[k], n)))
+        return tuple(blocks)
+
+    def allocate(self, engine, tree):
+        g = engine.grid
+        self.blocks = self.layout(g)
+        self.n_blocks = int(np.prod(self.blocks))
+        cap = engine.state.capacity
+        real = engine.real
+        self.particle_active = tree.add("particle_active", ti.i32, cap)
+        self.block_count = tree.add("mobility_count", ti.i32, self.n_blocks)
+        self.block_temperature = tree.add("mobility_temperature", real, self.n_blocks)   # (m/s)^2
+        self.block_mean_speed_sq = tree.add("mobility_mean_speed_sq", real, self.n_blocks)
+        self.block_solid_fraction = tree.add("mobility_solid_fraction", real, self.n_blocks)
+        self.block_volume = tree.add("mobility_volume", real, self.n_blocks)             # m^3
+        self.block_flag = tree.add("mobility_flag", ti.i32, self.n_blocks)   # moving-body contact
+        self.block_mobile = tree.add("mobility_mobile", ti.i32, self.n_blocks)
+        self.block_status = tree.add("mobility_status", ti.i32, self.n_blocks)
+        self.counts = tree.add("mobility_counts", ti.i32, 4)   # [inactive particles, cells by status..]
+
+    def upload(self, engine):
+        """The volume (m^3) of each mobility cell inside the domain (a non-periodic axis's last
+        contact cell reaches past the face)."""
+        g = engine.grid
+        edges = []
+        for k in range(3):
+            d, nb = g.dims[k], self.blocks[k]
+            starts = [(b * d + nb - 1) // nb for b in range(nb)] + [d]
+            lo = g.lo[k] + np.asarray(starts, float) * g.cell_size[k]
+            lo = np.minimum(lo, g.hi[k])
+            edges.append(np.diff(lo))
+        vol = edges[0][:, None, None] * edges[1][None, :, None] * edges[2][None, None, :]
+        npf = np.float64 if engine.real == ti.f64 else np.float32
+        self.block_volume.from_numpy(vol.reshape(-1).astype(npf))
+        self.particle_active.fill(1)
+
+    # ------------------------------------------------------------------ kernels
+    def compile(self, engine):
+        """The status kernel; needs the broadphase's cell ranges (and the mesh's candidate
+        lists when the scene has bodies). ``engine.mobility_frame``: the frame body's index
+        or -1."""
+        s = engine.state
+        g = engine.grid
+        st = self.settings
+        cell_start = engine.broadphase.cell_start
+        dims = g.dims
+        blocks = self.blocks
+        periodic = g.periodic
+        nbx, nby, nbz = blocks
+        threshold = st.granular_temperature_threshold
+        # mean squared acceleration above which a cell is not in equilibrium, (m/s^2)^2
+        acceleration_sq = st.acceleration_threshold ** 2 if math.isfinite(st.acceleration_threshold) else -1.0
+        check_acceleration = acceleration_sq >= 0.0
+        phi_min = st.solid_fraction_threshold
+        counts = self.counts
+        active = self.particle_active
+        count, temp, speed_sq = self.block_count, self.block_temperature, self.block_mean_speed_sq
+        phi, volume, flag = self.block_solid_fraction, self.block_volume, self.block_flag
+        mobile, status = self.block_mobile, self.block_status
+        mesh = engine.mesh
+        frame = engine.mobility_frame
+        body_frame = frame >= 0
+        # bodies that move (other than the frame's): their candidate contacts make a cell mobile
+        moving = []
+        for b, body in enumerate(engine.scene.bodies):
+            m = body.motion
+            if b != frame and (m.speed is not None and any(v != 0 for _, v in m.speed.points)
+                               or any(v != 0 for v in m.velocity)):
+                moving.append(b)
+        moving_flags = tuple(1 if b in moving else 0 for b in range(len(engine.scene.bodies)))
+        check_bodies = mesh is not None and len(moving) > 0
+        rigid_velocity = self.make_rigid_velocity(engine)
+        rigid_spin_ = self.make_rigid_spin(engine)
+        rigid_frame = frame >= 0
+        centre_of = self.make_rigid_centre(engine) if rigid_frame else None
+
+        @ti.func
+        def rigid_acceleration(x, t):
+            """The frame's centripetal acceleration at x (m/s^2; constant spin between
+            schedule steps), zero at rest."""
+            a = ti.Vector([0.0, 0.0, 0.0]) * x[0]
+            if ti.static(rigid_frame):
+                w = rigid_spin_(t)
+                a = w.cross(w.cross(x - centre_of(t)))
+            return a
+        n_blocks = self.n_blocks
+        four_thirds_pi = 4.0 / 3.0 * math.pi
+
+        @ti.func
+        def block_of_cell(c):
+            cz = c % dims[2]
+            cy = (c // dims[2]) % dims[1]
+            cx = c // (dims[1] * dims[2])
+            return ((cx * nbx // dims[0]) * nby + cy * nby // dims[1]) * nbz + cz * nbz // dims[2]
+
+        @ti.func
+        def first_cell(b, n, d):
+            return (b * d + n - 1) // n
+
+        @ti.kernel
+        def update(n: ti.i32, t: ti.f64):
+            for k in ti.static(range(4)):
+                counts[k] = 0
+            for b in range(n_blocks):
+                bz = b % nbz
+                by = (b // nbz) % nby
+                bx = b // (nby * nbz)
+                number = 0
+                velocity_sum = ti.Vector([0.0, 0.0, 0.0])
+                solid = 0.0
+                acceleration = 0.0
+                touches_moving = 0
+                for cx in range(first_cell(bx, nbx, dims[0]), first_cell(bx + 1, nbx, dims[0])):
+                    for cy in range(first_cell(by, nby, dims[1]), first_cell(by + 1, nby, dims[1])):
+                        for cz in range(first_cell(bz, nbz, dims[2]), first_cell(bz + 1, nbz, dims[2])):
+                            c = (cx * dims[1] + cy) * dims[2] + cz
+                            for i in range(cell_start[c], cell_start[c + 1]):
+                                number += 1
+                                velocity_sum += s.velocity[i] - rigid_velocity(s.position[i], t)
+                                solid += four_thirds_pi * s.radius[i] ** 3
+                                if ti.static(check_acceleration):
+                                    a = s.acceleration[i] - rigid_acceleration(s.position[i], t)
+                                    acceleration += a.dot(a)
+                                if ti.static(check_bodies):
+                                    for q in range(mesh.mesh_start[i], mesh.mesh_start[i] + mesh.mesh_count[i]):
+                                        body = mesh.tri_body[mesh.mesh_tri[q]]
+                                        for bb in ti.static(range(len(moving_flags))):
+                                            if ti.static(moving_flags[bb]):
+                                                if body == bb:
+                                                    touches_moving = 1
+                mean = velocity_sum / ti.max(number, 1)
+                fluctuation = 0.0
+                for cx in range(first_cell(bx, nbx, dims[0]), first_cell(bx + 1, nbx, dims[0])):
+                    for cy in range(first_cell(by, nby, dims[1]), first_cell(by + 1, nby, dims[1])):
+                        for cz in range(first_cell(bz, nbz, dims[2]), first_cell(bz + 1, nbz, dims[2])):
+                            c = (cx * dims[1] + cy) * dims[2] + cz
+                            for i in range(cell_start[c], cell_start[c + 1]):
+                                u = s.velocity[i] - rigid_velocity(s.position[i], t) - mean
+                                fluctuation += u.dot(u)
+                count[b] = number
+                temp[b] = fluctuation / (3.0 * ti.max(number, 1))
+                speed_sq[b] = mean.dot(mean) / 3.0
+                phi[b] = solid / volume[b]
+                flag[b] = touches_moving
+                if ti.static(check_acceleration):
+                    if acceleration > acceleration_sq * number:
+                        flag[b] = 1
+            for b in range(n_blocks):
+                bz = b % nbz
+                by = (b // nbz) % nby
+                bx = b // (nby * nbz)
+                state = INACTIVE
+                if count[b] == 0:
+                    state = EMPTY
+                elif (temp[b] > threshold or speed_sq[b] > threshold or phi[b] < phi_min
+                      or flag[b] != 0):
+                    state = MOBILE
+                else:
+                    for offset in range(27):
+                        nb, inside = neighbour(bx, by, bz, offset)
+                        if inside and count[nb] == 0:
+                            state = MOBILE
+                mobile[b] = state
+            for b in range(n_blocks):
+                bz = b % nbz
+                by = (b // nbz) % nby
+                bx = b // (nby * nbz)
+                state = mobile[b]
+                if state == INACTIVE:
+                    for offset in range(27):
+                        nb, inside = neighbour(bx, by, bz, offset)
+                        if inside and mobile[nb] == MOBILE:
+                            state = ACTIVE
+                status[b] = state
+                if state != EMPTY:
+                    ti.atomic_add(counts[1 + ti.min(state, 2)], 1)
+            for i in range(n):
+                a = 1
+                if status[block_of_cell(s.cell[i])] == INACTIVE:
+                    a = 0
+                    # held (at rest) or carried rigidly by the frame's body from now on
+                    s.velocity[i] = rigid_velocity(s.position[i], t)
+                    s.angular_velocity[i] = rigid_spin(t)
+                    s.acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
+                    s.angular_acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
+                    ti.atomic_add(counts[0], 1)
+                active[i] = a
+
+        @ti.func
+        def neighbour(bx, by, bz, offset):
+            step = ti.Vector([offset // 9 - 1, (offset // 3) % 3 - 1, offset % 3 - 1])
+            cell = ti.Vector([bx, by, bz]) + step
+            inside = True
+            for k in ti.static(range(3)):
+                if ti.static(periodic[k]):
+                    cell[k] = (cell[k] + blocks[k]) % blocks[k]
+                elif cell[k] < 0 or cell[k] >= blocks[k]:
+                    inside = False
+            return (cell[0] * nby + cell[1]) * nbz + cell[2], inside
+
+        rigid_spin = self.make_rigid_spin(engine)
+        self._update = update
+        self.body_frame = body_frame
+
+    def make_rigid_velocity(self, engine):
+        """ti.func (x, t) -> the frame body's velocity at point x (m/s); zero in "at_rest"."""
+        frame = engine.mobility_frame
+        if frame < 0:
+            @ti.func
+            def at_rest(x, t):
+                return ti.Vector([0.0, 0.0, 0.0]) * x[0]
+            return at_rest
+        motion = engine.scene.bodies[frame].motion
+        point = ti.Vector(list(motion.axis_point))
+        velocity = ti.Vector(list(motion.velocity))
+        spin = self.make_rigid_spin(engine)
+        real = engine.real
+
+        @ti.func
+        def body_velocity(x, t):
+            centre = point + velocity * ti.cast(t, real)
+            return velocity + spin(t).cross(x - centre)
+        return body_velocity
+
+    def make_rigid_centre(self, engine):
+        """ti.func t -> the frame body's axis point at t (m)."""
+        motion = engine.scene.bodies[engine.mobility_frame].motion
+        point = ti.Vector(list(motion.axis_point))
+        velocity = ti.Vector(list(motion.velocity))
+        real = engine.real
+
+        @ti.func
+        def centre(t):
+            return point + velocity * ti.cast(t, real)
+        return centre
+
+    def make_rigid_spin(self, engine):
+        """ti.func t -> the frame body's angular velocity vector (rad/s); zero in "at_rest"."""
+        frame = engine.mobility_frame
+        if frame < 0:
+            @ti.func
+            def no_spin(t):
+                return ti.Vector([0.0, 0.0, 0.0])
+            return no_spin
+        motion = engine.scene.bodies[frame].motion
+        axis = ti.Vector(list(motion.axis_direction))
+        points = tuple(motion.speed.points) if motion.speed is not None else ((0.0, 0.0),)
+
+        # the piecewise-constant schedule as a sum of steps: speed(t) = sum_k dv_k [t >= t_k]
+        steps = [(points[0][0], points[0][1])] + [
+            (points[k][0], points[k][1] - points[k - 1][1]) for k in range(1, len(points))]
+        real = engine.real
+
+        @ti.func
+        def spin(t):
+            speed = ti.cast(0.0, real)
+            for k in ti.static(range(len(steps))):
+                speed += ti.select(t >= steps[k][0], ti.cast(steps[k][1], real), ti.cast(0.0, real))
+            return speed * axis
+        return spin
+
+    def make_rigid_drift(self, engine):
+        """ti.func (x, dt, t) -> x carried rigidly by the frame body over the step ending at
+        t (rotation about its axis by |omega| dt, Rodrigues, plus its translation)."""
+        frame = engine.mobility_frame
+        motion = engine.scene.bodies[frame].motion
+        point = ti.Vector(list(motion.axis_point))
+        velocity = ti.Vector(list(motion.velocity))
+        axis = ti.Vector(list(motion.axis_direction))
+        spin = self.make_rigid_spin(engine)
+        real = engine.real
+
+        @ti.func
+        def rigid_drift(x, dt, t):
+            centre = point + velocity * ti.cast(t, real)
+            r = x - centre
+            angle = spin(t).dot(axis) * dt
+            c, s_ = ti.cos(angle), ti.sin(angle)
+            r_new = r * c + axis.cross(r) * s_ + axis * axis.dot(r) * (1.0 - c)
+            return centre + r_new + velocity * dt
+        return rigid_drift
+
+    # ------------------------------------------------------------------ driver
+    def update(self, engine, n: int, time: float):
+        self._update(n, time)
+
+    def statistics(self) -> dict:
+        """Counts from the last update: inactive particles; cells inactive, active, mobile."""
+        c = self.counts.to_numpy()
+        return {"inactive_particles": int(c[0]), "inactive_cells": int(c[1]),
+                "active_cells": int(c[2]), "mobile_cells": int(c[3])}

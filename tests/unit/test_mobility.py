@@ -1,0 +1,378 @@
+"""[mobility] (issue 12, effects/mobility.py): its keys and their errors, off means absent, the
+per-cell status against a numpy recomputation from the particles, what inactive particles skip
+(a frozen bed still loads its floor with its weight), and the body frame's rigid carriage."""
+import math
+import sys
+
+import numpy as np
+import pytest
+
+import taichi_dem as td
+from taichi_dem.errors import SceneError
+from taichi_dem.scene.loader import parse_scene
+
+from conftest import SMALL_SCENE
+
+
+def small(mobility: str = "", count=200, precision="f64"):
+    return SMALL_SCENE.format(precision=precision, rolling=0.0, count=count) + mobility
+
+
+def error_of(text):
+    with pytest.raises(SceneError) as e:
+        parse_scene(text, source="scene.toml")
+    return e.value
+
+
+# --------------------------------------------------------------------------------- keys
+def test_defaults_scale_with_the_scene():
+    m = parse_scene(small("\n[mobility]\nenabled = true\n")).mobility
+    d = 2 * 0.004
+    assert m.granular_temperature_threshold == pytest.approx(1e-5 * 9.81 * d, rel=1e-12)
+    assert m.acceleration_threshold == math.inf
+    assert m.threshold_is_auto and m.cell_size == pytest.approx(3 * d)
+    assert m.solid_fraction_threshold == 0.4 and m.mode == "at_rest"
+    assert parse_scene(small("\n[mobility]\nenabled = false\n")).mobility is None
+    m = parse_scene(small("\n[mobility]\ngranular_temperature_threshold = 2e-4\n"
+                          "solid_fraction_threshold = 0.3\ncell_size = \"30 mm\"\n")).mobility
+    assert (m.granular_temperature_threshold, m.solid_fraction_threshold, m.cell_size) == (2e-4, 0.3, 0.03)
+
+
+@pytest.mark.parametrize("body, key, fragment", [
+    ("grain = 1", "mobility.grain", "unknown key 'grain'"),
+    ("mode = \"drum\"", "mobility.mode", "allowed: at_rest, body_frame"),
+    ("mode = \"body_frame\"", "mobility.body", "required for mode \"body_frame\""),
+    ("mode = \"body_frame\"\nbody = \"shell\"", "mobility.body", "unknown body 'shell'"),
+    ("body = \"shell\"", "mobility.body", "only used with mode"),
+    ("solid_fraction_threshold = 0.8", "mobility.solid_fraction_threshold", "must be in [0, 0.74)"),
+    ("granular_temperature_threshold = -1e-4", "mobility.granular_temperature_threshold", "must be > 0"),
+    ("granular_temperature_threshold = \"1 m\"", "mobility.granular_temperature_threshold", "(m/s)^2"),
+    ("cell_size = 0.01", "mobility.cell_size", "less than two largest diameters"),
+    ("enabled = 3", "mobility.enabled", ""),
+])
+def test_bad_keys_name_file_key_and_reason(body, key, fragment):
+    err = error_of(small("\n[mobility]\n" + body + "\n"))
+    assert err.key == key and fragment in err.reason, str(err)
+    assert str(err).startswith("scene.toml")
+
+
+def test_auto_threshold_needs_gravity():
+    text = small("\n[mobility]\n").replace("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, 0.0, 0.0]")
+    err = error_of(text)
+    assert err.key == "mobility.granular_temperature_threshold" and "no gravity" in err.reason
+
+
+# --------------------------------------------------------------------------------- off = absent
+def test_off_means_absent():
+    with td.Simulation.from_text(small()) as sim:
+        e = sim.engine
+        assert e.mobility is None and "mobility" not in e.effects
+        names = {n for t in e.trees for n in t.fields}
+        assert not any(n.startswith("mobility") or n == "particle_active" for n in names)
+    with td.Simulation.from_text(small("\n[mobility]\n")) as sim:
+        names = {n for t in sim.engine.trees for n in t.fields}
+        assert "particle_active" in names and "mobility_status" in names
+
+
+# --------------------------------------------------------------------------------- status
+def numpy_status(engine, p):
+    """The status of every mobility cell recomputed on the host from the particles (positions,
+    velocities, radii), with the rules of effects/mobility.py; returns (status by cell,
+    temperature by cell, block of each particle)."""
+    g, m = engine.grid, engine.mobility
+    st = engine.scene.mobility
+    cells = np.clip(np.floor((p["position"] - g.lo) / np.asarray(g.cell_size)).astype(int), 0,
+                    np.asarray(g.dims) - 1)
+    b3 = cells * np.asarray(m.blocks) // np.asarray(g.dims)
+    nbx, nby, nbz = m.blocks
+    block = (b3[:, 0] * nby + b3[:, 1]) * nbz + b3[:, 2]
+    n = m.n_blocks
+    volume = m.block_volume.to_numpy()
+    count = np.bincount(block, minlength=n)
+    v = p["velocity"]
+    mean = np.stack([np.bincount(block, v[:, k], n) for k in range(3)], 1) / np.maximum(count, 1)[:, None]
+    fl = np.bincount(block, np.sum((v - mean[block]) ** 2, 1), n)
+    temp = fl / (3 * np.maximum(count, 1))
+    phi = np.bincount(block, 4 / 3 * math.pi * p["radius"] ** 3, n) / volume
+    thr = st.granular_temperature_threshold
+    raw = (temp > thr) | (np.sum(mean ** 2, 1) / 3 > thr) | (phi < st.solid_fraction_threshold)
+    idx = np.array(np.unravel_index(np.arange(n), m.blocks)).T
+    status = np.zeros(n, int)
+    offsets = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)])
+
+    def neighbours(i):
+        out = []
+        for o in offsets:
+            q = idx[i] + o
+            ok = True
+            for k in range(3):
+                if g.periodic[k]:
+                    q[k] %= m.blocks[k]
+                elif not 0 <= q[k] < m.blocks[k]:
+                    ok = False
+            if ok:
+                out.append(np.ravel_multi_index(q, m.blocks))
+        return out
+    mobile = np.zeros(n, bool)
+    for i in range(n):
+        if count[i] > 0 and (raw[i] or any(count[j] == 0 for j in neighbours(i))):
+            mobile[i] = True
+    for i in range(n):
+        if count[i] == 0:
+            status[i] = 3
+        elif mobile[i]:
+            status[i] = 2
+        elif any(mobile[j] for j in neighbours(i)):
+            status[i] = 1
+    return status, temp, block
+
+
+LATTICE_SCENE = """
+[simulation]
+end_time = 0.01
+gravity = [0.0, 0.0, -9.81]
+precision = "f64"
+dt = 1e-6
+[domain]
+min = [0, 0, 0]
+max = [{side}, {side}, {side}]
+periodic = ["x", "y", "z"]
+[materials.glass]
+density = 2500.0
+youngs_modulus = 1e7
+poisson_ratio = 0.25
+[[interactions]]
+pair = ["glass", "glass"]
+restitution = 0.5
+friction = 0.5
+[[particles]]
+material = "glass"
+file = "p.csv"
+[mobility]
+granular_temperature_threshold = 1e-4
+cell_size = 0.0086
+solid_fraction_threshold = 0.3
+"""
+
+
+def block_of(engine, x):
+    g, m = engine.grid, engine.mobility
+    cells = np.clip(np.floor((x - g.lo) / np.asarray(g.cell_size)).astype(int), 0,
+                    np.asarray(g.dims) - 1)
+    return cells * np.asarray(m.blocks) // np.asarray(g.dims)
+
+
+def test_status_matches_a_host_recomputation(tmp_path):
+    """A periodic box filled with resting spheres, one at the centre of each contact cell
+    (solid fraction 0.34), a hot spot of random velocities in one mobility cell, an emptied
+    cell elsewhere: the device's granular temperatures, statuses and particle flags equal the
+    numpy recomputation (f64), and all four statuses occur."""
+    r, side = 0.002, 0.06
+    text = LATTICE_SCENE.format(side=side)
+    x = np.array([[0.01, 0.01, 0.01]])
+    v = np.zeros_like(x)
+
+    def write(x, v):
+        rows = np.column_stack([x, np.full(len(x), r), v])
+        np.savetxt(tmp_path / "p.csv", rows, delimiter=",", header="x,y,z,radius,vx,vy,vz",
+                   comments="")
+    write(x, v)
+    with td.Simulation.from_text(text, base_dir=str(tmp_path)) as sim:
+        g = sim.engine.grid
+        assert sim.engine.mobility.blocks == (7, 7, 7) and g.dims == (13, 13, 13)
+        ax = g.lo[0] + (np.arange(13) + 0.5) * g.cell_size[0]
+        x = np.array(np.meshgrid(ax, ax, ax, indexing="ij")).reshape(3, -1).T
+        v = np.zeros_like(x)
+        b3 = block_of(sim.engine, x)
+    rng = np.random.default_rng(4)
+    hot = np.all(b3 == (0, 0, 0), axis=1)
+    v[hot] = rng.normal(0, 0.05, (hot.sum(), 3))
+    v[np.all(b3 == (2, 3, 0), axis=1)] = (0.0, 0.0, 1e-4)     # far below the threshold
+    keep = ~np.all(b3 == (4, 0, 3), axis=1)                     # an empty mobility cell
+    write(x[keep], v[keep])
+    with td.Simulation.from_text(text, base_dir=str(tmp_path)) as sim:
+        e = sim.engine
+        p = sim.particles()
+        status, temp, block = numpy_status(e, p)
+        assert np.allclose(e.mobility.block_temperature.to_numpy(), temp, rtol=1e-9, atol=1e-15)
+        assert np.array_equal(e.mobility.block_status.to_numpy(), status)
+        assert {0, 1, 2, 3} <= set(status.tolist())       # every status occurs
+        assert status[(2 * 7 + 3) * 7 + 0] == 0 and status[0] == 2
+        order = np.argsort(e.state.particle_id.to_numpy()[:e.count])
+        flags = e.mobility.particle_active.to_numpy()[:e.count][order]
+        assert np.array_equal(flags, (status[block] != 0).astype(int))
+        stats = e.mobility.statistics()
+        assert stats["inactive_particles"] == int(np.sum(status[block] == 0))
+
+
+# --------------------------------------------------------------------------------- frozen bed
+def test_a_frozen_bed_still_loads_its_floor():
+    """1200 spheres settled on a floor (0.5 s, threshold 1e-6 (m/s)^2), then judged: many are
+    inactive and held, their mutual contacts frozen. Nothing inactive moves; the floor's load
+    (the wall contacts of inactive particles are still computed) stays what it was when the bed
+    froze, and that is the bed's weight to 1 % (a bed frozen while it still rings at
+    T_g <= 1e-6 (m/s)^2 carries 0.2 % more or less; at the "auto" threshold 0.6 %, BENCHMARKS.md)."""
+    base = small(count=1200, precision="f32").replace("end_time = 0.02", "end_time = 1.0")
+    text = base.replace("min = [-0.05, -0.05, -0.01]", "min = [-0.05, -0.05, -0.01]\nperiodic = [\"x\", \"y\"]")
+    text += ("\n[mobility]\nsolid_fraction_threshold = 0.2\ncell_size = 0.016\n"
+             "granular_temperature_threshold = 1e-6\n")
+    with td.Simulation.from_text(text) as sim:
+        sim.run(until=0.5)
+        sim.engine.rebuild(sim.engine.count)        # judge the settled bed now
+        st = sim.engine.mobility.statistics()
+        assert st["inactive_particles"] > 0.1 * sim.particle_count, st
+        before = sim.particles()
+        sim.run(until=0.5 + sim.scene.output.interval)
+        first = float(sim.series["walls/floor/force"][-1][2])
+        sim.step(2000)
+        sim.run(until=sim.time + sim.scene.output.interval)
+        after = sim.particles()
+        order = np.argsort(sim.engine.state.particle_id.to_numpy()[:sim.engine.count])
+        inactive = sim.engine.mobility.particle_active.to_numpy()[:sim.engine.count][order] == 0
+        assert np.array_equal(before["position"][inactive], after["position"][inactive])
+        weight = float(np.sum(after["mass"])) * 9.81
+        floor = float(sim.series["walls/floor/force"][-1][2])
+        assert floor == pytest.approx(first, rel=1e-4)
+        assert -floor == pytest.approx(weight, rel=1e-2)
+
+
+# --------------------------------------------------------------------------------- body frame
+DRUM_SCENE = """
+[simulation]
+end_time = 1.0
+gravity = [0.0, 0.0, 0.0]
+precision = "f64"
+dt = 2e-5
+[domain]
+min = [-0.1, -0.1, -0.005]
+max = [0.1, 0.1, 0.055]
+[materials.glass]
+density = 2500.0
+youngs_modulus = 1e7
+poisson_ratio = 0.25
+[materials.steel]
+density = 7800.0
+youngs_modulus = 2e11
+poisson_ratio = 0.3
+[[interactions]]
+pair = ["glass", "glass"]
+restitution = 0.5
+friction = 0.5
+[[interactions]]
+pair = ["glass", "steel"]
+restitution = 0.5
+friction = 0.5
+[[bodies]]
+name = "drum"
+material = "steel"
+mesh = {{ builder = "drum", radius = 0.09, length = 0.05, axis_direction = [0, 0, 1] }}
+motion = {{ rotate = {{ axis_point = [0, 0, 0], axis_direction = [0, 0, 1], speed = "{speed} rad/s" }} }}
+[[particles]]
+material = "glass"
+file = "p.csv"
+[mobility]
+mode = "{mode}"
+{body}
+granular_temperature_threshold = 1e-6
+solid_fraction_threshold = 0.1
+"""
+
+
+@pytest.mark.parametrize("mode", ["body_frame", "at_rest"])
+def test_body_frame_carries_a_bed_that_turns_with_its_drum(tmp_path, mode):
+    """Spheres on a lattice (not touching, no gravity) inside a drum turning at 1 rad/s, each
+    moving with the drum (v = omega x r). In "body_frame" their velocity relative to the drum
+    is nil, so the bed's interior is inactive and carried rigidly: after 0.02 s (0.02 rad, 12 rebuilds) a
+    particle inactive all along sits at R(omega t) x0 to 1e-9 m with v = omega x r (Rodrigues,
+    exact). In "at_rest" the same bed is moving, so none of it is inactive."""
+    omega = 1.0
+    ax = np.arange(-0.066, 0.0661, 0.0044)
+    az = np.arange(0.0022, 0.05, 0.0044)
+    x = np.array(np.meshgrid(ax, ax, az, indexing="ij")).reshape(3, -1).T
+    x = x[np.hypot(x[:, 0], x[:, 1]) < 0.068]
+    v = np.column_stack([-omega * x[:, 1], omega * x[:, 0], np.zeros(len(x))])
+    np.savetxt(tmp_path / "p.csv", np.column_stack([x, np.full(len(x), 0.0015), v]),
+               delimiter=",", header="x,y,z,radius,vx,vy,vz", comments="")
+    text = DRUM_SCENE.format(speed=omega, mode=mode,
+                             body='body = "drum"' if mode == "body_frame" else "")
+    with td.Simulation.from_text(text, base_dir=str(tmp_path)) as sim:
+        e = sim.engine
+        n = e.count
+        always = np.ones(n, bool)
+
+        def flags():
+            order = np.argsort(e.state.particle_id.to_numpy()[:n])
+            return e.mobility.particle_active.to_numpy()[:n][order] == 0
+        always &= flags()
+        if mode == "at_rest":
+            assert e.mobility.statistics()["inactive_particles"] == 0
+            return
+        assert always.mean() > 0.05, e.mobility.statistics()
+        for _ in range(20):
+            sim.step(50)
+            always &= flags()
+        assert always.sum() > 100 and e.broadphase.rebuilds > 3
+        t = sim.time
+        c, s_ = math.cos(omega * t), math.sin(omega * t)
+        expected = np.column_stack([c * x[:, 0] - s_ * x[:, 1], s_ * x[:, 0] + c * x[:, 1], x[:, 2]])
+        p = sim.particles()
+        assert np.max(np.abs(p["position"][always] - expected[always])) < 1e-9
+        r = p["position"][always]
+        assert np.allclose(p["velocity"][always][:, :2], np.column_stack([-omega * r[:, 1], omega * r[:, 0]]),
+                           atol=1e-12)
+
+
+# --------------------------------------------------------------------------------- heat
+def test_frozen_pairs_conduct_through_their_kept_conductance(tmp_path):
+    """1000 fixed spheres on a periodic cubic lattice, overlapping by 0.1 % of the diameter,
+    the left half at 400 K and the right half at 300 K, conducting. Every cell is inactive, so
+    after the first step each pair's heat is its conductance kept from the rebuild step times
+    today's temperature difference: the temperatures after 300 steps equal those of the run
+    without mobility to 1e-12 K (f64; the geometry, hence the conductance, does not change)."""
+    r, n = 0.002, 10
+    spacing = 2 * r * (1 - 1e-3)
+    side = n * spacing
+    ax = (np.arange(n) + 0.5) * spacing
+    x = np.array(np.meshgrid(ax, ax, ax, indexing="ij")).reshape(3, -1).T
+    hot = x[:, 0] < side / 2
+    fills = ""
+    for name, sel, temp in (("hot", hot, 400.0), ("cold", ~hot, 300.0)):
+        np.savetxt(tmp_path / f"{name}.csv", np.column_stack([x[sel], np.full(sel.sum(), r)]),
+                   delimiter=",", header="x,y,z,radius", comments="")
+        fills += (f'[[particles]]\nmaterial = "glass"\nfixed = true\ntemperature = {temp}\n'
+                  f'file = "{name}.csv"\n\n')
+    text = f"""
+[simulation]
+end_time = 1.0
+gravity = [0.0, 0.0, 0.0]
+precision = "f64"
+dt = 1e-4
+[domain]
+min = [0, 0, 0]
+max = [{side}, {side}, {side}]
+periodic = ["x", "y", "z"]
+[materials.glass]
+density = 2500.0
+youngs_modulus = 1e7
+poisson_ratio = 0.25
+thermal_conductivity = 1.0
+heat_capacity = 800.0
+[[interactions]]
+pair = ["glass", "glass"]
+restitution = 0.5
+friction = 0.5
+[thermal]
+conduction = true
+{fills}"""
+    temperatures = {}
+    for mobility in ("", "[mobility]\ngranular_temperature_threshold = 1e-6\nsolid_fraction_threshold = 0.2\n"):
+        with td.Simulation.from_text(text + mobility, base_dir=str(tmp_path)) as sim:
+            if mobility:
+                m = sim.engine.mobility
+                assert m.statistics()["inactive_particles"] == n ** 3, (m.statistics(), m.blocks, m.block_solid_fraction.to_numpy(), m.block_temperature.to_numpy().max(), m.block_mean_speed_sq.to_numpy().max())
+            sim.step(300)
+            p = sim.particles()
+            temperatures[bool(mobility)] = p["temperature"]
+    moved = np.max(np.abs(temperatures[False] - np.where(hot, 400.0, 300.0)))
+    assert moved > 1e-3                     # heat did flow
+    assert np.max(np.abs(temperatures[True] - temperatures[False])) < 1e-12
