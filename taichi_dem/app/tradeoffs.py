@@ -34,8 +34,8 @@ does not apply, is skipped and the report says why):
                 fill mass); factory mass rates unchanged (the particle rate falls by the cube),
                 so the mass flows match; an explicit dt is scaled by the factor (the contact
                 time grows as the radius). Interactions, materials and geometry are unchanged.
-``mobility``    ``mobility.enabled = true`` (mobility skipping; the loader refuses it until it
-                exists, then the knob runs).
+``mobility``    ``mobility.enabled = true`` (mobility skipping, issue 12: the contacts and
+                integration of immobile particles skipped).
 ``time_scale``  ``thermal.time_scale`` 10, 100 (thermal scenes: heat capacities divided by S,
                 issue 10).
 """

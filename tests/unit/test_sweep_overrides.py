@@ -85,7 +85,7 @@ def test_structural_errors_name_file_and_key(key, value, words):
     ("interactions.0.friciton", 0.3, "interactions[0].friciton", ["did you mean 'friction'"]),
     ("simulation.rayleigh_fraction", 3.0, "simulation.rayleigh_fraction", ["must be in (0, 1]"]),
     ("materials.glass.youngs_modulus", "hard", "materials.glass.youngs_modulus", []),
-    ("mobility.enabled", True, "mobility", ["not supported yet"]),
+    ("mobility.mode", "frozen", "mobility.mode", ["at_rest"]),
 ])
 def test_loader_errors_name_file_key_and_the_set(key, value, loader_key, words):
     """The loader validates the overridden document: its message names the scene file, the
@@ -185,10 +185,14 @@ def test_tradeoff_planning_timestep_modulus_and_hooks():
     ref, variants, skipped = tradeoffs.plan_study(str(BOX), ["timestep", "mobility", "time_scale"],
                                                   seeds=1, duration=0.02)
     info = tradeoffs.step_info(parse_scene(ref[0].text, source=str(BOX)))
-    dts = [parse_scene(v.text, source=str(BOX)).simulation.dt for v in variants]
+    timestep = [v for v in variants if v.labels["knob"] == "timestep"]
+    dts = [parse_scene(v.text, source=str(BOX)).simulation.dt for v in timestep]
     assert dts == pytest.approx([f * info["dt"] for f in (0.5, 1.5, 2.0, 2.4)], rel=1e-12)
     assert all(parse_scene(v.text, source=str(BOX)).simulation.precision == "f64" for v in variants)
-    assert "not supported yet" in skipped["mobility: enabled"]
+    # mobility (issue 12) is a knob now: its variant enables it
+    assert "mobility: enabled" not in skipped
+    mobility = [v for v in variants if v.labels["knob"] == "mobility"]
+    assert len(mobility) == 1 and parse_scene(mobility[0].text, source=str(BOX)).mobility is not None
     assert "no [thermal]" in skipped["time_scale"]
 
     import os
