@@ -19,6 +19,10 @@ as the summaries use). Names and units:
 ``gas/outlet_temperature``             K      plug-flow gas leaving the domain
 ``particles/mean_temperature``         K      at the end of the run (thermal)
 ``particles/kinetic_energy``           J      every scene
+``particles/discharge_rate``           1/s    particles leaving the domain (a hopper's
+                                              orifice): the slope of the lost count while 15 -
+                                              60 % of the initial count has left, as the hopper
+                                              demo fits its rate (only once 60 % has left)
 =====================================  =====  ===============================================
 """
 from __future__ import annotations
@@ -30,7 +34,8 @@ import numpy as np
 
 UNITS = {"axial_torque": "N m", "power": "W", "heat_flow": "W", "load": "N", "mass_flow": "kg/s",
          "residence_mean": "s", "residence_median": "s", "temperature": "K",
-         "outlet_temperature": "K", "mean_temperature": "K", "kinetic_energy": "J"}
+         "outlet_temperature": "K", "mean_temperature": "K", "kinetic_energy": "J",
+         "discharge_rate": "1/s"}
 
 
 def unit(name: str) -> str:
@@ -99,6 +104,14 @@ def key_outputs(h5_path: str, window: float = 0.25) -> dict[str, float]:
         if "particles/mean_temperature" in s and s["particles/mean_temperature"].shape[0]:
             out["particles/mean_temperature"] = float(s["particles/mean_temperature"][-1])
         out["particles/kinetic_energy"] = tail_mean("particles/kinetic_energy")
+        if "particles/lost" in s and "particles/count" in s and s["particles/count"].shape[0]:
+            t = s["time"][()]
+            lost = s["particles/lost"][()].astype(float)
+            initial = float(s["particles/count"][0])
+            if initial > 0 and lost[-1] >= 0.6 * initial:
+                window_ = (lost >= 0.15 * initial) & (lost <= 0.6 * initial)
+                if np.count_nonzero(window_) >= 3:
+                    out["particles/discharge_rate"] = float(np.polyfit(t[window_], lost[window_], 1)[0])
     return out
 
 

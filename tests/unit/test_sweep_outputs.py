@@ -7,6 +7,7 @@ import math
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import taichi_dem as td
@@ -40,3 +41,25 @@ def test_outputs_from_hdf5_match_the_summary(tmp_path, capsys):
     assert 0.0 < out["particles/kinetic_energy"] and math.isfinite(out["particles/kinetic_energy"])
     assert unit("drain/temperature") == "K" and unit("mid/mass_flow") == "kg/s"
     assert unit("res/residence_mean") == "s"
+
+
+def test_discharge_rate_is_the_slope_while_15_to_60_percent_left(tmp_path):
+    # a hopper's discharge read from its lost count: 1000 particles leaving at 400/s from
+    # t = 0.5 s; the slope of the 15 - 60 % window is the rate, and a run that has not let 60 %
+    # out has none
+    import h5py
+    from taichi_dem.app.outputs import key_outputs
+    t = np.linspace(0.0, 3.0, 61)
+    lost = np.clip(400.0 * (t - 0.5), 0.0, 1000.0)
+    path = tmp_path / "r.h5"
+    with h5py.File(path, "w") as f:
+        s = f.create_group("series")
+        s["time"] = t
+        s["particles/count"] = 1000.0 - lost
+        s["particles/lost"] = lost
+        s["particles/kinetic_energy"] = np.ones_like(t)
+    assert key_outputs(str(path))["particles/discharge_rate"] == pytest.approx(400.0, rel=1e-9)
+    with h5py.File(path, "a") as f:
+        del f["series/particles/lost"]
+        f["series/particles/lost"] = np.minimum(lost, 500.0)
+    assert "particles/discharge_rate" not in key_outputs(str(path))
