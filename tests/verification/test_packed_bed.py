@@ -23,8 +23,8 @@ from packed_bed import packed_bed_conductivity
 
 @pytest.mark.slow
 def test_glass_bed_is_bracketed_by_the_two_gas_gap_models():
-    iso = packed_bed_conductivity("glass", model="isothermal", count=700)
-    solid = packed_bed_conductivity("glass", model="solid_resistance", count=700)
+    iso = packed_bed_conductivity("glass", model="isothermal", count=900)
+    solid = packed_bed_conductivity("glass", model="solid_resistance", count=900)
     zbs = iso["zehner_schlunder"]
     print(f"\n  glass, porosity {iso['porosity']:.3f}: isothermal {abs(iso['k_eff']):.4f}, "
           f"solid resistance {abs(solid['k_eff']):.4f}, Zehner-Schlünder {zbs:.4f} W/(m K)")
@@ -36,8 +36,8 @@ def test_glass_bed_is_bracketed_by_the_two_gas_gap_models():
 
 @pytest.mark.slow
 def test_steel_bed_near_zehner_schlunder():
-    iso = packed_bed_conductivity("steel", model="isothermal", count=700)
-    solid = packed_bed_conductivity("steel", model="solid_resistance", count=700)
+    iso = packed_bed_conductivity("steel", model="isothermal", count=900)
+    solid = packed_bed_conductivity("steel", model="solid_resistance", count=900)
     zbs = iso["zehner_schlunder"]
     print(f"\n  steel, porosity {iso['porosity']:.3f}: isothermal {abs(iso['k_eff']):.4f}, "
           f"solid resistance {abs(solid['k_eff']):.4f}, Zehner-Schlünder {zbs:.4f} W/(m K)")
