@@ -129,17 +129,17 @@ def test_killed_sweep_resumes_without_rerunning_finished_runs(tmp_path):
 
 
 def test_tradeoffs_report_numbers(client, tmp_path):
-    """A tiny study (coarse graining, 2 seeds; the mobility hook skipped): the report's
+    """A tiny study (coarse graining, 2 seeds; the time-scale knob skipped: no heat): the report's
     errors and speed-ups are those of its runs, the coarse-grained runs have 1/f^3 the beads
     at f times the time step, and one PNG per output is written."""
-    res = tradeoffs.run_tradeoffs(BOX, str(tmp_path), ["size", "mobility"], seeds=2,
+    res = tradeoffs.run_tradeoffs(BOX, str(tmp_path), ["size", "time_scale"], seeds=2,
                                   duration=DURATION, tolerance=0.05, client=client,
                                   command="test", progress=False)
     recs = res["records"]
     assert all(r["status"] == "done" for r in recs), [r.get("message") for r in recs]
     ref, rows = res["reference"], {r.setting: r for r in res["rows"]}
     assert set(rows) == {"radius x1.5", "radius x2"}
-    assert "not supported yet" in res["skipped"]["mobility: enabled"]
+    assert "no [thermal]" in res["skipped"]["time_scale"]
 
     def of(setting):
         return [r for r in recs if r["labels"]["setting"] == setting]
@@ -170,7 +170,7 @@ def test_tradeoffs_report_numbers(client, tmp_path):
         assert f"{100 * row.errors['floor/load']:+.1f} %" in line
         assert f"| {row.speedup:.3g} |" in line
     assert "## size" in md and "Recommended" in md
-    assert "mobility" in md.split("## Skipped")[1]
+    assert "time_scale" in md.split("## Skipped")[1]
     # the study restricted to one output: same numbers, one plot; an unknown name exits 2
     ref1, rows1, _ = tradeoffs.aggregate(recs, ["floor/load"])
     assert list(ref1.values) == ["floor/load"]
