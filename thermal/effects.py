@@ -214,7 +214,18 @@ class PlugFlowGas(Effect):
     def after_pairs(self, engine, n, dt):
         """The per-cell stage: the gas sees this step's particles (W, K); its energy
         integral advances by the thermal step (S dt)."""
-        engine.gas_stream.exchange(n, dt * engine.scene.thermal.time_scale)
+        engine.gas_stream.exchange(n, dt * engine.scene.thermal.time_scale, engine.serial)
+
+    def cell_func(self, engine):
+        """``after_pairs`` as a ti.func (n, dt) for a loop that is already serial
+        (Engine.run_steps, several steps in one launch)."""
+        exchange = engine.gas_stream.exchange_serial
+        time_scale = engine.scene.thermal.time_scale
+
+        @ti.func
+        def gas_march(n, dt):
+            exchange(n, dt * time_scale)
+        return gas_march
 
     def particle_func(self, engine):
         s = engine.state

@@ -40,8 +40,9 @@ def _phi(x):
 
 
 class AxialPlugFlowGas:
-    """The gas stream's fields and kernels. ``exchange(n, dt)`` runs after the pair kernel and
-    before the particle update; ``particle_heat(i, T)`` is the ti.func the update calls.
+    """The gas stream's fields and kernels. ``exchange(n, dt, serial_loops)`` runs after the pair
+    kernel and before the particle update (``serial_loops``: the engine's loop mode);
+    ``particle_heat(i, T)`` is the ti.func the update calls.
 
     Per-particle scratch (cell, conductance) is recomputed every step, so it needs no
     reordering; it is sized to the particle capacity it was built with."""
@@ -115,9 +116,45 @@ class AxialPlugFlowGas:
             G[i] = h_area
             return c, h_area
 
+        @ti.func
+        def march(dt):
+            """The gas from the inlet cell by cell: each cell's exchange with the particles in
+            it (the sums GC, SC of this step), then those sums cleared; dt: the thermal step, s."""
+            t_gas = ti.cast(t_in, self.real)
+            total = 0.0
+            for k in range(n_cells):
+                c = k
+                if ti.static(not along):
+                    c = n_cells - 1 - k
+                if ti.static(blocks):
+                    for b in range(blocks):
+                        GC[c] += PG[b, c]
+                        SC[c] += PS[b, c]
+                        PG[b, c] = 0.0
+                        PS[b, c] = 0.0
+                g_c = GC[c]
+                t_out = t_gas
+                t_seen = t_gas
+                if g_c > 0.0:
+                    t_particles = SC[c] / g_c
+                    ntu = g_c / capacity_rate
+                    f = phi(ntu)                      # (1 - e^-NTU) / NTU
+                    t_out = t_gas - (t_gas - t_particles) * ntu * f
+                    t_seen = t_particles + (t_gas - t_particles) * f    # T_pc + Q_c / G_c
+                    total += capacity_rate * (t_gas - t_out)
+                TC[c] = t_seen
+                TX[c] = t_out
+                GC[c] = 0.0
+                SC[c] = 0.0
+                t_gas = t_out
+            totals[0] = ti.cast(total, ti.f64)
+            totals[1] += ti.cast(total, ti.f64) * ti.cast(dt, ti.f64)
+            totals[2] = ti.cast(t_gas, ti.f64)
+
         @ti.kernel
-        def exchange(n: ti.i32, dt: self.real):
+        def exchange(n: ti.i32, dt: self.real, serial_loops: ti.template()):
             if ti.static(blocks):
+                ti.loop_config(serialize=serial_loops)
                 for b in range(blocks):
                     chunk = (n + blocks - 1) // blocks
                     for i in range(b * chunk, ti.min(n, (b + 1) * chunk)):     # serial in a block
@@ -126,42 +163,26 @@ class AxialPlugFlowGas:
                             PG[b, c] = PG[b, c] + h_area                 # own row: no atomics
                             PS[b, c] = PS[b, c] + h_area * s.temperature[i]
             else:
+                ti.loop_config(serialize=serial_loops)
                 for i in range(n):
                     c, h_area = particle_conductance(i)
                     if c >= 0:
                         ti.atomic_add(GC[c], h_area)
                         ti.atomic_add(SC[c], h_area * s.temperature[i])
+            ti.loop_config(serialize=True)
             for _ in range(1):           # one serial march from the inlet
-                t_gas = ti.cast(t_in, self.real)
-                total = 0.0
-                for k in range(n_cells):
-                    c = k
-                    if ti.static(not along):
-                        c = n_cells - 1 - k
-                    if ti.static(blocks):
-                        for b in range(blocks):
-                            GC[c] += PG[b, c]
-                            SC[c] += PS[b, c]
-                            PG[b, c] = 0.0
-                            PS[b, c] = 0.0
-                    g_c = GC[c]
-                    t_out = t_gas
-                    t_seen = t_gas
-                    if g_c > 0.0:
-                        t_particles = SC[c] / g_c
-                        ntu = g_c / capacity_rate
-                        f = phi(ntu)                      # (1 - e^-NTU) / NTU
-                        t_out = t_gas - (t_gas - t_particles) * ntu * f
-                        t_seen = t_particles + (t_gas - t_particles) * f    # T_pc + Q_c / G_c
-                        total += capacity_rate * (t_gas - t_out)
-                    TC[c] = t_seen
-                    TX[c] = t_out
-                    GC[c] = 0.0
-                    SC[c] = 0.0
-                    t_gas = t_out
-                totals[0] = ti.cast(total, ti.f64)
-                totals[1] += ti.cast(total, ti.f64) * ti.cast(dt, ti.f64)
-                totals[2] = ti.cast(t_gas, ti.f64)
+                march(dt)
+
+        @ti.func
+        def exchange_serial(n, dt):
+            """``exchange`` inside a loop that is already serial (Engine.run_steps): the
+            particles' sums go straight onto their cells, then the march."""
+            for i in range(n):
+                c, h_area = particle_conductance(i)
+                if c >= 0:
+                    GC[c] += h_area
+                    SC[c] += h_area * s.temperature[i]
+            march(dt)
 
         @ti.func
         def particle_heat(i, temperature):
@@ -186,6 +207,7 @@ class AxialPlugFlowGas:
             return t, inside
 
         self.exchange = exchange
+        self.exchange_serial = exchange_serial
         self.particle_heat = particle_heat
         self.local_temperature = local_temperature
 

@@ -7,6 +7,7 @@ lists them with their messages).
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import sys
 import time
@@ -32,6 +33,10 @@ def _common_outputs(p: argparse.ArgumentParser):
     p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"])
     p.add_argument("--precision", choices=["f32", "f64"])
     p.add_argument("--threads", type=int, help="CPU threads (default: all cores)")
+    p.add_argument("--parallel-from", type=int, metavar="N", dest="parallel_from",
+                   help="particles from which the CPU runs the step on all threads; below, one "
+                        "thread and several steps per launch (default 2000; 0: always "
+                        "parallel; BENCHMARKS.md 'Small scenes')")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--window", "--gui", action="store_true", dest="window",
                    help="a live window (Taichi GGUI): space pauses, up/down change the speed "
@@ -224,7 +229,7 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
     t0 = time.perf_counter()
     try:
         sim = Simulation(scene, arch=args.arch, precision=args.precision, threads=args.threads,
-                         h5=h5 or "")
+                         h5=h5 or "", parallel_from=getattr(args, "parallel_from", None))
     except DivergenceError as err:       # at the first sample: there is no good state
         return _fail(f"{err} (at the start: no checkpoint written)", 3)
     # beside the results, or in --out DIR (CONTRACT.md); also where a divergence leaves the
@@ -235,6 +240,7 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
 
 def cmd_resume(args) -> int:
     """Continue a checkpointed run: results appended to its results file (or --h5/--out)."""
+    from ..run.checkpoint import resume as resume_checkpoint
     from ..run.simulation import Simulation
 
     problem = _window_problem(args)
@@ -259,8 +265,9 @@ def cmd_resume(args) -> int:
         h5 = stored_results if stored_results and Path(stored_results).exists() else ""
     checkpoint = str(Path(args.out) / Path(path).name) if args.out else path
     try:
-        sim = Simulation.from_checkpoint(path, arch=args.arch, threads=args.threads, h5=h5,
-                                         checkpoint=checkpoint)
+        build = functools.partial(Simulation, parallel_from=args.parallel_from)
+        sim = resume_checkpoint(path, build=build, arch=args.arch, threads=args.threads, h5=h5,
+                                checkpoint=checkpoint)
     except CheckpointError as err:
         return _fail(str(err))
     if args.precision and args.precision != sim.precision:

@@ -26,7 +26,7 @@ from ..contacts.geometry import contact_types
 from ..contacts.law import has_effects, margin_fraction
 from ..effects.mesh_contact import closest_point_on_triangle
 from ..engine.broadphase import exclusive_scan, previous_entry
-from ..engine.state import fit_rows
+from ..engine.state import fit_rows, grown_capacity
 from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
 
 SAME_SURFACE_COS = math.cos(math.radians(30.0))
@@ -264,10 +264,21 @@ class MeshContacts:
                 m.offset[b] = off
                 m.angular_velocity[b] = omega
 
+        @ti.func
+        def set_frames(time):
+            """update_frames inside a loop that is already serial (Engine.run_steps)."""
+            for b in range(nb):
+                rot, off, omega = frame_of(b, time)
+                m.rotation[b] = rot
+                m.offset[b] = off
+                m.angular_velocity[b] = omega
+
+        self.set_frames = set_frames
         heat_loads = self.particle_load_heat is not None
 
         @ti.kernel
-        def flush_loads(n: ti.i32):
+        def flush_loads(n: ti.i32, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 for b in ti.static(range(nb)):
                     m.force_sum[b] += m.particle_load_force[i, b]
@@ -278,8 +289,8 @@ class MeshContacts:
                         m.heat_sum[b] += m.particle_load_heat[i, b]
                         m.particle_load_heat[i, b] = 0.0
 
-        self._update_frames = update_frames
-        self._flush_loads = flush_loads
+        self._update_frames = update_frames     # (a few bodies: always serial)
+        self._flush_loads = self.e.serial_switch(flush_loads)
         self._compile_binning()
         self._compile_rows()
 
@@ -340,21 +351,25 @@ class MeshContacts:
                                 ti.atomic_add(m.tri_cell_count[cid], 1)
 
         @ti.kernel
-        def count_bins() -> ti.i32:
+        def count_bins(serial_loops: ti.template()) -> ti.i32:
+            ti.loop_config(serialize=serial_loops)
             for c in range(n_cells):
                 m.tri_cell_count[c] = 0
                 m.tri_cell_fill[c] = 0
+            ti.loop_config(serialize=serial_loops)
             for t in range(nt):
                 visit_cells(t, False)
             exclusive_scan(m.tri_cell_count, m.tri_cell_start, n_cells)
             return m.tri_cell_start[n_cells]
 
         @ti.kernel
-        def fill_bins():
+        def fill_bins(serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for t in range(nt):
                 visit_cells(t, True)
 
-        self._count_bins, self._fill_bins = count_bins, fill_bins
+        self._count_bins = self.e.serial_switch(count_bins)
+        self._fill_bins = self.e.serial_switch(fill_bins)
 
     def _compile_rows(self):
         m = self
@@ -366,7 +381,8 @@ class MeshContacts:
         scratch = self.scratch
 
         @ti.kernel
-        def save_rows(n: ti.i32):
+        def save_rows(n: ti.i32, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 pid = s.particle_id[i]
                 m.old_start_by_id[pid] = m.mesh_start[i]
@@ -379,7 +395,8 @@ class MeshContacts:
                         m.old_rolling_history[k] = m.rolling_history[k]
 
         @ti.kernel
-        def find_candidates(n: ti.i32) -> ti.i32:
+        def find_candidates(n: ti.i32, serial_loops: ti.template()) -> ti.i32:
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 c = s.cell[i]
                 xi = s.position[i]
@@ -397,12 +414,14 @@ class MeshContacts:
                         count += 1
                 m.mesh_count[i] = count
             longest = 0
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 ti.atomic_max(longest, m.mesh_count[i])
             exclusive_scan(m.mesh_count, m.mesh_start, n)
             return longest
 
-        self._save_rows, self._find_candidates = save_rows, find_candidates
+        self._save_rows = self.e.serial_switch(save_rows)
+        self._find_candidates = self.e.serial_switch(find_candidates)
         self._compile_compact()
 
     def _compile_compact(self):
@@ -414,7 +433,8 @@ class MeshContacts:
         old_rolling = m.old_rolling_history if epsd else m.old_history  # (unused without EPSD)
 
         @ti.kernel
-        def compact_and_carry(n: ti.i32):
+        def compact_and_carry(n: ti.i32, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 pid = s.particle_id[i]
                 old_start = m.old_start_by_id[pid]
@@ -434,7 +454,7 @@ class MeshContacts:
                         if ti.static(epsd):
                             m.rolling_history[k] = old_rolling[old]
 
-        self._compact_and_carry = compact_and_carry
+        self._compact_and_carry = self.e.serial_switch(compact_and_carry)
 
     # --------------------------------------------------------------- contact law
     def make_particle_contacts(self, triangle_law, surface_law, sphere_surface):
@@ -613,7 +633,7 @@ class MeshContacts:
         entries = int(self.mesh_start[n])
         grown = False
         if entries > self.entries_capacity:
-            self._alloc_entries(int(entries * 1.5) + 16)
+            self._alloc_entries(grown_capacity(entries, n, self.e.state.capacity) + 16)
             self._compile_rows()
             grown = True
         self._compact_and_carry(n)
@@ -625,6 +645,23 @@ class MeshContacts:
         half = 0.5 * self.e.skin
         return any(self.kin.displacement(k, self.binned_time, time) > half
                    for k in range(self.n_bodies))
+
+    def steps_before_rebinning(self, time: float, dt: float, most: int) -> int:
+        """How many steps at ``time``, ``time + dt``, ... (at most ``most``, at least 1) the
+        current binning serves: the largest m with no body moved half the skin by
+        ``time + (m - 1) dt``. A bisection: the bound (kinematics.displacement) grows with
+        time unless a body reverses within the span, which a run of steps (at most one output
+        interval or factory batch) does not straddle in practice."""
+        if most <= 1 or not self.needs_rebinning(time + (most - 1) * dt):
+            return max(most, 1)
+        good, bad = 1, most        # steps: good serves (time was checked), bad does not
+        while bad - good > 1:
+            mid = (good + bad) // 2
+            if self.needs_rebinning(time + (mid - 1) * dt):
+                bad = mid
+            else:
+                good = mid
+        return good
 
     def contact_counts(self, n: int) -> np.ndarray:
         """Number of alive particles touching each body now (the heat-exchange surface's
@@ -641,9 +678,11 @@ class MeshContacts:
                 counts.finalize()
 
             @ti.kernel
-            def count_contacts(n: ti.i32):
+            def count_contacts(n: ti.i32, serial_loops: ti.template()):
+                ti.loop_config(serialize=serial_loops)
                 for b in range(nb):
                     m.touching[b] = 0
+                ti.loop_config(serialize=serial_loops)
                 for i in range(n):
                     if s.alive[i] != 0:
                         for b in ti.static(range(nb)):
@@ -653,7 +692,7 @@ class MeshContacts:
                                     touches = 1
                             if touches != 0:
                                 ti.atomic_add(m.touching[b], 1)
-            self._count_contacts = count_contacts
+            self._count_contacts = self.e.serial_switch(count_contacts)
         self._count_contacts(n)
         return self.touching.to_numpy()[: self.n_bodies].astype(np.int64)
 
@@ -672,15 +711,17 @@ class MeshContacts:
                 tree.finalize()
 
             @ti.kernel
-            def mark_touched(n: ti.i32):
+            def mark_touched(n: ti.i32, serial_loops: ti.template()):
+                ti.loop_config(serialize=serial_loops)
                 for t in range(m.n_triangles):
                     m.touched[t] = 0
+                ti.loop_config(serialize=serial_loops)
                 for i in range(n):
                     if s.alive[i] != 0:
                         for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
                             if m.mesh_contact[k] != 0:
                                 m.touched[m.mesh_tri[k]] = 1      # benign race: all write 1
-            self._mark_touched = mark_touched
+            self._mark_touched = self.e.serial_switch(mark_touched)
         if self.n_triangles == 0:
             return np.zeros(self.n_bodies)
         self._mark_touched(n)
@@ -703,16 +744,18 @@ class MeshContacts:
                 tree.finalize()
 
             @ti.kernel
-            def deepest_overlap(n: ti.i32):
+            def deepest_overlap(n: ti.i32, serial_loops: ti.template()):
+                ti.loop_config(serialize=serial_loops)
                 for b in range(nb):
                     m.deepest[b] = 0.0
+                ti.loop_config(serialize=serial_loops)
                 for i in range(n):
                     if s.alive[i] != 0:
                         for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
                             if m.mesh_contact[k] != 0:
                                 ti.atomic_max(m.deepest[m.tri_body[m.mesh_tri[k]]],
                                               m.mesh_overlap[k] / s.radius[i])
-            self._deepest_overlap = deepest_overlap
+            self._deepest_overlap = self.e.serial_switch(deepest_overlap)
         self._deepest_overlap(n)
         return self.deepest.to_numpy()[: self.n_bodies].astype(np.float64)
 

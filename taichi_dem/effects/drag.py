@@ -53,19 +53,37 @@ class Drag(Effect):
         cell_solid = self.cell_solid
 
         @ti.kernel
-        def solid_per_cell(n: ti.i32):
-            for c in cell_solid:
+        def solid_per_cell(n: ti.i32, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
+            for c in range(cell_solid.shape[0]):
                 cell_solid[c] = 0.0
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 if s.alive[i] != 0:
                     r = s.radius[i]
                     ti.atomic_add(cell_solid[s.cell[i]], 4.0 / 3.0 * math.pi * r * r * r)
 
-        self._solid_per_cell = solid_per_cell
+        self._solid_per_cell = engine.serial_switch(solid_per_cell)
+
+        @ti.func
+        def solid_per_cell_serial(n, dt):
+            """The same inside a loop that is already serial (Engine.run_steps)."""
+            for c in range(cell_solid.shape[0]):
+                cell_solid[c] = 0.0
+            for i in range(n):
+                if s.alive[i] != 0:
+                    r = s.radius[i]
+                    cell_solid[s.cell[i]] += 4.0 / 3.0 * math.pi * r * r * r
+
+        self._solid_per_cell_serial = solid_per_cell_serial
 
     def after_pairs(self, engine, n, dt):
         """The cell stage: solid volume per contact cell (m^3)."""
         self._solid_per_cell(n)
+
+    def cell_func(self, engine):
+        """``after_pairs`` as a ti.func (n, dt) for Engine.run_steps."""
+        return self._solid_per_cell_serial
 
     def particle_func(self, engine):
         s = engine.state

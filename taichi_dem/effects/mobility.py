@@ -182,9 +182,10 @@ class Mobility(Effect):
             return (b * d + n - 1) // n
 
         @ti.kernel
-        def update(n: ti.i32, t: ti.f64):
+        def update(n: ti.i32, t: ti.f64, serial_loops: ti.template()):
             for k in ti.static(range(4)):
                 counts[k] = 0
+            ti.loop_config(serialize=serial_loops)
             for b in range(n_blocks):
                 bz = b % nbz
                 by = (b // nbz) % nby
@@ -229,6 +230,7 @@ class Mobility(Effect):
                 if ti.static(check_acceleration):
                     if acceleration > acceleration_sq * number:
                         flag[b] = 1
+            ti.loop_config(serialize=serial_loops)
             for b in range(n_blocks):
                 bz = b % nbz
                 by = (b // nbz) % nby
@@ -245,6 +247,7 @@ class Mobility(Effect):
                         if inside and count[nb] == 0:
                             state = MOBILE
                 mobile[b] = state
+            ti.loop_config(serialize=serial_loops)
             for b in range(n_blocks):
                 bz = b % nbz
                 by = (b // nbz) % nby
@@ -258,6 +261,7 @@ class Mobility(Effect):
                 status[b] = state
                 if state != EMPTY:
                     ti.atomic_add(counts[1 + ti.min(state, 2)], 1)
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 a = 1
                 if status[block_of_cell(s.cell[i])] == INACTIVE:
@@ -283,7 +287,7 @@ class Mobility(Effect):
             return (cell[0] * nby + cell[1]) * nbz + cell[2], inside
 
         rigid_spin = self.make_rigid_spin(engine)
-        self._update = update
+        self._update = engine.serial_switch(update)
         self.body_frame = body_frame
 
     def make_rigid_velocity(self, engine):

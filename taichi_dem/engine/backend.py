@@ -10,6 +10,7 @@ why precision is a runtime setting and not only a field dtype.
 """
 from __future__ import annotations
 
+import os
 import weakref
 
 import taichi as ti
@@ -23,7 +24,7 @@ _ARCHES = {
     "vulkan": lambda: ti.vulkan,
     "metal": lambda: ti.metal,
 }
-_current: dict = {"arch": None, "precision": None, "generation": 0}
+_current: dict = {"arch": None, "precision": None, "generation": 0, "threads": None}
 _live: "weakref.WeakSet" = weakref.WeakSet()
 
 
@@ -46,9 +47,17 @@ def acquire(owner, arch: str = "cpu", precision: str = "f32", threads: int | Non
         if threads:
             kwargs["cpu_max_num_threads"] = threads
         ti.init(**kwargs)
-        _current.update(arch=arch, precision=precision, generation=_current["generation"] + 1)
+        _current.update(arch=arch, precision=precision, generation=_current["generation"] + 1,
+                        threads=threads)
     _live.add(owner)
     return _current["generation"]
+
+
+def cpu_threads() -> int | None:
+    """Threads a CPU runtime runs parallel loops on (None on a GPU)."""
+    if _current["arch"] != "cpu":
+        return None
+    return _current["threads"] or os.cpu_count() or 1
 
 
 def generation() -> int:

@@ -16,7 +16,7 @@ import math
 import numpy as np
 import taichi as ti
 
-from .state import PairState
+from .state import PairState, grown_capacity
 
 MAX_CELLS_PER_PARTICLE = 8      # a sparse domain gets coarser cells instead of millions of empty ones
 MIN_CELLS = 4096
@@ -126,17 +126,20 @@ class Broadphase:
             return (c[0] * dims[1] + c[1]) * dims[2] + c[2]
 
         @ti.kernel
-        def save_rows(n: ti.i32):
+        def save_rows(n: ti.i32, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 pid = s.particle_id[i]
                 s.old_row_start_by_id[pid] = s.row_start[i]
                 s.old_row_count_by_id[pid] = s.row_owned[i]
 
         @ti.kernel
-        def sort_by_cell(n: ti.i32):
+        def sort_by_cell(n: ti.i32, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for c in range(n_cells):
                 cell_count[c] = 0
                 cell_fill[c] = 0
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 # dead particles (left the domain) sort to the end and are dropped
                 c = n_cells
@@ -155,39 +158,52 @@ class Broadphase:
                     s.order[slot] = i
 
         @ti.kernel
-        def permute(n: ti.i32):
+        def permute(n: ti.i32, serial_loops: ti.template()):
             # new slot k takes old particle order[k]; every per-particle array moves together
             for f in ti.static(vec_fields):
+                ti.loop_config(serialize=serial_loops)
                 for k in range(n):
                     s.shadow_vec[k] = f[s.order[k]]
+                ti.loop_config(serialize=serial_loops)
                 for k in range(n):
                     f[k] = s.shadow_vec[k]
             for f in ti.static(real_fields):
+                ti.loop_config(serialize=serial_loops)
                 for k in range(n):
                     s.shadow_real[k] = f[s.order[k]]
+                ti.loop_config(serialize=serial_loops)
                 for k in range(n):
                     f[k] = s.shadow_real[k]
             for f in ti.static(int_fields):
+                ti.loop_config(serialize=serial_loops)
                 for k in range(n):
                     s.shadow_int[k] = f[s.order[k]]
+                ti.loop_config(serialize=serial_loops)
                 for k in range(n):
                     f[k] = s.shadow_int[k]
             for f in ti.static(f64_fields):
+                ti.loop_config(serialize=serial_loops)
                 for k in range(n):
                     s.shadow_f64[k] = f[s.order[k]]
+                ti.loop_config(serialize=serial_loops)
                 for k in range(n):
                     f[k] = s.shadow_f64[k]
             for f in ti.static(wall_fields):
                 for w in ti.static(range(n_walls)):
+                    ti.loop_config(serialize=serial_loops)
                     for k in range(n):
                         s.shadow_vec[k] = f[s.order[k], w]
+                    ti.loop_config(serialize=serial_loops)
                     for k in range(n):
                         f[k, w] = s.shadow_vec[k]
+            ti.loop_config(serialize=serial_loops)
             for k in range(n):
                 s.cell[k] = cell_of(s.position[k])
                 s.reference_position[k] = s.position[k]
 
-        self._save_rows, self._sort_by_cell, self._permute = save_rows, sort_by_cell, permute
+        serial = self.e.serial_switch
+        self._save_rows, self._sort_by_cell, self._permute = (
+            serial(save_rows), serial(sort_by_cell), serial(permute))
         self._compile_search(32)
 
     def _compile_search(self, width: int):
@@ -214,7 +230,8 @@ class Broadphase:
         minimum_image = g.make_minimum_image()
 
         @ti.kernel
-        def find_candidates(n: ti.i32) -> ti.i32:
+        def find_candidates(n: ti.i32, serial_loops: ti.template()) -> ti.i32:
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 c = s.cell[i]
                 cz = c % dims[2]
@@ -255,13 +272,14 @@ class Broadphase:
                                     count += 1
                 s.row_count[i] = count
             longest = 0
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 ti.atomic_max(longest, s.row_count[i])
             exclusive_scan(s.row_count, s.row_start, n)
             total[0] = s.row_start[n]
             return longest
 
-        self._find_candidates = find_candidates
+        self._find_candidates = self.e.serial_switch(find_candidates)
 
     def _make_compact(self, pairs: "PairState"):
         """Kernel copying the scratch rows into the CSR list, owned pairs (partner id larger)
@@ -272,7 +290,8 @@ class Broadphase:
         scratch = scratch_field()
 
         @ti.kernel
-        def compact(n: ti.i32):
+        def compact(n: ti.i32, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 front = s.row_start[i]
                 back = s.row_start[i] + s.row_count[i] - 1
@@ -286,7 +305,7 @@ class Broadphase:
                         p.neighbour[back] = j
                         back -= 1
                 s.row_owned[i] = front - s.row_start[i]
-        return compact
+        return self.e.serial_switch(compact)
 
     def compile_pair_kernels(self, pairs: PairState):
         """Kernels that touch the pair arrays; rebuilt whenever those are reallocated."""
@@ -297,7 +316,8 @@ class Broadphase:
         self._compact = self._make_compact(p)
 
         @ti.kernel
-        def save_pairs(n: ti.i32):
+        def save_pairs(n: ti.i32, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                     p.old_partner_id[k] = s.particle_id[p.neighbour[k]]
@@ -306,7 +326,8 @@ class Broadphase:
                         f[1][k] = f[0][k]
 
         @ti.kernel
-        def link_and_carry(n: ti.i32):
+        def link_and_carry(n: ti.i32, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 pid = s.particle_id[i]
                 old_start = s.old_row_start_by_id[pid]
@@ -334,7 +355,8 @@ class Broadphase:
                             p.mirror[k] = m
                             break
 
-        self._save_pairs, self._link_and_carry = save_pairs, link_and_carry
+        self._save_pairs = self.e.serial_switch(save_pairs)
+        self._link_and_carry = self.e.serial_switch(link_and_carry)
 
     # ------------------------------------------------------------------ driver
     def rebuild(self, n: int) -> int:
@@ -360,7 +382,7 @@ class Broadphase:
             longest = int(self._find_candidates(alive))
         entries = int(self.total[0])
         if e.pairs is None or entries > e.pairs.capacity:
-            e.grow_pairs(max(int(entries * 1.5), 1024))
+            e.grow_pairs(grown_capacity(entries, alive, e.state.capacity, 1024))
         self._compact(alive)
         self._link_and_carry(alive)
         if e.mesh is not None and e.mesh.rebuild_rows(alive, e.time):

@@ -76,6 +76,16 @@ def fit_rows(a: np.ndarray, n: int) -> np.ndarray:
     return out
 
 
+def grown_capacity(entries: int, alive: int, particle_capacity: int, floor: int = 16) -> int:
+    """Room for list entries (pairs, mesh candidates) once ``entries`` no longer fit: 1.5x
+    today's, and at least what the particle capacity would need at today's entries per
+    particle. Every reallocation recompiles the kernels that read the list (~0.3-1 s of
+    Python-side compilation each time, even from the kernel cache), so a scene filling from a
+    factory should reallocate a few times, not at every half-again of its hold-up."""
+    per_particle = entries / max(alive, 1)
+    return int(max(1.5 * entries, 1.2 * per_particle * particle_capacity, floor))
+
+
 class ParticleState:
     """Per-particle SoA fields, kept in spatial (cell) order; ``particle_id`` maps back to the
     user's order. ``capacity`` slots, of which the first ``count`` are alive after a rebuild.

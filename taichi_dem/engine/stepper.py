@@ -21,6 +21,7 @@ enabled are neither allocated nor compiled (``ti.static``). The engine never imp
 import numpy as np
 import taichi as ti
 
+from . import backend
 from .broadphase import Broadphase, GridSpec
 from .precision import make_compensated_add
 from ..contacts.geometry import contact_types, make_geometry
@@ -30,12 +31,26 @@ from ..setup.pair_tables import PairTables
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 
 
+# Below this many particles a CPU runs every loop of the step on one thread (Engine.serial).
+# Dispatching one parallel loop to Taichi's CPU thread pool costs ~100 us on this project's
+# 2-core machines, with one thread as with two (a serial loop: nothing; a launch: ~15 us),
+# while two threads save ~40 % of the physics: the break-even is near 1,000-3,000 particles
+# (bench/launch_cost.py, BENCHMARKS.md "Small scenes").
+PARALLEL_FROM = 2000
+
+
 class Engine:
     """Owns the device state of one simulation and the kernels that advance it."""
 
     def __init__(self, scene, tables: PairTables, capacity: int, real, skin: float,
-                 max_radius: float, dt: float):
+                 max_radius: float, dt: float, parallel_from: "int | None" = None):
         self.scene = scene
+        # the loop mode of every kernel (serial_switch); updated with the particle count
+        self.threads = backend.cpu_threads()
+        self.parallel_from = PARALLEL_FROM if parallel_from is None else int(parallel_from)
+        self.serial = False
+        self.choose_loop_mode(0)
+
         self.tables = tables
         self.real = real
         self.skin = skin
@@ -48,6 +63,10 @@ class Engine:
         self.contact_effects = tuple(e for e in self.effect_list if e.stage == "contact")
         self.particle_effects = tuple(e for e in self.effect_list if e.stage == "particle")
         self.cell_effects = tuple(e for e in self.effect_list if hasattr(e, "after_pairs"))
+        # several steps per launch in the serial mode (Engine.run_steps), unless some effect's
+        # cell stage has no ti.func form
+        self.runs = self.threads is not None and all(hasattr(e, "cell_func")
+                                                     for e in self.cell_effects)
         self.temperature_effect = by_name.get("temperature")
         self.drying_effect = by_name.get("drying")
         self.rolling_cdt = "rolling_constant_torque" in self.effects
@@ -144,6 +163,29 @@ class Engine:
         self._compile_particle_kernels()
         if scene.factories:
             self._compile_insert()
+
+    def choose_loop_mode(self, n: int) -> bool:
+        """Serial loops for ``n`` particles? On a GPU never; on one CPU thread always; else
+        below ``parallel_from`` particles, with a band of +-20 % so that a count wandering
+        around it does not switch (each mode compiles its own kernels, once)."""
+        if self.threads is None:
+            serial = False
+        elif self.threads == 1:
+            serial = True
+        elif self.serial:
+            serial = n < 1.2 * self.parallel_from
+        else:
+            serial = n < 0.8 * self.parallel_from
+        self.serial = serial
+        return serial
+
+    def serial_switch(self, kernel):
+        """``kernel`` called with the engine's loop mode (``serial``) as its last argument, a
+        ti.template(): its loops run on one thread when it is True (``ti.loop_config``)."""
+        def launch(*args):
+            return kernel(*args, self.serial)
+        launch.kernel = kernel
+        return launch
 
     def new_tree(self) -> FieldTree:
         t = FieldTree()
@@ -254,7 +296,8 @@ class Engine:
         self.drift_particle = drift_particle
 
         @ti.kernel
-        def drift(n: ti.i32, dt: real, t_new: ti.f64):
+        def drift(n: ti.i32, dt: real, t_new: ti.f64, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 drift_particle(i, dt, t_new)
 
@@ -266,11 +309,12 @@ class Engine:
         dt_step = self.dt * (self.scene.thermal.time_scale if thermal else 1.0)
 
         @ti.kernel
-        def measure(n: ti.i32):
+        def measure(n: ti.i32, serial_loops: ti.template()):
             # kinetic energy (translational + rotational, J), largest speed, non-finite flag,
             # alive count; thermal: sum m c T (J), sum m c (J/K), largest dt sum(h)/(m c)
             for k in ti.static(range(Reduction.SIZE)):
                 red[k] = 0.0
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
                     m = s.mass[i]
@@ -285,6 +329,7 @@ class Engine:
             if ti.static(thermal):
                 for k in ti.static(range(ThermalSum.SIZE)):
                     sums[k] = 0.0
+                ti.loop_config(serialize=serial_loops)
                 for i in range(n):
                     if s.alive[i] != 0:
                         thermal_mass = 1.0 / ti.cast(s.inverse_thermal_mass[i], ti.f64)
@@ -304,7 +349,7 @@ class Engine:
                             sums[ThermalSum.WATER_MASS] += ti.cast(s.mass[i], ti.f64) * water
                             sums[ThermalSum.DRY_MASS] += ti.cast(s.mass[i], ti.f64)
 
-        self._drift, self._measure = drift, measure
+        self._drift, self._measure = self.serial_switch(drift), self.serial_switch(measure)
 
     def _compile_pair_kernels(self, p: PairState):
         s = self.state
@@ -354,84 +399,94 @@ class Engine:
         mobility = self.mobility is not None
         active = self.mobility.particle_active if mobility else None
 
-        @ti.kernel
-        def pair_forces(n: ti.i32, dt: real, full: ti.i32):
-            """``full`` = 1 (the step of a rebuild): every pair; 0: [mobility] pairs of two
+        @ti.func
+        def pair_particle(i, dt, full):
+            """The owned contacts of particle i in one step: their geometry, the contact law,
+            the owner's sums and the partner's shares stored at the entry (no atomics).
+            ``full`` = 1 (the step of a rebuild): every pair; 0: [mobility] pairs of two
             inactive particles keep their force, torque and history (their heat flows through
             the kept conductance)."""
-            for i in range(n):
-                xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
-                ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
-                temperature_i = temperature_of(i)
-                owned_force = vec0
-                owned_torque = vec0
-                owned_heat = 0.0
-                owned_conductance = 0.0
-                frozen_i = False
+            xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
+            ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
+            temperature_i = temperature_of(i)
+            owned_force = vec0
+            owned_torque = vec0
+            owned_heat = 0.0
+            owned_conductance = 0.0
+            frozen_i = False
+            if ti.static(mobility):
+                frozen_i = full == 0 and active[i] == 0
+            for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
+                j = p.neighbour[k]
                 if ti.static(mobility):
-                    frozen_i = full == 0 and active[i] == 0
-                for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
-                    j = p.neighbour[k]
-                    if ti.static(mobility):
-                        if frozen_i and active[j] == 0:
-                            # both inactive: the contact is frozen as it was at the rebuild
-                            if ti.static(pair_heat):
-                                if p.contact[k] != 0:
-                                    h = p.pair_conductance[k]
-                                    q = h * (temperature_of(j) - temperature_i)
-                                    owned_heat += q
-                                    owned_conductance += h
-                                    p.partner_heat[k] = -q
-                            continue
-                    d = minimum_image(xi - s.position[j])
-                    rj = s.radius[j]
-                    distance_sq = d.dot(d)
-                    reach = ri + rj
-                    if ti.static(pair_margin > 0.0):
-                        reach += ti.static(pair_margin) * ti.max(ri, rj)
-                    if distance_sq < reach * reach and distance_sq > 0.0:
-                        c = sphere_sphere(d, distance_sq, ri, rj, vi, s.velocity[j], wi,
-                                          s.angular_velocity[j], ai, s.acceleration[j], inv_mi,
-                                          s.inverse_mass[j], inv_ii, s.inverse_inertia[j], mi,
-                                          s.material[j], temperature_i, temperature_of(j))
-                        history = History(tangential=p.tangential_history[k], rolling=vec0)
-                        if ti.static(epsd):
-                            history.rolling = p.rolling_history[k]
-                        out, history = pair_law(c, history, dt)
-                        if c.normal_overlap <= 0.0:
-                            # near, not touching (heat only): no spring to carry
-                            history.tangential = vec0
-                            history.rolling = vec0
+                    if frozen_i and active[j] == 0:
+                        # both inactive: the contact is frozen as it was at the rebuild
                         if ti.static(pair_heat):
-                            owned_heat += out.heat
-                            owned_conductance += out.conductance
-                            p.partner_heat[k] = -out.heat
-                            p.pair_conductance[k] = out.conductance
-                        owned_force += out.force
-                        owned_torque += out.torque_i
-                        p.partner_force[k] = -out.force
-                        p.partner_torque[k] = out.torque_j
-                        p.tangential_history[k] = history.tangential
-                        if ti.static(epsd):
-                            p.rolling_history[k] = history.rolling
-                        p.contact[k] = ti.cast(ti.select(c.normal_overlap > 0.0, 1, 2), ti.u8)
-                    elif p.contact[k] != 0:
-                        # the contact opened: its history is discarded
-                        p.contact[k] = ti.u8(0)
-                        p.tangential_history[k] = vec0
-                        if ti.static(epsd):
-                            p.rolling_history[k] = vec0
-                s.owned_force[i] = owned_force
-                s.owned_torque[i] = owned_torque
-                if ti.static(thermal):
-                    s.owned_heat[i] = owned_heat
-                    s.conductance[i] = owned_conductance
+                            if p.contact[k] != 0:
+                                h = p.pair_conductance[k]
+                                q = h * (temperature_of(j) - temperature_i)
+                                owned_heat += q
+                                owned_conductance += h
+                                p.partner_heat[k] = -q
+                        continue
+                d = minimum_image(xi - s.position[j])
+                rj = s.radius[j]
+                distance_sq = d.dot(d)
+                reach = ri + rj
+                if ti.static(pair_margin > 0.0):
+                    reach += ti.static(pair_margin) * ti.max(ri, rj)
+                if distance_sq < reach * reach and distance_sq > 0.0:
+                    c = sphere_sphere(d, distance_sq, ri, rj, vi, s.velocity[j], wi,
+                                      s.angular_velocity[j], ai, s.acceleration[j], inv_mi,
+                                      s.inverse_mass[j], inv_ii, s.inverse_inertia[j], mi,
+                                      s.material[j], temperature_i, temperature_of(j))
+                    history = History(tangential=p.tangential_history[k], rolling=vec0)
+                    if ti.static(epsd):
+                        history.rolling = p.rolling_history[k]
+                    out, history = pair_law(c, history, dt)
+                    if c.normal_overlap <= 0.0:
+                        # near, not touching (heat only): no spring to carry
+                        history.tangential = vec0
+                        history.rolling = vec0
+                    if ti.static(pair_heat):
+                        owned_heat += out.heat
+                        owned_conductance += out.conductance
+                        p.partner_heat[k] = -out.heat
+                        p.pair_conductance[k] = out.conductance
+                    owned_force += out.force
+                    owned_torque += out.torque_i
+                    p.partner_force[k] = -out.force
+                    p.partner_torque[k] = out.torque_j
+                    p.tangential_history[k] = history.tangential
+                    if ti.static(epsd):
+                        p.rolling_history[k] = history.rolling
+                    p.contact[k] = ti.cast(ti.select(c.normal_overlap > 0.0, 1, 2), ti.u8)
+                elif p.contact[k] != 0:
+                    # the contact opened: its history is discarded
+                    p.contact[k] = ti.u8(0)
+                    p.tangential_history[k] = vec0
+                    if ti.static(epsd):
+                        p.rolling_history[k] = vec0
+            s.owned_force[i] = owned_force
+            s.owned_torque[i] = owned_torque
+            if ti.static(thermal):
+                s.owned_heat[i] = owned_heat
+                s.conductance[i] = owned_conductance
 
         @ti.kernel
-        def gather(n: ti.i32, dt: real, record: ti.i32, then_drift: ti.i32, t_next: ti.f64):
+        def pair_forces(n: ti.i32, dt: real, full: ti.i32, serial_loops: ti.template()):
+            """pair_particle over the particles; ``serial_loops``: one thread (Engine.serial)."""
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                if s.alive[i] == 0:
-                    continue          # removed since the last rebuild: parked, inert
+                pair_particle(i, dt, full)
+
+        @ti.func
+        def gather_particle(i, dt, record, then_drift, t_next):
+            """The rest of particle i's step: its partners' shares through the mirror index,
+            its plane walls and mesh triangles, the particle effects, the integrate stage
+            and the second half kick; ``then_drift``: the next step's drift to ``t_next``
+            too. A particle removed since the last rebuild is parked and inert."""
+            if s.alive[i] != 0:
                 force = s.owned_force[i]
                 torque = s.owned_torque[i]
                 integrates = True
@@ -520,13 +575,72 @@ class Engine:
                     # the next step's first half, fused here to save a pass over the particles
                     drift_particle(i, dt, t_next)
 
-        self._pair_forces, self._gather = pair_forces, gather
+        @ti.kernel
+        def gather(n: ti.i32, dt: real, record: ti.i32, then_drift: ti.i32, t_next: ti.f64,
+                   serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
+            for i in range(n):
+                gather_particle(i, dt, record, then_drift, t_next)
+
+        self._pair_forces = self.serial_switch(pair_forces)
+        self._gather = self.serial_switch(gather)
+
+        # runs of steps (serial mode): the cell stage of each effect as a ti.func
+        cell_funcs = tuple(e.cell_func(self) for e in self.cell_effects) if self.runs else ()
+        set_frames = self.mesh.set_frames if has_mesh else None
+        flags = self.flags
+        n_wall_slots = max(n_walls, 1)
+
+        @ti.kernel
+        def run_steps(n: ti.i32, dt: real, t_first: ti.f64, dt_time: ti.f64, steps: ti.i32,
+                      full_first: ti.i32, record_last: ti.i32, drift_last: ti.i32) -> ti.i32:
+            """Up to ``steps`` whole steps in one launch, every loop on one thread: the serial
+            mode's answer to launch costs (~15 us a launch, against the ~100 us a parallel
+            loop costs to dispatch). Step j is at t_first + j dt_time (s): the bodies' frames,
+            the pair stage, the cell stage, the particle stage, then the next drift (not after
+            the last step unless ``drift_last``). It stops before a step whose neighbour lists
+            the previous drift invalidated (Flag.REBUILD): the host rebuilds and goes on.
+            ``full_first``: the first step follows a rebuild ([mobility]); ``record_last``: the
+            last step books the wall loads. Returns the steps done."""
+            done = 0
+            ti.loop_config(serialize=True)
+            for j in range(steps):
+                if j > 0 and flags[Flag.REBUILD] != 0:
+                    break
+                t = t_first + j * dt_time
+                last = j == steps - 1
+                record = 0
+                if last and record_last != 0:
+                    record = 1
+                    for w in range(n_wall_slots):
+                        wall_force[w] = vec0
+                        if ti.static(thermal):
+                            wall_heat[w] = 0.0
+                if ti.static(has_mesh):
+                    set_frames(ti.cast(t, real))
+                full = 0
+                if j == 0:
+                    full = full_first
+                for i in range(n):
+                    pair_particle(i, dt, full)
+                for cell_stage in ti.static(cell_funcs):
+                    cell_stage(n, dt)
+                then_drift = 1
+                if last:
+                    then_drift = drift_last
+                for i in range(n):
+                    gather_particle(i, dt, record, then_drift, t + dt_time)
+                done += 1
+            return done
+
+        self._run_steps = run_steps
 
     # ------------------------------------------------------------------ driver
     def start(self, n: int) -> int:
         """Build the first neighbour list and the initial accelerations (no time advance)."""
         if self.mesh is not None:
             self.mesh.update_frames(self.time)
+        self.choose_loop_mode(n)
         self.count = self.broadphase.rebuild(n)
         if self.mobility is not None:
             self.mobility.update(self, self.count, self.time)
@@ -543,13 +657,18 @@ class Engine:
             batch = self.process.drain()
             if batch is not None:
                 self.removed_batches.append(batch)
+        self.choose_loop_mode(n)
         self.count = self.broadphase.rebuild(n)
         self.flags[Flag.DEAD_IN_SLOTS] = 0
         if self.mobility is not None:
             self.mobility.update(self, self.count, self.time)
 
     def advance(self, steps: int, record_last: bool = False):
-        """Advance ``steps`` time steps of ``self.dt``."""
+        """Advance ``steps`` time steps of ``self.dt``: in runs of steps per launch in the
+        serial mode (``runs``), else two parallel launches per step."""
+        if self.serial and self.runs:
+            self._advance_in_runs(steps, record_last)
+            return
         dt = self.dt
         for k in range(steps):
             n = self.count
@@ -575,6 +694,33 @@ class Engine:
                 e.after_pairs(self, self.count, dt)     # the gas sees this step's particles
             # the state is left at a whole step (no pending drift) when advance returns
             self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
+
+    def _advance_in_runs(self, steps: int, record_last: bool):
+        """``advance`` with run_steps: the host only rebuilds, between runs. A run ends at a
+        rebuild the drift flags, at the last step the current binning of the bodies' triangles
+        serves, or at ``steps``."""
+        dt = self.dt
+        k = 0
+        while k < steps:
+            n = self.count
+            if k == 0:
+                self._drift(n, dt, self.time + dt)   # later runs end with their drift done
+            self.time += dt                          # the time of the drifted positions
+            rebuild = self.flags[Flag.REBUILD] != 0
+            if self.mesh is not None:
+                rebuild = rebuild or self.mesh.needs_rebinning(self.time)
+            if rebuild:
+                self.rebuild(n)
+            run = steps - k
+            if self.mesh is not None:
+                run = self.mesh.steps_before_rebinning(self.time, dt, run)
+            final = k + run == steps
+            done = int(self._run_steps(self.count, dt, self.time, dt, run, 1 if rebuild else 0,
+                                       1 if (record_last and final) else 0, 0 if final else 1))
+            if self.mesh is not None:
+                self.mesh.interval_steps += done
+            k += done
+            self.time += (done - 1) * dt
 
     def measure(self) -> dict:
         self._measure(self.count)
@@ -662,7 +808,8 @@ class Engine:
                    key: ti.types.ndarray(), serial: ti.types.ndarray(),
                    origin: ti.types.ndarray(), birth_time: ti.types.ndarray(),
                    temperature: ti.types.ndarray(), inverse_thermal_mass: ti.types.ndarray(),
-                   moisture: ti.types.ndarray()):
+                   moisture: ti.types.ndarray(), serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
             for q in range(k):
                 i = start + q
                 x = ti.Vector([position[q, 0], position[q, 1], position[q, 2]])
@@ -717,5 +864,5 @@ class Engine:
                             mesh.particle_load_heat[i, b] = 0.0
             flags[Flag.REBUILD] = 1
 
-        self._insert = insert
+        self._insert = self.serial_switch(insert)
 

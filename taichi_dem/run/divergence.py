@@ -66,11 +66,12 @@ class DivergenceGuard:
         body_scale = OVERLAP_LIMIT / BODY_OVERLAP_LIMIT
 
         @ti.kernel
-        def scan(n: ti.i32):
+        def scan(n: ti.i32, serial_loops: ti.template()):
             largest[0] = 0.0
             largest[1] = 0.0
             for k in ti.static(range(3)):
                 index[k] = _NONE
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 worst[i] = 0.0
                 if s.alive[i] != 0:
@@ -108,6 +109,7 @@ class DivergenceGuard:
                         ti.atomic_max(largest[0], ratio)
                         ti.atomic_max(largest[1], v.norm())
             # which particle: the first (lowest slot) holding the largest value
+            ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 if s.alive[i] != 0:
                     if largest[0] > 0.0 and worst[i] >= largest[0]:
@@ -116,7 +118,7 @@ class DivergenceGuard:
                     if largest[1] > 0.0 and speed >= largest[1]:
                         ti.atomic_min(index[2], i)
 
-        self._scan = scan
+        self._scan = e.serial_switch(scan)
 
     def __call__(self, measured: dict) -> None:
         self.check(self.sim.time)

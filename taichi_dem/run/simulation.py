@@ -117,7 +117,11 @@ class Simulation:
     """One DEM simulation. Units SI throughout (m, kg, s, K, N)."""
 
     def __init__(self, scene: Scene, *, arch: str = "cpu", precision: Optional[str] = None,
-                 threads: Optional[int] = None, h5: Optional[str] = None):
+                 threads: Optional[int] = None, h5: Optional[str] = None,
+                 parallel_from: Optional[int] = None):
+        """``parallel_from``: particles from which a CPU runs the step's loops on all
+        threads (below it: one thread, several steps per launch; engine/stepper.py
+        PARALLEL_FROM; 0: always parallel)."""
         from ..engine.stepper import Engine
 
         self.scene = scene
@@ -147,7 +151,7 @@ class Simulation:
         capacity = self.n_initial + _factory_capacity(scene)
 
         self.engine = Engine(scene, self.tables, max(capacity, 1), self.real, self.skin,
-                             float(np.max(radii)), self.dt)
+                             float(np.max(radii)), self.dt, parallel_from=parallel_from)
         small = self.engine.grid.too_small_periodic_axes(
             (2.0 + self.engine.pair_margin) * float(np.max(radii)) + self.skin)
         if small:     # (_fit_skin_to_periodic_axes makes this unreachable; kept as a guard)

@@ -1,0 +1,91 @@
+"""The engine's two loop modes (engine/stepper.py): below ``parallel_from`` particles a CPU
+runs every loop on one thread with several whole steps per launch (``run_steps``); from it on,
+two parallel launches per step. They are the same arithmetic in the same order (no
+floating-point atomics in the particle state), so the same steps must give the same state;
+only the times handed to the kernels are formed differently (t0 + j dt on the device against
+a running sum on the host), which moves a turning body's frame by round-off."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import taichi_dem as td
+from taichi_dem.engine.stepper import Engine
+
+sys.path.insert(0, str(Path(__file__).parent))
+from resume_scene import scene_text  # noqa: E402
+
+def walls_only_text():
+    """The resume scene without its paddle: planes only, no time-dependent geometry."""
+    text = scene_text("f64", count=200)
+    head, rest = text.split("[[bodies]]", 1)
+    return head + "[[particles]]" + rest.split("[[particles]]", 1)[1]
+
+
+def run(text, parallel_from, steps):
+    sim = td.Simulation.from_text(text, parallel_from=parallel_from)
+    try:
+        sim.step(steps)
+        p = sim.particles()
+        e = sim.engine
+        return dict(position=p["position"], velocity=p["velocity"],
+                    temperature=p.get("temperature"), serial=e.serial, runs=e.runs,
+                    rebuilds=e.broadphase.rebuilds, time=e.time, steps=sim.step_count,
+                    series={k: np.asarray(v) for k, v in sim.series.items()})
+    finally:
+        sim.close()
+
+
+def test_runs_of_steps_equal_parallel_steps_on_planes():
+    text = walls_only_text()
+    serial = run(text, None, 3000)         # 200 beads: serial, in runs
+    parallel = run(text, 0, 3000)          # every step two parallel launches
+    assert serial["serial"] and serial["runs"] and not parallel["serial"]
+    # the beads fell, hit the floor and the lists were rebuilt many times (runs were cut)
+    assert serial["rebuilds"] > 10 and serial["rebuilds"] == parallel["rebuilds"]
+    assert serial["steps"] == parallel["steps"] == 3000
+    assert serial["time"] == pytest.approx(parallel["time"], rel=1e-12)
+    for key in ("position", "velocity", "temperature"):
+        assert np.array_equal(serial[key], parallel[key]), key
+    # the floor's force and heat were booked at the same samples
+    for name in ("walls/floor/force", "walls/floor/heat_flow"):
+        if name in serial["series"]:
+            assert np.allclose(serial["series"][name], parallel["series"][name],
+                               rtol=1e-9, atol=1e-12), name
+
+
+def test_runs_of_steps_follow_a_turning_paddle():
+    text = scene_text("f64", count=300)
+    serial = run(text, None, 3000)
+    parallel = run(text, 0, 3000)
+    assert serial["serial"] and not parallel["serial"]
+    # frames from t0 + j dt (device) or a running sum (host): round-off of 1e-16 s in the
+    # paddle's angle, grown by 3000 steps of collisions; 1e-9 m is 2.5e-7 bead radii
+    assert np.max(np.abs(serial["position"] - parallel["position"])) < 1e-9
+    assert np.max(np.abs(serial["temperature"] - parallel["temperature"])) < 1e-9
+    torque = "bodies/paddle/torque"
+    if torque in serial["series"]:
+        scale = np.max(np.abs(parallel["series"][torque])) + 1e-30
+        assert np.max(np.abs(serial["series"][torque] - parallel["series"][torque])) < 1e-6 * scale
+
+
+class _Stub:
+    """choose_loop_mode needs only threads, parallel_from and the current mode."""
+    choose_loop_mode = Engine.choose_loop_mode
+
+    def __init__(self, threads, parallel_from):
+        self.threads, self.parallel_from, self.serial = threads, parallel_from, False
+
+
+def test_loop_mode_switches_with_a_band():
+    e = _Stub(2, 1000)
+    assert e.choose_loop_mode(0) is True
+    assert e.choose_loop_mode(1100) is True       # within +20 %: stays serial
+    assert e.choose_loop_mode(1250) is False      # past it: parallel
+    assert e.choose_loop_mode(900) is False       # within -20 %: stays parallel
+    assert e.choose_loop_mode(700) is True
+    assert _Stub(1, 1000).choose_loop_mode(10 ** 6) is True      # one thread: always serial
+    assert _Stub(None, 1000).choose_loop_mode(0) is False        # a GPU: never serial
+    always = _Stub(2, 0)
+    assert always.choose_loop_mode(0) is False                   # parallel_from = 0
