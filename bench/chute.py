@@ -30,11 +30,13 @@ SIZES = {"8k": dict(max_particles=8000), "32k": dict(copies=1), "128k": dict(cop
 
 
 def run_taichi_dem(scene_path: str, steps: int, warmup: int, threads=None, precision="f32",
-                   arch: str = "cpu") -> dict:
-    """One timed run of the chute scene: particle-steps per second after ``warmup`` steps."""
+                   arch: str = "cpu", parallel_from=None) -> dict:
+    """One timed run of the chute scene: particle-steps per second after ``warmup`` steps.
+    ``parallel_from``: the engine's loop-mode threshold (None: its default; 0: parallel
+    loops at any size; a huge number: serial loops in runs of steps at any size)."""
     import taichi_dem as td
     sim = td.Simulation.from_toml(scene_path, threads=threads, precision=precision, h5="",
-                                  arch=arch)
+                                  arch=arch, parallel_from=parallel_from)
     try:
         sim.step(warmup)
         rebuilds0 = sim.engine.broadphase.rebuilds
@@ -43,7 +45,7 @@ def run_taichi_dem(scene_path: str, steps: int, warmup: int, threads=None, preci
         sim.engine.flags.to_numpy()          # synchronise
         seconds = time.perf_counter() - t0
         n = sim.particle_count
-        return dict(particles=n, steps=steps, seconds=seconds,
+        return dict(particles=n, steps=steps, seconds=seconds, serial=sim.engine.serial,
                     particle_steps_per_s=n * steps / seconds,
                     rebuilds=sim.engine.broadphase.rebuilds - rebuilds0,
                     neighbours_per_particle=sim.engine.broadphase.entries / n)

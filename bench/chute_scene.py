@@ -151,7 +151,9 @@ def write_chute_scene(out_dir, data_path=None, copies: int = 1, max_particles=No
     ``copies``: tile the periodic 40 x 20 box nx x ny times (4 -> 2 x 2 = 128,000 particles).
     ``max_particles``: keep only particles below an x cut and shorten the periodic box to the
     cut; particles overlapping their new periodic images across the seam are dropped and the
-    cut moved out to make up for them (the count ends at or a few above ``max_particles``).
+    cut moved out to make up for them (the count ends at or a few above ``max_particles``);
+    below a tenth of the particles the box is first halved in y the same way (so that x stays
+    longer than two pair cut-offs at 1,000 particles).
     ``end_time`` defaults to 0.1 s = 1000 steps of dt = 1e-4.
     """
     out_dir = Path(out_dir)
@@ -173,9 +175,22 @@ def write_chute_scene(out_dir, data_path=None, copies: int = 1, max_particles=No
     x0, y0 = data.box_lo[0], data.box_lo[1]
     lx, ly = nx * lx0, ny * ly0
 
+    if max_particles is not None and max_particles < 1:
+        raise ValueError("max_particles must be positive")
+    if max_particles is not None and max_particles < 0.1 * len(pos):
+        # an x cut alone would leave x shorter than two pair cut-offs (1k of 32k: 1.25 d):
+        # halve y first (the same seam rule with the axes swapped), then cut x
+        swap = [1, 0, 2]
+        ys = np.sort(pos[:, 1])
+        half = len(ys) // 2
+        cut_y = 0.5 * (ys[half - 1] + ys[half])
+        below = np.nonzero(pos[:, 1] < cut_y)[0]
+        drop = _seam_overlaps((pos[below] - np.array([x0, y0, 0.0]))[:, swap], rad[below],
+                              typ[below] == 2, cut_y - y0, lx, band=2.0 * float(rad.max()))
+        keep = np.delete(below, drop)
+        pos, vel, ang, rad, typ = pos[keep], vel[keep], ang[keep], rad[keep], typ[keep]
+        ly = cut_y - y0
     if max_particles is not None and max_particles < len(pos):
-        if max_particles < 1:
-            raise ValueError("max_particles must be positive")
         xs = np.sort(pos[:, 0])
         target = int(max_particles)
         for _ in range(4):   # cut further out to make up for the seam's dropped particles

@@ -8,9 +8,15 @@ particles in the same run, with the fixed per-step cost and the per-particle cos
 
 Sizes up to 32k cut the benchmark's 32,000 particles (``max_particles``: a shorter periodic
 x), larger ones tile it (``copies``); LAMMPS reads a data file written from the same particles.
-The smallest is 2k: the bed is 40 particles deep, and 1k would need a periodic length below
-two pair cut-offs (the engine refuses it); a 1k scene of this flow needs a shallower bed. Steps per run are
-``--work`` particle-steps divided by N (clamped to 50..2000), after 50 warm-up steps (JIT).
+At 1k the box is halved in y as well (an x cut alone would be shorter than two pair
+cut-offs). Steps per run are ``--work`` particle-steps divided by N (clamped to 50..2000),
+after 50 warm-up steps (JIT).
+
+The engine has two loop modes (engine/stepper.py): serial loops with several steps per launch
+below ``parallel_from`` particles, parallel loops with two launches per step from it on. Up
+to ``--both-modes-up-to`` particles each mode is also run forced (``serial``: parallel_from
+huge; ``parallel``: parallel_from = 0), and each mode's cost is fitted on its own sizes:
+time per step = a + b N, a the fixed per-step cost, b the per-particle cost.
 """
 import argparse
 import json
@@ -30,7 +36,7 @@ from chute import run_taichi_dem  # noqa: E402
 from chute_scene import write_chute_scene  # noqa: E402
 from lammps_chute import LammpsMissing, run_lammps  # noqa: E402
 
-SIZES = {"2k": 2000, "4k": 4000, "16k": 16000, "32k": 32000, "64k": 64000, "128k": 128000,
+SIZES = {"1k": 1000, "2k": 2000, "4k": 4000, "16k": 16000, "32k": 32000, "64k": 64000, "128k": 128000,
          "256k": 256000, "1M": 1024000}
 
 
@@ -72,13 +78,15 @@ def lammps_data_for(scene: Path) -> Path:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--sizes", nargs="+", default=["2k", "4k", "16k", "64k", "256k", "1M"],
+    p.add_argument("--sizes", nargs="+", default=["1k", "4k", "16k", "64k", "256k", "1M"],
                    choices=list(SIZES))
     p.add_argument("--work", type=float, default=3e7, help="particle-steps per timed run")
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
     p.add_argument("--no-lammps", action="store_true")
     p.add_argument("--out", type=Path, default=HERE / "results" / "cost_curve")
+    p.add_argument("--both-modes-up-to", type=int, default=16000, metavar="N",
+                   help="also run the forced serial and parallel modes up to N particles")
     a = p.parse_args(argv)
     a.out.mkdir(parents=True, exist_ok=True)
     rows = []
@@ -87,10 +95,15 @@ def main(argv=None) -> int:
             size = SIZES[label]
             scene = scene_for(size, Path(tmp) / label)
             steps = int(min(max(a.work / size, 50), 2000))
-            ours = [run_taichi_dem(str(scene), steps, 50)["particle_steps_per_s"]
-                    for _ in range(a.repeats)]
+            runs = [run_taichi_dem(str(scene), steps, 50) for _ in range(a.repeats)]
+            ours = [r["particle_steps_per_s"] for r in runs]
             row = {"size": label, "steps": steps, "taichi_dem": statistics.median(ours),
-                   "taichi_dem_runs": ours}
+                   "taichi_dem_runs": ours, "mode": "serial" if runs[0]["serial"] else "parallel"}
+            if size <= a.both_modes_up_to:
+                for mode, threshold in (("serial", 10 ** 9), ("parallel", 0)):
+                    forced = [run_taichi_dem(str(scene), steps, 50, parallel_from=threshold)
+                              ["particle_steps_per_s"] for _ in range(a.repeats)]
+                    row[f"taichi_dem_{mode}"] = statistics.median(forced)
             if not a.no_lammps:
                 data = lammps_data_for(scene)
                 for ranks in a.ranks:
@@ -108,30 +121,53 @@ def main(argv=None) -> int:
             print(json.dumps({k: (round(v / 1e6, 3) if isinstance(v, float) else v)
                               for k, v in row.items() if k != "taichi_dem_runs"}), flush=True)
     n = np.array([r["particles"] for r in rows], float)
-    # time per step = a + b N, fitted to taichi_dem's medians
-    t_step = n / np.array([r["taichi_dem"] for r in rows])
-    b, a0 = np.polyfit(n, t_step, 1) if len(n) > 1 else (t_step[0] / n[0], 0.0)
-    print(f"\ntaichi_dem: time per step = {a0 * 1e6:.1f} us + {b * 1e9:.2f} ns x N "
-          f"(fixed share at 1k: {a0 / (a0 + b * 1000):.0%}, at 2k: {a0 / (a0 + b * 2000):.0%})")
-    print("| particles | steps | taichi_dem M/s | " + " | ".join(
+    fits = {}
+    for mode in ("serial", "parallel"):
+        # each mode fitted on the sizes it ran at: forced runs, and default runs in that mode
+        pts = [(r["particles"], r.get(f"taichi_dem_{mode}") or
+                (r["taichi_dem"] if r["mode"] == mode else None)) for r in rows]
+        pts = [(k, v) for k, v in pts if v]
+        if mode == "serial":
+            pts = [(k, v) for k, v in pts if k <= a.both_modes_up_to]
+        if len(pts) >= 2:
+            nn = np.array([k for k, _ in pts], float)
+            slope, fixed = np.polyfit(nn, nn / np.array([v for _, v in pts]), 1)
+            fits[mode] = {"fixed_s": float(fixed), "per_particle_s": float(slope),
+                          "sizes": [int(k) for k in nn]}
+            print(f"\ntaichi_dem {mode}: time per step = {fixed * 1e6:.1f} us + "
+                  f"{slope * 1e9:.2f} ns x N (fixed share at 1k: "
+                  f"{fixed / (fixed + slope * 1000):.0%}; fitted on {len(pts)} sizes)")
+    # the default mode's curve: the fit of the mode it runs in at 1k
+    b, a0 = ((fits["serial"]["per_particle_s"], fits["serial"]["fixed_s"]) if "serial" in fits
+             else np.polyfit(n, n / np.array([r["taichi_dem"] for r in rows]), 1)
+             if len(n) > 1 else (n[0] / rows[0]["taichi_dem"] / n[0], 0.0))
+    print("| particles | steps | mode | taichi_dem M/s | serial | parallel | " + " | ".join(
         f"LAMMPS {k} rank(s) M/s | ratio" for k in a.ranks if not a.no_lammps) + " |")
     for r in rows:
-        cells = [f"{r['particles']:,}", str(r["steps"]), f"{r['taichi_dem'] / 1e6:.2f}"]
+        cells = [f"{r['particles']:,}", str(r["steps"]), r["mode"], f"{r['taichi_dem'] / 1e6:.2f}",
+                 *(f"{r[k] / 1e6:.2f}" if k in r else "-"
+                   for k in ("taichi_dem_serial", "taichi_dem_parallel"))]
         for k in a.ranks:
             if f"lammps_{k}" in r:
                 cells += [f"{r[f'lammps_{k}'] / 1e6:.2f}", f"{r['taichi_dem'] / r[f'lammps_{k}']:.2f}"]
         print("| " + " | ".join(cells) + " |")
-    (a.out / "cost_curve.json").write_text(json.dumps({"rows": rows, "fixed_s": a0,
-                                                       "per_particle_s": b}, indent=1))
+    (a.out / "cost_curve.json").write_text(json.dumps({"rows": rows, "fixed_s": float(a0),
+                                                       "per_particle_s": float(b), "fits": fits},
+                                                      indent=1))
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    ax.plot(n, [r["taichi_dem"] / 1e6 for r in rows], "o-", label="taichi_dem (f32, 2 threads)")
+    ax.plot(n, [r["taichi_dem"] / 1e6 for r in rows], "o-", label="taichi_dem (f32, 2 threads, default mode)")
     for k in a.ranks:
         if all(f"lammps_{k}" in r for r in rows):
             ax.plot(n, [r[f"lammps_{k}"] / 1e6 for r in rows], "s--", label=f"LAMMPS {k} rank(s)")
-    ax.plot(n, n / (a0 + b * n) / 1e6, ":", color="grey", label=f"fit: {a0 * 1e6:.0f} us + {b * 1e9:.1f} ns N")
+    for mode, style in (("serial", ":"), ("parallel", "-.")):
+        if mode in fits:
+            f = fits[mode]
+            nn = np.array(f["sizes"], float)
+            ax.plot(nn, nn / (f["fixed_s"] + f["per_particle_s"] * nn) / 1e6, style, color="grey",
+                    label=f"{mode} fit: {f['fixed_s'] * 1e6:.0f} us + {f['per_particle_s'] * 1e9:.1f} ns N")
     ax.set_xscale("log")
     ax.set_xlabel("particles")
     ax.set_ylabel("million particle-steps per second")

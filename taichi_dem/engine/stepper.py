@@ -644,6 +644,10 @@ class Engine:
         self.count = self.broadphase.rebuild(n)
         if self.mobility is not None:
             self.mobility.update(self, self.count, self.time)
+        if self.serial and self.runs:
+            # one step of no length in the kernel the runs use (nothing else to compile)
+            self._run_steps(self.count, 0.0, self.time, 0.0, 1, 1, 0, 0)
+            return self.count
         self._pair_forces(self.count, 0.0, 1)
         for e in self.cell_effects:
             e.after_pairs(self, self.count, 0.0)
