@@ -84,9 +84,15 @@ def _gas_over_solid(scene, tables, k_gas):
 
 class _GasGap(Effect):
     """What the two gas-gap effects share: k_g (W/(m K)), the lens (radii, also the contact
-    margin), the minimum gap (m), the model and, for the series model, the k_g/k_s table."""
+    margin), the minimum gap (m), the model and, for the series model, the k_g/k_s table.
+
+    In the step the gas-gap integral is looked up (gas_gap.py "tables"): one table per pair of
+    particle kinds (``engine.species``: (material index, radius m) of each kind the scene holds
+    or inserts), or per kind against a wall, tabulated at set-up. Without a finite set of kinds
+    (radii from a distribution) every contact integrates (Gauss-Legendre, as in the tests)."""
 
     stage = "contact"
+    MOST_KINDS = 8
 
     def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance"):
         super().__init__(description)
@@ -94,11 +100,44 @@ class _GasGap(Effect):
         self.margin = float(lens)
         self.model = model
         self.tables = ("gas_over_solid",) if model == "solid_resistance" else ()
+        self.kinds_tabulated = None     # the species the tables are for (None: no tables)
 
     def table_values(self, scene, tables):
         if self.model != "solid_resistance":
             return {}
         return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
+
+    def _tabulate(self, engine) -> bool:
+        kinds = getattr(engine, "species", None)
+        return kinds is not None and 0 < len(kinds) <= self.MOST_KINDS
+
+    def _allocate_tables(self, engine, tree, prefix, shape):
+        """Fields for the tables (shape + nodes) and their ranges (shape + 3: s_lo, s_hi,
+        nodes per unit ln(1 + s/S))."""
+        self.kinds_tabulated = engine.species
+        self.table = tree.add(prefix + "_table", engine.real, shape + (gas_gap.TABLE_NODES,))
+        self.table_range = tree.add(prefix + "_range", engine.real, shape + (3,))
+
+    def _ratios(self, engine):
+        """k_g / k_s of each material (0: isothermal), from the engine's table."""
+        if self.model != "solid_resistance":
+            return None
+        return engine.table["gas_over_solid"].to_numpy()[:, 0].astype(np.float64)
+
+    def kind_func(self):
+        """ti.func (material, radius) -> the kind's index in the tables, -1 if none."""
+        kinds = self.kinds_tabulated
+
+        @ti.func
+        def kind_of(material, radius):
+            k = -1
+            for q in ti.static(range(len(kinds))):
+                if material == ti.static(kinds[q][0]) and ti.abs(
+                        radius - ti.static(kinds[q][1])) <= ti.static(1e-5 * kinds[q][1]):
+                    k = q
+            return k
+
+        return kind_of
 
 
 class GasGapWall(_GasGap):
@@ -108,18 +147,54 @@ class GasGapWall(_GasGap):
     name = "gas_gap_wall"
     kinds = ("plane", "surface")
 
+    def allocate(self, engine, tree):
+        # the isothermal plane has a closed form: tables only for the series model
+        if self.model == "solid_resistance" and self._tabulate(engine):
+            self._allocate_tables(engine, tree, "gas_gap_wall", (len(engine.species),))
+
+    def upload(self, engine):
+        if self.kinds_tabulated is None:
+            return
+        _, lens, min_gap = self.parameters
+        ratio = self._ratios(engine)
+        values, ranges = [], []
+        for material, radius in self.kinds_tabulated:
+            values.append(gas_gap.plane_table(radius, lens, min_gap, ratio[material]))
+            ranges.append(gas_gap.table_range(radius, radius, lens, min_gap))
+        npf = np.float64 if engine.real == ti.f64 else np.float32
+        self.table.from_numpy(np.array(values, npf))
+        self.table_range.from_numpy(np.array(ranges, npf))
 
     def contact_func(self, engine):
         k_gas, lens, min_gap = self.parameters
         solid = self.model == "solid_resistance"
         ratio = engine.table["gas_over_solid"] if solid else None
+        tabulated = self.kinds_tabulated is not None
+        kind_of = self.kind_func() if tabulated else None
+        table, table_range = (self.table, self.table_range) if tabulated else (None, None)
+        last = gas_gap.TABLE_NODES
 
         @ti.func
         def gas_gap_wall(c, out):
             distance = c.radius_i - c.normal_overlap
             if ti.static(solid):
-                out.conductance += k_gas * gas_gap.plane_solid_gap_integral(
-                    c.radius_i, distance, lens, min_gap, ratio[c.material_i, c.material_j])
+                integrate = True
+                value = 0.0 * distance
+                if ti.static(tabulated):
+                    k = kind_of(c.material_i, c.radius_i)
+                    if k >= 0:
+                        index, fraction = gas_gap.table_position(
+                            -c.normal_overlap, table_range[k, 0], table_range[k, 1],
+                            table_range[k, 2], min_gap)
+                        if index >= 0:
+                            integrate = False
+                            if index < last:
+                                value = ((1.0 - fraction) * table[k, index]
+                                         + fraction * table[k, index + 1])
+                if integrate:
+                    value = gas_gap.plane_solid_gap_integral(
+                        c.radius_i, distance, lens, min_gap, ratio[c.material_i, c.material_j])
+                out.conductance += k_gas * value
             else:
                 out.conductance += k_gas * gas_gap.plane_gap_integral(
                     c.radius_i, distance, lens, min_gap)
@@ -138,22 +213,70 @@ class GasGapPair(_GasGap):
     kinds = ("pair",)
     pair_fields = Conduction.pair_fields
 
+    def allocate(self, engine, tree):
+        if self._tabulate(engine):
+            k = len(engine.species)
+            self._allocate_tables(engine, tree, "gas_gap_pair", (k, k))
+
+    def upload(self, engine):
+        if self.kinds_tabulated is None:
+            return
+        _, lens, min_gap = self.parameters
+        ratio = self._ratios(engine)
+        kinds = self.kinds_tabulated
+        n = len(kinds)
+        values = np.zeros((n, n, gas_gap.TABLE_NODES))
+        ranges = np.zeros((n, n, 3))
+        for a in range(n):
+            for b in range(a, n):
+                (ma, ra), (mb, rb) = kinds[a], kinds[b]
+                if ratio is None:
+                    v = gas_gap.pair_table(ra, rb, lens, min_gap, "isothermal")
+                else:
+                    v = gas_gap.pair_table(ra, rb, lens, min_gap, "solid_resistance",
+                                           ratio[ma], ratio[mb])
+                values[a, b] = values[b, a] = v
+                ranges[a, b] = ranges[b, a] = gas_gap.table_range(min(ra, rb), max(ra, rb),
+                                                                  lens, min_gap)
+        npf = np.float64 if engine.real == ti.f64 else np.float32
+        self.table.from_numpy(values.astype(npf))
+        self.table_range.from_numpy(ranges.astype(npf))
 
     def contact_func(self, engine):
         k_gas, lens, min_gap = self.parameters
         solid = self.model == "solid_resistance"
         ratio = engine.table["gas_over_solid"] if solid else None
+        tabulated = self.kinds_tabulated is not None
+        kind_of = self.kind_func() if tabulated else None
+        table, table_range = (self.table, self.table_range) if tabulated else (None, None)
+        last = gas_gap.TABLE_NODES
 
         @ti.func
         def gas_gap_pair(c, out):
             distance = c.radius_i + c.radius_j - c.normal_overlap
-            if ti.static(solid):
-                out.conductance += k_gas * gas_gap.pair_solid_gap_integral(
-                    c.radius_i, c.radius_j, distance, lens, min_gap,
-                    ratio[c.material_i, c.material_j], ratio[c.material_j, c.material_i])
-            else:
-                out.conductance += k_gas * gas_gap.pair_gap_integral(
-                    c.radius_i, c.radius_j, distance, lens, min_gap)
+            integrate = True
+            value = 0.0 * distance
+            if ti.static(tabulated):
+                a = kind_of(c.material_i, c.radius_i)
+                b = kind_of(c.material_j, c.radius_j)
+                if a >= 0 and b >= 0:
+                    index, fraction = gas_gap.table_position(
+                        -c.normal_overlap, table_range[a, b, 0], table_range[a, b, 1],
+                        table_range[a, b, 2], min_gap)
+                    if index >= 0:
+                        integrate = False
+                        if index < last:
+                            value = ((1.0 - fraction) * table[a, b, index]
+                                     + fraction * table[a, b, index + 1])
+            if integrate:
+                if ti.static(solid):
+                    value = gas_gap.pair_solid_gap_integral(
+                        c.radius_i, c.radius_j, distance, lens, min_gap,
+                        ratio[c.material_i, c.material_j], ratio[c.material_j, c.material_i])
+                else:
+                    value = gas_gap.pair_gap_integral(c.radius_i, c.radius_j, distance, lens,
+                                                      min_gap)
+            out.conductance += k_gas * value
             return out
 
         return gas_gap_pair

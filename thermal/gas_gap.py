@@ -304,3 +304,78 @@ def pair_solid_gap_integral_reference(radius_i, radius_j, distance, lens, min_ga
         uj = np.sqrt(np.maximum(small ** 2 - r ** 2, 0.0))
         return gas_over_solid_i * ui + gas_over_solid_j * uj + np.maximum(distance - ui - uj, min_gap)
     return _integrate(gap, r_in, r_out, panels)
+
+
+# ---------------------------------------------------------------- tables (the step's path)
+# In the step the integrals above are looked up, not integrated: for each pair of particle
+# kinds (material, radius) in a scene, and each kind against a wall, the integral is tabulated
+# once at set-up against the surface separation s (m) - the brute-force references above, in
+# f64 - and interpolated linearly. Nodes: uniform in s over overlaps down to TABLE_OVERLAP of
+# the smaller radius, uniform in ln(1 + s / S) over the gaps up to the lens (dense where the
+# gap is smallest and the integral varies fastest), one node at contact (s = 0) where the
+# integral has a kink. Interpolation error: below 1e-4 of the contact value
+# (tests/verification/test_gas_gap_table.py). Deeper overlaps fall back to the quadrature;
+# a scene whose factories sample radii from a distribution has no finite set of kinds and
+# integrates every contact (``species`` None).
+TABLE_OVERLAP = 0.1
+TABLE_NODES_OVERLAP = 129
+TABLE_NODES_GAP = 896
+TABLE_NODES = TABLE_NODES_OVERLAP + TABLE_NODES_GAP - 1
+TABLE_PANELS = 400
+
+
+def table_range(radius_small, radius_big, lens, min_gap):
+    """(s_lo, s_hi, gap nodes per unit ln(1 + s/S)) of a table, m, m, 1."""
+    s_lo = -TABLE_OVERLAP * radius_small
+    s_hi = lens * radius_big
+    return s_lo, s_hi, (TABLE_NODES_GAP - 1) / math.log1p(s_hi / min_gap)
+
+
+def table_separations(radius_small, radius_big, lens, min_gap) -> np.ndarray:
+    """The TABLE_NODES separations s (m) a table holds the integral at."""
+    s_lo, s_hi, per_log = table_range(radius_small, radius_big, lens, min_gap)
+    overlap = np.linspace(s_lo, 0.0, TABLE_NODES_OVERLAP)
+    gap = min_gap * np.expm1(np.arange(1, TABLE_NODES_GAP) / per_log)
+    gap[-1] = s_hi
+    return np.concatenate([overlap, gap])
+
+
+def pair_table(radius_i, radius_j, lens, min_gap, model, gas_over_solid_i=0.0,
+               gas_over_solid_j=0.0) -> np.ndarray:
+    """The pair integral (m) at ``table_separations`` for two kinds of sphere; ``model``
+    "isothermal" or "solid_resistance" (with k_g / k_s of each)."""
+    small, big = min(radius_i, radius_j), max(radius_i, radius_j)
+    s = table_separations(small, big, lens, min_gap)
+    if model == "solid_resistance":
+        return np.array([pair_solid_gap_integral_reference(
+            radius_i, radius_j, radius_i + radius_j + x, lens, min_gap, gas_over_solid_i,
+            gas_over_solid_j, TABLE_PANELS) for x in s])
+    return np.array([pair_gap_integral_reference(radius_i, radius_j, radius_i + radius_j + x,
+                                                 lens, min_gap, TABLE_PANELS) for x in s])
+
+
+def plane_table(radius, lens, min_gap, gas_over_solid) -> np.ndarray:
+    """The sphere-plane integral with the solid's resistance (m) at ``table_separations``."""
+    s = table_separations(radius, radius, lens, min_gap)
+    return np.array([plane_solid_gap_integral_reference(radius, radius + x, lens, min_gap,
+                                                        gas_over_solid, TABLE_PANELS)
+                     for x in s])
+
+
+@ti.func
+def table_position(s, s_lo, s_hi, per_log, min_gap):
+    """(index, fraction) of separation ``s`` (m) between two nodes of a table; index -1 below
+    the table (deeper overlap: integrate), TABLE_NODES beyond it (no gas conduction)."""
+    index = -1
+    fraction = 0.0 * s
+    if s >= s_hi:
+        index = TABLE_NODES
+    elif s >= s_lo:
+        x = 0.0 * s
+        if s < 0.0:
+            x = (s - s_lo) / (-s_lo) * (TABLE_NODES_OVERLAP - 1)
+        else:
+            x = (TABLE_NODES_OVERLAP - 1) + ti.log(1.0 + s / min_gap) * per_log
+        index = ti.min(ti.cast(x, ti.i32), TABLE_NODES - 2)
+        fraction = ti.min(x - index, 1.0)
+    return index, fraction

@@ -23,7 +23,7 @@ class FieldTree:
 
     def add(self, name: str, dtype, shape, vector: bool = False):
         f = ti.Vector.field(VEC, dtype) if vector else ti.field(dtype)
-        axes = ti.ij if isinstance(shape, tuple) and len(shape) == 2 else ti.i
+        axes = ti.axes(*range(len(shape))) if isinstance(shape, tuple) else ti.i
         self._builder.dense(axes, shape).place(f)
         self.fields[name] = f
         return f

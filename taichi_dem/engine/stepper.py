@@ -43,8 +43,12 @@ class Engine:
     """Owns the device state of one simulation and the kernels that advance it."""
 
     def __init__(self, scene, tables: PairTables, capacity: int, real, skin: float,
-                 max_radius: float, dt: float, parallel_from: "int | None" = None):
+                 max_radius: float, dt: float, parallel_from: "int | None" = None,
+                 species: "tuple | None" = None):
         self.scene = scene
+        # the kinds of particle, ((material index, radius m), ...) or None (radii from a
+        # distribution): what per-kind tables (the gas gap's) are built for
+        self.species = species
         # the loop mode of every kernel (serial_switch); updated with the particle count
         self.threads = backend.cpu_threads()
         self.parallel_from = PARALLEL_FROM if parallel_from is None else int(parallel_from)

@@ -48,6 +48,32 @@ def _sizes_to_expect(scene: Scene, placed, names):
             np.concatenate(speeds), np.concatenate(fixed))
 
 
+def _particle_kinds(scene: Scene, placed, names, most: int = 8):
+    """The kinds of particle the scene holds or inserts: ((material index, radius m), ...)
+    sorted, or None when there are more than ``most`` or a factory samples its radii from a
+    distribution (engine tables per kind: the gas gap's)."""
+    kinds = set()
+    if len(placed.radius):
+        rows = np.unique(np.column_stack([np.asarray(placed.material, np.float64),
+                                          np.asarray(placed.radius, np.float64)]), axis=0)
+        if len(rows) > most:
+            return None
+        kinds.update((int(m), float(r)) for m, r in rows)
+    for f in scene.factories:
+        if f.sizes:
+            radii = [r for r, _ in f.sizes]
+        elif f.radius is not None:
+            if f.radius.std != 0.0:
+                return None
+            radii = [f.radius.mean]
+        else:
+            radii = [f.sheet.radius]
+        kinds.update((names.index(f.material), float(r)) for r in radii)
+    if len(kinds) > most:
+        return None
+    return tuple(sorted(kinds))
+
+
 def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
                                notes: list, say: bool = True) -> float:
     """The Verlet skin (m), shrunk where a periodic axis is thin.
@@ -151,7 +177,8 @@ class Simulation:
         capacity = self.n_initial + _factory_capacity(scene)
 
         self.engine = Engine(scene, self.tables, max(capacity, 1), self.real, self.skin,
-                             float(np.max(radii)), self.dt, parallel_from=parallel_from)
+                             float(np.max(radii)), self.dt, parallel_from=parallel_from,
+                             species=_particle_kinds(scene, placed, self.tables.names))
         small = self.engine.grid.too_small_periodic_axes(
             (2.0 + self.engine.pair_margin) * float(np.max(radii)) + self.skin)
         if small:     # (_fit_skin_to_periodic_axes makes this unreachable; kept as a guard)
