@@ -167,6 +167,7 @@ class Engine:
         self._compile_particle_kernels()
         if scene.factories:
             self._compile_insert()
+            self._compile_occupied()
 
     def choose_loop_mode(self, n: int) -> bool:
         """Serial loops for ``n`` particles? On a GPU never; on one CPU thread always; else
@@ -789,6 +790,33 @@ class Engine:
                      np.ascontiguousarray(arrays.get("inverse_thermal_mass", zeros), npf),
                      np.ascontiguousarray(arrays.get("moisture", zeros), npt))
         self.count += k
+
+    def occupied(self) -> dict:
+        """What the slots in use hold, for placing new particles among them: ``alive`` (n,)
+        bool, ``position`` (n, 3) m, ``radius`` (n,) m, ``particle_id`` (n,) int, in slot
+        order. One serial launch (four to_numpy calls would be four parallel launches, each
+        copying the whole capacity)."""
+        n = self.count
+        table = np.zeros((n, 6), np.float64)
+        if n:
+            self._occupied(n, table)
+        return {"alive": table[:, 4] != 0.0, "position": table[:, :3], "radius": table[:, 3],
+                "particle_id": table[:, 5].astype(np.int64)}
+
+    def _compile_occupied(self):
+        s = self.state
+
+        @ti.kernel
+        def occupied(n: ti.i32, out: ti.types.ndarray(), serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
+            for i in range(n):
+                for k in ti.static(range(3)):
+                    out[i, k] = ti.cast(s.position[i][k], ti.f64)
+                out[i, 3] = ti.cast(s.radius[i], ti.f64)
+                out[i, 4] = ti.cast(s.alive[i], ti.f64)
+                out[i, 5] = ti.cast(s.particle_id[i], ti.f64)
+
+        self._occupied = self.serial_switch(occupied)
 
     def _compile_insert(self):
         s = self.state

@@ -157,13 +157,13 @@ class FactorySet:
 
     def _insert(self, due: list[int], time: float):
         engine = self.sim.engine
-        st = engine.state
         n = engine.count
         # what is in the simulation now (the placement avoids it)
-        alive = st.alive.to_numpy()[:n] != 0
-        pos = st.position.to_numpy()[:n][alive].astype(np.float64)
-        rad = st.radius.to_numpy()[:n][alive].astype(np.float64)
-        keys_in_use = st.particle_id.to_numpy()[:n]
+        now = engine.occupied()
+        alive = now["alive"]
+        pos = now["position"][alive]
+        rad = now["radius"][alive]
+        keys_in_use = now["particle_id"]
         batches = []
         for k in due:
             if self.factories[k].pattern == "sheet":

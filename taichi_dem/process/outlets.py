@@ -11,6 +11,7 @@ between two rebuilds; the host drains it at every rebuild and every output sampl
 (Engine.rebuild, accounting.py), and a log more than half full asks for a rebuild.
 """
 
+import numpy as np
 import taichi as ti
 
 from ..engine.state import Flag
@@ -76,6 +77,32 @@ class ProcessDevice:
             self.log_thermal_mass = tree.add("log_thermal_mass", ti.f64, cap) if self.thermal else None
             self.log_moisture = tree.add("log_moisture", ti.f64, cap) if engine.moisture else None
         self.planes = PlaneCrossings(scene, tree)
+        if self.log_enabled:
+            self._compile_drain(engine)
+
+    # the log's columns, in the order drain() copies them out
+    def _log_columns(self):
+        cols = [("id", self.log_id), ("origin", self.log_origin), ("exit", self.log_exit),
+                ("t_in", self.log_t_in), ("t_out", self.log_t_out), ("mass", self.log_mass)]
+        if self.log_temperature is not None:
+            cols += [("temperature", self.log_temperature), ("thermal_mass", self.log_thermal_mass)]
+        if self.log_moisture is not None:
+            cols.append(("moisture", self.log_moisture))
+        return cols
+
+    def _compile_drain(self, engine):
+        fields = tuple(f for _, f in self._log_columns())
+
+        @ti.kernel
+        def copy_log(n: ti.i32, out: ti.types.ndarray(), serial_loops: ti.template()):
+            # one launch for every column (ids are exact in f64); a field's to_numpy is one
+            # parallel launch each and copies the whole capacity
+            ti.loop_config(serialize=serial_loops)
+            for q in range(n):
+                for c in ti.static(range(len(fields))):
+                    out[q, c] = ti.cast(fields[c][q], ti.f64)
+
+        self._copy_log = engine.serial_switch(copy_log)
 
     def make_funcs(self, engine):
         """Compile-time construction of ``after_drift(i, x_old, x_new, x_wrapped, inside, t)``:
@@ -150,13 +177,12 @@ class ProcessDevice:
         n = int(self.log_count[0])
         if n == 0:
             return None
-        out = {"id": self.log_id.to_numpy()[:n], "origin": self.log_origin.to_numpy()[:n],
-               "exit": self.log_exit.to_numpy()[:n], "t_in": self.log_t_in.to_numpy()[:n],
-               "t_out": self.log_t_out.to_numpy()[:n], "mass": self.log_mass.to_numpy()[:n]}
-        if self.log_temperature is not None:
-            out["temperature"] = self.log_temperature.to_numpy()[:n]
-            out["thermal_mass"] = self.log_thermal_mass.to_numpy()[:n]
-        if self.log_moisture is not None:
-            out["moisture"] = self.log_moisture.to_numpy()[:n]
+        columns = self._log_columns()
+        table = np.zeros((n, len(columns)), np.float64)
+        self._copy_log(n, table)
+        out = {}
+        for c, (name, field) in enumerate(columns):
+            out[name] = (table[:, c].astype(np.int32) if field.dtype == ti.i32
+                         else table[:, c].copy())
         self.log_count[0] = 0
         return out

@@ -184,10 +184,25 @@ class _Grid:
                     yield rep_q, self.order[idx]
 
 
+_BRUTE_FORCE_PAIRS = 200_000     # query x point pairs below which _conflicts checks them all
+
+
 def _conflicts(grid: _Grid, radii_pts: np.ndarray, q: np.ndarray, rq: np.ndarray,
                exclude_self: bool = False) -> np.ndarray:
     """Mask of queries overlapping any grid point (distance < (rq + r_point)(1 + clearance))."""
     bad = np.zeros(len(q), bool)
+    if len(q) * len(grid.points) <= _BRUTE_FORCE_PAIRS:
+        # a few candidates among a few hundred particles (a factory's every insertion): all
+        # pairs in one array operation beat 27 cell offsets of tiny arrays
+        if len(q) and len(grid.points):
+            d = grid.delta(q[:, None, :], grid.points[None, :, :])
+            reach = (rq[:, None] + radii_pts[None, :]) * (1.0 + _CLEAR)
+            hit = np.einsum("ijk,ijk->ij", d, d) < reach * reach
+            if exclude_self:
+                m = min(len(q), len(grid.points))
+                hit[np.arange(m), np.arange(m)] = False
+            bad = hit.any(axis=1)
+        return bad
     for qi, pj in grid.pairs(q):
         if exclude_self:
             keep = qi != pj
