@@ -252,3 +252,33 @@ def counter_current_gas_temperature(solids_temperature, solids_moisture, outlet_
                           - (solids_heat_capacity + x * water_heat_capacity) * t)
     gain += solids_flow * (x - outlet_moisture) * (latent_heat + water_heat_capacity * evaporation_temperature)
     return gas_inlet_temperature - gain / (gas_flow * gas_heat_capacity)
+
+
+def longer_cooler_outlet(heat_flows, length: float, bed_temperatures, wall_temperature: float,
+                         inlet_temperature: float, mass_rate: float, heat_capacity: float,
+                         full_length: float, blocks: int = 4) -> dict:
+    """Plug-flow estimate of where the solids of a longer indirect cooler leave, from a short
+    one's run: the short run's conductance per metre of shell, UA' = Q / (L (T_bed - T_wall))
+    (W/(m K); Q W into the shell, L m, T_bed the mean temperature of the solids inside, K),
+    held along ``full_length`` (m); then T_out = T_w + (T_in - T_w) exp(-NTU) with
+    NTU = UA' L_full / (m_dot c) (mass_rate kg/s, heat_capacity J/(kg K)). The same bed along
+    the whole length (fill, mixing, shell contact) is the assumption; the stated error is the
+    scatter of UA' between ``blocks`` consecutive parts of the samples (one standard
+    deviation of the block means, over sqrt(blocks)). Returns conductance_per_metre,
+    its error, ntu, outlet_temperature and its error (K)."""
+    q = np.asarray(heat_flows, float)
+    t_bed = np.asarray(bed_temperatures, float)
+    per_metre = q / (length * (t_bed - wall_temperature))
+    parts = [float(np.mean(p)) for p in np.array_split(per_metre, max(1, min(blocks, len(per_metre))))]
+    mean = float(np.mean(per_metre))
+    error = float(np.std(parts, ddof=1) / math.sqrt(len(parts))) if len(parts) > 1 else 0.0
+    capacity_rate = mass_rate * heat_capacity
+
+    def outlet(ua):
+        return wall_temperature + (inlet_temperature - wall_temperature) * math.exp(
+            -ua * full_length / capacity_rate)
+    t_out = outlet(mean)
+    spread = 0.5 * abs(outlet(max(mean - error, 0.0)) - outlet(mean + error))
+    return {"conductance_per_metre": mean, "conductance_per_metre_error": error,
+            "ntu": mean * full_length / capacity_rate, "outlet_temperature": t_out,
+            "outlet_temperature_error": spread}

@@ -284,6 +284,33 @@ class Process(Demo):
 
 class PaddleCooler(Process):
     name, scene = "paddle_cooler", "paddle_cooler.toml"
+    FULL_LENGTH = 6.0        # m, the seed's cooler (paddle_cooler_full.toml)
+
+    def summary(self, sim):
+        """The process summary, then the seed's 6 m cooler estimated from this 0.5 m one
+        (analysis.longer_cooler_outlet: this run's shell conductance per metre, plug flow)."""
+        super().summary(sim)
+        s = sim.series
+        shell = next((b for b in sim.scene.bodies if b.name == "shell"), None)
+        feed = sim.scene.factories[0] if sim.scene.factories else None
+        if (shell is None or shell.temperature is None or feed is None or feed.temperature is None
+                or "bodies/shell/heat_flow" not in s or len(s["time"]) < 8):
+            return
+        t = np.asarray(s["time"], float)
+        late = t >= 0.75 * t[-1]
+        material = sim.scene.materials[feed.material]
+        length = float(np.ptp(np.asarray(shell.vertices, float)[:, 0]))
+        est = analysis.longer_cooler_outlet(
+            np.asarray(s["bodies/shell/heat_flow"], float)[late], length,
+            np.asarray(s["particles/mean_temperature"], float)[late], shell.temperature,
+            feed.temperature, feed.mass_rate.at(sim.time), material.heat_capacity,
+            self.FULL_LENGTH)
+        print(f"summary: the seed's {self.FULL_LENGTH:g} m cooler, estimated from this "
+              f"{length:.3g} m one (plug flow at this run's shell conductance "
+              f"{est['conductance_per_metre']:.3g} +- {est['conductance_per_metre_error']:.2g} "
+              f"W/(m K) per metre, NTU {est['ntu']:.3g}): the ash would leave at "
+              f"{est['outlet_temperature'] - 273.15:.1f} +- {est['outlet_temperature_error']:.1f} C "
+              f"(fed at {feed.temperature - 273.15:.0f} C)")
 
 
 class PaddleCoolerOptimised(Process):

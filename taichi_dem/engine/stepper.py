@@ -16,6 +16,13 @@ One step (velocity Verlet):
           step's drift (one pass over the particles less)
 The effects (effects/, thermal/effects.py) declare their stage, fields and tables; those not
 enabled are neither allocated nor compiled (``ti.static``). The engine never imports thermal/.
+
+Loop modes (``serial``, chosen by the particle count at each rebuild): from ``parallel_from``
+particles on, the pair and gather kernels above, each a parallel loop, one launch each per
+step; below it every loop runs on one thread (``ti.loop_config(serialize=...)``, a template
+argument of every kernel: ``serial_switch``) and ``run_steps`` does several whole steps -
+frames, pairs, cells, gather and the next drift - in one launch, until the drift flags a
+rebuild. The physics is the same ti.funcs (``pair_particle``, ``gather_particle``) in both.
 """
 
 import numpy as np

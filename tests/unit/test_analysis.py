@@ -81,3 +81,25 @@ def test_counter_current_balance_closes():
     sensible = 1.0 * (800.0 * 400.0 - (800.0 + 0.01 * 4186.0) * 300.0)
     latent = 0.01 * (2.26e6 + 4186.0 * 373.15)
     assert wet[0] == pytest.approx(900.0 - (sensible + latent) / 2000.0, rel=1e-12)
+
+
+def test_longer_cooler_outlet_is_the_plug_flow_exponential():
+    import math
+    from taichi_dem.app.analysis import longer_cooler_outlet
+    # a 0.5 m cooler whose shell takes 534 W from a bed at 723 K over a 303 K shell:
+    # UA' = 534 / (0.5 x 420) = 2.543 W/(m K); 6 m at 13 t/h of c = 800: NTU = 15.26 / 2889
+    q = np.full(40, 534.0)
+    bed = np.full(40, 723.0)
+    est = longer_cooler_outlet(q, 0.5, bed, 303.0, 723.15, 13000 / 3600, 800.0, 6.0)
+    ua = 534.0 / (0.5 * 420.0)
+    ntu = ua * 6.0 / (13000 / 3600 * 800.0)
+    assert est["conductance_per_metre"] == pytest.approx(ua, rel=1e-12)
+    assert est["ntu"] == pytest.approx(ntu, rel=1e-12)
+    assert est["outlet_temperature"] == pytest.approx(303.0 + 420.15 * math.exp(-ntu), rel=1e-12)
+    assert est["outlet_temperature_error"] == 0.0       # no scatter, no error
+    # scatter between blocks becomes an error of the right size
+    noisy = q * np.repeat([0.9, 1.1, 0.9, 1.1], 10)
+    est = longer_cooler_outlet(noisy, 0.5, bed, 303.0, 723.15, 13000 / 3600, 800.0, 6.0)
+    assert est["conductance_per_metre_error"] == pytest.approx(ua * 0.1 * 2 / math.sqrt(3) / 2,
+                                                              rel=1e-9)
+    assert 0.0 < est["outlet_temperature_error"] < 723.15 - est["outlet_temperature"]
