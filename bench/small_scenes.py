@@ -6,7 +6,7 @@ Taichi runtime takes its thread count once per process).
     .venv/bin/python bench/small_scenes.py demos/dryer_drum.toml --until 2 --repeats 3
     .venv/bin/python bench/small_scenes.py demos/paddle_cooler.toml --until 8
 
-Modes (engine/stepper.py): ``runs`` - the default below 2,000 particles: every loop on one
+Modes (engine/stepper.py): ``runs`` - the default below 5,000 particles: every loop on one
 thread, several whole steps per launch (Engine.run_steps); ``parallel`` - parallel_from = 0:
 two parallel launches per step on every thread; ``serial-steps`` - one thread, one step per
 launch (the serial loops without the runs), to show what each part gives. Stepping time is the

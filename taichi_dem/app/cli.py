@@ -35,7 +35,7 @@ def _common_outputs(p: argparse.ArgumentParser):
     p.add_argument("--threads", type=int, help="CPU threads (default: all cores)")
     p.add_argument("--parallel-from", type=int, metavar="N", dest="parallel_from",
                    help="particles from which the CPU runs the step on all threads; below, one "
-                        "thread and several steps per launch (default 2000; 0: always "
+                        "thread and several steps per launch (default 5000; 0: always "
                         "parallel; BENCHMARKS.md 'Small scenes')")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--window", "--gui", action="store_true", dest="window",

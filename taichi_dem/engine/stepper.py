@@ -40,10 +40,12 @@ from .state import FieldTree, Flag, PairState, ParticleState, Reduction, Thermal
 
 # Below this many particles a CPU runs every loop of the step on one thread (Engine.serial).
 # Dispatching one parallel loop to Taichi's CPU thread pool costs ~100 us on this project's
-# 2-core machines, with one thread as with two (a serial loop: nothing; a launch: ~15 us),
-# while two threads save ~40 % of the physics: the break-even is near 1,000-3,000 particles
-# (bench/launch_cost.py, BENCHMARKS.md "Small scenes").
-PARALLEL_FROM = 2000
+# 2-core machines, with one thread as with two (a serial loop: nothing; a launch: ~15 us;
+# bench/launch_cost.py), while two threads save ~40 % of the physics. Measured break-even
+# (bench/cost_curve.py, BENCHMARKS.md "Cost curve"): the chute (0.14 us per particle-step)
+# ~10,000 particles - serial 1.7x faster at 4,000, parallel 1.16x faster at 16,000; the
+# cooler (0.5 us per particle-step) ~3,000. 5,000 is within ~15 % of the better mode for both.
+PARALLEL_FROM = 5000
 
 
 class Engine:
