@@ -14,6 +14,11 @@ particle   in the per-particle pass (gather), after the contacts: ``particle_fun
            torque N m, acceleration m/s^2, heat W, conductance W/K)
 integrate  the update of the particle's state from its load (velocity Verlet, temperature,
            drying); run by the engine in that order
+cell       between the pair stage and the particle stage, over cells: ``after_pairs(engine,
+           n, dt)`` launches its kernel (the drag's solid per contact cell, the plug-flow
+           gas's march); ``cell_func(engine)`` returns the same work as a ti.func ``(n, dt)``
+           for a loop that is already serial (Engine.run_steps: several steps per launch);
+           an effect without one keeps its scene to one launch per kernel per step
 process    factories and outlets (process/); observe: sensors (sensors/)
 
 Fields are declared by name: ``particle_fields`` (per particle, ``{name: (is_vector, kind)}``,
