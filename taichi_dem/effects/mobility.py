@@ -37,6 +37,26 @@ Still computed: its contacts with active particles (both sides: the active partn
 force), with plane walls and mesh bodies (the wall and body loads and torques stay complete),
 and all heat effects and the temperature update.
 
+In "body_frame" the inactive core is part of the frame's body kinematically, so the body must
+hold it: each inactive particle's contacts from outside the core (active partners, walls,
+bodies), its weight and its centripetal mass-acceleration give the reaction F + m g - m a_rigid
+(and the contact torque T) that is booked on the frame body every step like a contact's load
+(engine/stepper.py ``book_carried_load``; the core's inner contacts cancel in that sum and are
+left out on both sides). Without it a drum whose core froze read its torque 10 % low: the weight
+of the core, and the shear of the cascading layer on it, never reached the shell
+(tests/unit/test_mobility.py checks the booked torque against sum m (x - c) x g exactly). The
+frozen pairs' tangential springs are re-projected onto the turned contact plane at each rebuild
+step, as every pair's is at every step (hertz_mindlin.rotate_into_tangent_plane): exact for the
+tilt of the normal, and, as for active pairs, without the twist about the normal.
+
+Where a cell is *empty* for the "touches an empty cell" rule, "body_frame" leaves out cells
+beyond the frame body's reach (less than a quarter of their volume within the body's farthest
+vertex from its axis, less a largest radius: outside a drum's shell), and measures a cell's
+solid fraction against its volume within that reach: otherwise the shell would count as a free
+surface and a cell cut by it as dilute, and every cell along the shell would stay mobile with
+the layer inside it active (measured: a 19 d deep bed then froze at most 10 % of its particles
+at any threshold; with the reach, 31 %).
+
 Defaults (scene/loader.py): the threshold is 1e-5 g d_max, i.e. fluctuations of 0.3 % of
 sqrt(g d): for the seed's 2.24 mm beads 2.2e-7 (m/s)^2. A frozen cell keeps the contact forces
 of the instant it froze, so the threshold decides how far from equilibrium a bed may be when it
@@ -98,6 +118,9 @@ class Mobility(Effect):
         self.block_solid_fraction = tree.add("mobility_solid_fraction", real, self.n_blocks)
         self.block_volume = tree.add("mobility_volume", real, self.n_blocks)             # m^3
         self.block_flag = tree.add("mobility_flag", ti.i32, self.n_blocks)   # moving-body contact
+        # 1: the cell lies beyond the frame body's reach (outside a drum's shell): no particle
+        # can be there, so its being empty is no free surface
+        self.block_beyond = tree.add("mobility_beyond", ti.i32, self.n_blocks)
         self.block_mobile = tree.add("mobility_mobile", ti.i32, self.n_blocks)
         self.block_status = tree.add("mobility_status", ti.i32, self.n_blocks)
         self.counts = tree.add("mobility_counts", ti.i32, 4)   # [inactive particles, cells by status..]
@@ -114,9 +137,57 @@ class Mobility(Effect):
             lo = np.minimum(lo, g.hi[k])
             edges.append(np.diff(lo))
         vol = edges[0][:, None, None] * edges[1][None, :, None] * edges[2][None, None, :]
+        beyond = np.zeros(vol.shape, np.int32)
+        reach = self.frame_reach(engine)
+        if reach is not None:
+            # where particle centres can be: a largest radius inside the body's reach; a cell
+            # of which less than a quarter is there may well hold no centre in a full drum
+            point, axis, radius = reach
+            inside = self.fraction_within(engine, edges, point, axis,
+                                          max(radius - engine.max_radius, 0.0))
+            vol = vol * inside
+            beyond = (inside < 0.25).astype(np.int32)
         npf = np.float64 if engine.real == ti.f64 else np.float32
-        self.block_volume.from_numpy(vol.reshape(-1).astype(npf))
+        self.block_volume.from_numpy(np.maximum(vol, 1e-30).reshape(-1).astype(npf))
+        self.block_beyond.from_numpy(beyond.reshape(-1))
         self.particle_active.fill(1)
+
+    @staticmethod
+    def frame_reach(engine):
+        """(axis point m, unit axis, radius m) of the cylinder that the frame body sweeps as it
+        turns (its farthest vertex from the axis), or None: in mode "at_rest", or for a body
+        that also translates (its reach moves)."""
+        frame = engine.mobility_frame
+        if frame < 0:
+            return None
+        body = engine.scene.bodies[frame]
+        motion = body.motion
+        if any(v != 0 for v in motion.velocity):
+            return None
+        point = np.asarray(motion.axis_point, float)
+        axis = np.asarray(motion.axis_direction, float)
+        axis = axis / np.linalg.norm(axis)
+        r = np.asarray(body.vertices, float) - point
+        radial = r - np.outer(r @ axis, axis)
+        return point, axis, float(np.sqrt(np.max(np.sum(radial ** 2, axis=1))))
+
+    @staticmethod
+    def fraction_within(engine, edges, point, axis, radius, samples: int = 6):
+        """Fraction of each mobility cell's volume (per axis widths ``edges``, from the grid's
+        lower corner) within ``radius`` of the axis through ``point`` along ``axis``: the
+        midpoints of samples^3 sub-cells, numpy at set-up (m, unit vector, m)."""
+        g = engine.grid
+        lows = [g.lo[k] + np.concatenate([[0.0], np.cumsum(edges[k])[:-1]]) for k in range(3)]
+        u = (np.arange(samples) + 0.5) / samples
+        coords = [lows[k][:, None] + edges[k][:, None] * u[None, :] for k in range(3)]  # (n_k, s)
+        X, Y, Z = np.meshgrid(coords[0].ravel(), coords[1].ravel(), coords[2].ravel(),
+                              indexing="ij")
+        r = np.stack([X, Y, Z], axis=-1) - point
+        radial_sq = np.sum(r ** 2, axis=-1) - (r @ axis) ** 2
+        within = (radial_sq <= radius ** 2).astype(float)
+        n = [len(e) for e in edges]
+        within = within.reshape(n[0], samples, n[1], samples, n[2], samples)
+        return within.mean(axis=(1, 3, 5))
 
     # ------------------------------------------------------------------ kernels
     def compile(self, engine):
@@ -141,6 +212,7 @@ class Mobility(Effect):
         count, temp, speed_sq = self.block_count, self.block_temperature, self.block_mean_speed_sq
         phi, volume, flag = self.block_solid_fraction, self.block_volume, self.block_flag
         mobile, status = self.block_mobile, self.block_status
+        beyond = self.block_beyond
         mesh = engine.mesh
         frame = engine.mobility_frame
         body_frame = frame >= 0
@@ -244,7 +316,7 @@ class Mobility(Effect):
                 else:
                     for offset in range(27):
                         nb, inside = neighbour(bx, by, bz, offset)
-                        if inside and count[nb] == 0:
+                        if inside and count[nb] == 0 and beyond[nb] == 0:
                             state = MOBILE
                 mobile[b] = state
             ti.loop_config(serialize=serial_loops)

@@ -153,6 +153,7 @@ class Engine:
         t.finalize()
         self.removed_batches: list = []    # removal-log entries drained at rebuilds
         npf = np.float64 if real == ti.f64 else np.float32
+        self.max_radius = max_radius          # (the uploads below may read it)
         for name, values in table_values.items():
             field = self.table[name]
             field.from_numpy(values.astype(np.int32 if field.dtype == ti.i32 else npf))
@@ -412,6 +413,10 @@ class Engine:
 
         mobility = self.mobility is not None
         active = self.mobility.particle_active if mobility else None
+        # [mobility] "body_frame": the frozen core is carried by the frame's body, so what holds
+        # it there is a load on that body (booked in the gather); its inner contacts cancel in
+        # that sum and are left out of both sides
+        core_internal = mobility and self.mobility_frame >= 0
 
         @ti.func
         def pair_particle(i, dt, full):
@@ -430,6 +435,9 @@ class Engine:
             frozen_i = False
             if ti.static(mobility):
                 frozen_i = full == 0 and active[i] == 0
+            inactive_i = False
+            if ti.static(core_internal):
+                inactive_i = active[i] == 0
             for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                 j = p.neighbour[k]
                 if ti.static(mobility):
@@ -467,8 +475,12 @@ class Engine:
                         owned_conductance += out.conductance
                         p.partner_heat[k] = -out.heat
                         p.pair_conductance[k] = out.conductance
-                    owned_force += out.force
-                    owned_torque += out.torque_i
+                    inner = False
+                    if ti.static(core_internal):
+                        inner = inactive_i and active[j] == 0
+                    if not inner:
+                        owned_force += out.force
+                        owned_torque += out.torque_i
                     p.partner_force[k] = -out.force
                     p.partner_torque[k] = out.torque_j
                     p.tangential_history[k] = history.tangential
@@ -494,6 +506,25 @@ class Engine:
             for i in range(n):
                 pair_particle(i, dt, full)
 
+        frame = self.mobility_frame
+        loads = self.mesh if core_internal else None
+
+        @ti.func
+        def book_carried_load(i, force, torque, acceleration):
+            """[mobility] "body_frame": inactive particle i is carried rigidly by the frame's
+            body, which must supply C = m a_rigid - (F + m g) and the torque -T that keep it on
+            its path (a_rigid = w x (w x r), the body's spin constant between schedule steps);
+            the reaction, F + m g - m a_rigid at the lever r from the body's axis point and T,
+            is a load on the body like a contact's. ``force``, ``torque``: the contacts from
+            outside the inactive core (N, N m); ``acceleration``: the particle effects' (m/s^2).
+            Booked in the body's per-particle load sums, every step as the contacts are."""
+            w = loads.angular_velocity[frame]
+            lever = s.position[i] - (loads.axis_point[frame] + loads.offset[frame])
+            residual = force + s.mass[i] * (acceleration - w.cross(w.cross(lever)))
+            loads.particle_load_force[i, frame] = loads.particle_load_force[i, frame] + residual
+            loads.particle_load_torque[i, frame] = (loads.particle_load_torque[i, frame]
+                                                    + lever.cross(residual) + torque)
+
         @ti.func
         def gather_particle(i, dt, record, then_drift, t_next):
             """The rest of particle i's step: its partners' shares through the mirror index,
@@ -511,6 +542,15 @@ class Engine:
                         m = p.mirror[k]
                         if m >= 0:
                             if p.contact[m] != 0:
+                                force += p.partner_force[m]
+                                torque += p.partner_torque[m]
+                elif ti.static(core_internal):
+                    # carried by the frame's body: only the shares of active partners (the
+                    # core's inner contacts cancel in the load booked below)
+                    for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
+                        m = p.mirror[k]
+                        if m >= 0:
+                            if p.contact[m] != 0 and active[p.neighbour[k]] != 0:
                                 force += p.partner_force[m]
                                 torque += p.partner_torque[m]
                 heat = 0.0           # W into the particle
@@ -578,6 +618,9 @@ class Engine:
                     if s.alive[i] != 0:
                         # explicit update; stable while dt sum(h) / (m c) < 1 (checked per sample)
                         update_temperature(i, load.heat, load.conductance, dt)
+                if ti.static(core_internal):
+                    if inv_m > 0.0 and s.alive[i] != 0 and not integrates:
+                        book_carried_load(i, force, torque, load.acceleration)
                 if inv_m > 0.0 and s.alive[i] != 0 and integrates:
                     a = force * inv_m + load.acceleration
                     alpha = torque * s.inverse_inertia[i]

@@ -232,7 +232,11 @@ def test_a_frozen_bed_still_loads_its_floor():
         assert np.array_equal(before["position"][inactive], after["position"][inactive])
         weight = float(np.sum(after["mass"])) * 9.81
         floor = float(sim.series["walls/floor/force"][-1][2])
-        assert floor == pytest.approx(first, rel=1e-4)
+        # the cells on the floor touch the empty cells under it, so they stay mobile and their
+        # particles still settle by a few 1e-4 of the load (3.8e-4 measured on one CPU, under
+        # 1e-4 on another: f32 code generation differs); a frozen bed losing its load (the
+        # 37 % of the first default threshold) fails this by three decades
+        assert floor == pytest.approx(first, rel=2e-3)
         assert -floor == pytest.approx(weight, rel=1e-2)
 
 
@@ -376,3 +380,63 @@ conduction = true
     moved = np.max(np.abs(temperatures[False] - np.where(hot, 400.0, 300.0)))
     assert moved > 1e-3                     # heat did flow
     assert np.max(np.abs(temperatures[True] - temperatures[False])) < 1e-12
+
+
+def test_body_frame_books_what_carries_the_core_on_the_drum(tmp_path):
+    """The inactive core is carried rigidly by the drum, so the drum must hold it: the reaction
+    (the core's weight less its centripetal mass-acceleration, plus the contacts from outside
+    the core) is booked on the drum like a contact. The lattice of the test above, not touching,
+    in gravity g = -9.81 y across the drum's z axis: the drum's axial torque over each step is
+    sum over the inactive particles of m ((x - c) x g) . z (the centripetal part is radial and
+    has no axial moment), to round-off (f64). Without the booking the drum reports nothing (no
+    particle touches it) while in the full model the same weight would reach it through the
+    bed: a frozen core in a drum read 10 % low in torque (bench/mobility_deep_drum.py)."""
+    omega = 1.0
+    ax = np.arange(-0.066, 0.0661, 0.0044)
+    az = np.arange(0.0022, 0.05, 0.0044)
+    x = np.array(np.meshgrid(ax, ax, az, indexing="ij")).reshape(3, -1).T
+    x = x[np.hypot(x[:, 0], x[:, 1]) < 0.068]
+    v = np.column_stack([-omega * x[:, 1], omega * x[:, 0], np.zeros(len(x))])
+    np.savetxt(tmp_path / "p.csv", np.column_stack([x, np.full(len(x), 0.0015), v]),
+               delimiter=",", header="x,y,z,radius,vx,vy,vz", comments="")
+    text = DRUM_SCENE.format(speed=omega, mode="body_frame", body='body = "drum"')
+    text = text.replace("gravity = [0.0, 0.0, 0.0]", "gravity = [0.0, -9.81, 0.0]")
+    text += "\n[output]\ninterval = 1e-4\n"                  # 5 steps of 2e-5 s
+    with td.Simulation.from_text(text, base_dir=str(tmp_path)) as sim:
+        e = sim.engine
+        n = e.count
+        expected = []
+        for _ in range(5):
+            sim.step(1)
+            order = np.argsort(e.state.particle_id.to_numpy()[:n])
+            inactive = e.mobility.particle_active.to_numpy()[:n][order] == 0
+            p = sim.particles()
+            expected.append(float(np.sum(p["mass"][inactive] * -9.81 * p["position"][inactive, 0])))
+        assert inactive.sum() > 100
+        torque = float(sim.series["bodies/drum/axial_torque"][-1])
+        force = np.asarray(sim.series["bodies/drum/force"][-1])
+        weight = float(np.sum(p["mass"][inactive])) * 9.81
+    assert abs(np.mean(expected)) > 1e-4                     # the lattice is lopsided enough
+    assert torque == pytest.approx(np.mean(expected), rel=1e-6, abs=1e-12)
+    # and the force: the weight, less the (radial, summing to m w^2 x_cm) centripetal part
+    assert force[1] == pytest.approx(-weight, rel=0.05)
+
+
+def test_cells_beyond_a_drum_shell_are_measured_inside_it():
+    """In "body_frame" a cell's solid fraction counts only its volume within the frame body's
+    reach (a drum's shell), and cells wholly outside do not count as empty neighbours (the
+    shell is no free surface). The volume fraction of four square cells around a cylinder of
+    radius R through their common corner is pi/4 each (the quarter circle in an R x R square);
+    of a cell beyond the circle 0 (2 % sampling error at 40^3 sub-cells)."""
+    from types import SimpleNamespace
+    from taichi_dem.effects.mobility import Mobility
+    R = 0.1
+    engine = SimpleNamespace(grid=SimpleNamespace(lo=np.array([-R, -R, 0.0])))
+    edges = [np.array([R, R, R]), np.array([R, R, R]), np.array([0.05])]   # 3 x 3 x 1 cells
+    f = Mobility.fraction_within(engine, edges, np.zeros(3), np.array([0.0, 0.0, 1.0]), R,
+                                 samples=40)
+    assert f.shape == (3, 3, 1)
+    for i, j in ((0, 0), (0, 1), (1, 0), (1, 1)):
+        assert f[i, j, 0] == pytest.approx(math.pi / 4, rel=0.02)
+    assert f[2, 2, 0] == 0.0 and f[2, 0, 0] == 0.0
+    assert f[0, 2, 0] == 0.0
