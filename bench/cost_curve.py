@@ -87,7 +87,11 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, default=HERE / "results" / "cost_curve")
     p.add_argument("--both-modes-up-to", type=int, default=16000, metavar="N",
                    help="also run the forced serial and parallel modes up to N particles")
+    p.add_argument("--from-json", type=Path, help="redo the fits, table and plot of a saved "
+                   "cost_curve.json (no runs)")
     a = p.parse_args(argv)
+    if a.from_json:
+        return report(json.loads(a.from_json.read_text())["rows"], a)
     a.out.mkdir(parents=True, exist_ok=True)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -120,34 +124,47 @@ def main(argv=None) -> int:
             rows.append(row)
             print(json.dumps({k: (round(v / 1e6, 3) if isinstance(v, float) else v)
                               for k, v in row.items() if k != "taichi_dem_runs"}), flush=True)
+    return report(rows, a)
+
+
+def fit_mode(rows, mode, largest=None):
+    """time per step = a + b N fitted on the sizes run in ``mode`` (forced, or the default
+    when it ran in that mode), weighted by 1/time (least relative error, so the small sizes,
+    where the fixed part shows, count as much as the large ones); None below two sizes."""
+    pts = [(r["particles"], r.get(f"taichi_dem_{mode}") or
+            (r["taichi_dem"] if r["mode"] == mode else None)) for r in rows]
+    pts = [(k, v) for k, v in pts if v and (largest is None or k <= largest)]
+    if len(pts) < 2:
+        return None
+    nn = np.array([k for k, _ in pts], float)
+    t = nn / np.array([v for _, v in pts])
+    slope, fixed = np.polyfit(nn, t, 1, w=1.0 / t)
+    return {"fixed_s": float(fixed), "per_particle_s": float(slope), "sizes": [int(k) for k in nn]}
+
+
+def report(rows, a):
+    """The fits, the markdown table, cost_curve.json and cost_curve.png under ``a.out``."""
+    a.out.mkdir(parents=True, exist_ok=True)
     n = np.array([r["particles"] for r in rows], float)
     fits = {}
     for mode in ("serial", "parallel"):
-        # each mode fitted on the sizes it ran at: forced runs, and default runs in that mode
-        pts = [(r["particles"], r.get(f"taichi_dem_{mode}") or
-                (r["taichi_dem"] if r["mode"] == mode else None)) for r in rows]
-        pts = [(k, v) for k, v in pts if v]
-        if mode == "serial":
-            pts = [(k, v) for k, v in pts if k <= a.both_modes_up_to]
-        if len(pts) >= 2:
-            nn = np.array([k for k, _ in pts], float)
-            slope, fixed = np.polyfit(nn, nn / np.array([v for _, v in pts]), 1)
-            fits[mode] = {"fixed_s": float(fixed), "per_particle_s": float(slope),
-                          "sizes": [int(k) for k in nn]}
-            print(f"\ntaichi_dem {mode}: time per step = {fixed * 1e6:.1f} us + "
-                  f"{slope * 1e9:.2f} ns x N (fixed share at 1k: "
-                  f"{fixed / (fixed + slope * 1000):.0%}; fitted on {len(pts)} sizes)")
-    # the default mode's curve: the fit of the mode it runs in at 1k
-    b, a0 = ((fits["serial"]["per_particle_s"], fits["serial"]["fixed_s"]) if "serial" in fits
-             else np.polyfit(n, n / np.array([r["taichi_dem"] for r in rows]), 1)
-             if len(n) > 1 else (n[0] / rows[0]["taichi_dem"] / n[0], 0.0))
+        f = fit_mode(rows, mode, 1.1 * a.both_modes_up_to if mode == "serial" else None)
+        if f is not None:
+            fits[mode] = f
+            print(f"\ntaichi_dem {mode}: time per step = {f['fixed_s'] * 1e6:.1f} us + "
+                  f"{f['per_particle_s'] * 1e9:.2f} ns x N (fixed share at 1k: "
+                  f"{f['fixed_s'] / (f['fixed_s'] + f['per_particle_s'] * 1000):.0%}; fitted on "
+                  f"{len(f['sizes'])} sizes)")
+    first = "serial" if "serial" in fits else "parallel" if "parallel" in fits else None
+    b, a0 = ((fits[first]["per_particle_s"], fits[first]["fixed_s"]) if first else (0.0, 0.0))
+    ranks = [k for k in a.ranks if any(f"lammps_{k}" in r for r in rows)]
     print("| particles | steps | mode | taichi_dem M/s | serial | parallel | " + " | ".join(
-        f"LAMMPS {k} rank(s) M/s | ratio" for k in a.ranks if not a.no_lammps) + " |")
+        f"LAMMPS {k} rank(s) M/s | ratio" for k in ranks) + " |")
     for r in rows:
         cells = [f"{r['particles']:,}", str(r["steps"]), r["mode"], f"{r['taichi_dem'] / 1e6:.2f}",
                  *(f"{r[k] / 1e6:.2f}" if k in r else "-"
                    for k in ("taichi_dem_serial", "taichi_dem_parallel"))]
-        for k in a.ranks:
+        for k in ranks:
             if f"lammps_{k}" in r:
                 cells += [f"{r[f'lammps_{k}'] / 1e6:.2f}", f"{r['taichi_dem'] / r[f'lammps_{k}']:.2f}"]
         print("| " + " | ".join(cells) + " |")
@@ -159,7 +176,7 @@ def main(argv=None) -> int:
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     ax.plot(n, [r["taichi_dem"] / 1e6 for r in rows], "o-", label="taichi_dem (f32, 2 threads, default mode)")
-    for k in a.ranks:
+    for k in ranks:
         if all(f"lammps_{k}" in r for r in rows):
             ax.plot(n, [r[f"lammps_{k}"] / 1e6 for r in rows], "s--", label=f"LAMMPS {k} rank(s)")
     for mode, style in (("serial", ":"), ("parallel", "-.")):

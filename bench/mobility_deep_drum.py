@@ -136,7 +136,13 @@ def measure(sim, first: int, thetas, axial, inactive) -> dict:
     torque = np.asarray(sim.series["bodies/drum/axial_torque"][first:], float)
     flow = float(np.nanmean(sim.series["sensors/axial/mass_flow"][first:]))
     bed_mass = float(np.sum(sim.particles()["mass"]))
-    return dict(torque=float(np.mean(torque)), axial=flow * SLICE / bed_mass,
+    flows = np.asarray(sim.series["sensors/axial/mass_flow"][first:], float)
+    flows = flows[np.isfinite(flows)]
+    # standard errors of the window means from the samples' scatter (samples of 0.1 s taken
+    # as independent: an estimate of the noise an error must exceed to be seen)
+    se = dict(torque_se=float(np.std(torque, ddof=1) / np.sqrt(len(torque))),
+              axial_se=float(np.std(flows, ddof=1) / np.sqrt(len(flows))) * SLICE / bed_mass)
+    return dict(se, torque=float(np.mean(torque)), axial=flow * SLICE / bed_mass,
                 theta=math.degrees(float(np.mean(thetas))),
                 inactive=float(np.mean(inactive)) if inactive else 0.0)
 
@@ -216,8 +222,10 @@ def main(argv=None):
         print(f"{v:16s} {r['torque']:11.4f} {r['axial'] * 1e3:11.3f} {r['theta']:9.2f} "
               f"{r['inactive']:8.1%} {r['wall']:7.1f} {ref['wall'] / r['wall']:8.2f} "
               f"{r['torque'] / ref['torque'] - 1:+10.2%} {r['axial'] / ref['axial'] - 1:+9.2%}")
-    print(f"(sample-to-sample sd of the reference: torque {ref['torque_sd']:.4f} N m, axial speed "
-          f"{ref['axial_sd'] * 1e3:.3f} mm/s)")
+    print(f"(standard errors of the reference's window means: torque {ref['torque_se']:.4f} N m "
+          f"({ref['torque_se'] / abs(ref['torque']):.1%}), axial speed {ref['axial_se'] * 1e3:.3f} "
+          f"mm/s ({ref['axial_se'] / abs(ref['axial']):.1%}); the same run's figures from another "
+          f"state differ by about sqrt(2) of these)")
     return results
 
 

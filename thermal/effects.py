@@ -82,6 +82,10 @@ def _gas_over_solid(scene, tables, k_gas):
     return out
 
 
+# the gas-gap models that put the particles' own resistance in series (their k_g / k_s table)
+SOLID_MODELS = ("solid_resistance", "voronoi")
+
+
 class _GasGap(Effect):
     """What the two gas-gap effects share: k_g (W/(m K)), the lens (radii, also the contact
     margin), the minimum gap (m), the model and, for the series model, the k_g/k_s table.
@@ -94,16 +98,19 @@ class _GasGap(Effect):
     stage = "contact"
     MOST_KINDS = 8
 
-    def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance"):
+    def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance",
+                 porosity=0.4):
         super().__init__(description)
         self.parameters = (float(conductivity), float(lens), float(min_gap))
         self.margin = float(lens)
         self.model = model
-        self.tables = ("gas_over_solid",) if model == "solid_resistance" else ()
+        self.porosity = float(porosity)          # the "voronoi" model's packing porosity
+        self.solid = model in SOLID_MODELS       # the particles' own resistance counts
+        self.tables = ("gas_over_solid",) if self.solid else ()
         self.kinds_tabulated = None     # the species the tables are for (None: no tables)
 
     def table_values(self, scene, tables):
-        if self.model != "solid_resistance":
+        if not self.solid:
             return {}
         return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
 
@@ -120,7 +127,7 @@ class _GasGap(Effect):
 
     def _ratios(self, engine):
         """k_g / k_s of each material (0: isothermal), from the engine's table."""
-        if self.model != "solid_resistance":
+        if not self.solid:
             return None
         return engine.table["gas_over_solid"].to_numpy()[:, 0].astype(np.float64)
 
@@ -148,8 +155,8 @@ class GasGapWall(_GasGap):
     kinds = ("plane", "surface")
 
     def allocate(self, engine, tree):
-        # the isothermal plane has a closed form: tables only for the series model
-        if self.model == "solid_resistance" and self._tabulate(engine):
+        # the isothermal plane has a closed form: tables only for the models with the solid
+        if self.solid and self._tabulate(engine):
             self._allocate_tables(engine, tree, "gas_gap_wall", (len(engine.species),))
 
     def upload(self, engine):
@@ -159,7 +166,8 @@ class GasGapWall(_GasGap):
         ratio = self._ratios(engine)
         values, ranges = [], []
         for material, radius in self.kinds_tabulated:
-            values.append(gas_gap.plane_table(radius, lens, min_gap, ratio[material]))
+            values.append(gas_gap.plane_table(radius, lens, min_gap, ratio[material],
+                                              self.model, self.porosity))
             ranges.append(gas_gap.table_range(radius, radius, lens, min_gap))
         npf = np.float64 if engine.real == ti.f64 else np.float32
         self.table.from_numpy(np.array(values, npf))
@@ -167,7 +175,9 @@ class GasGapWall(_GasGap):
 
     def contact_func(self, engine):
         k_gas, lens, min_gap = self.parameters
-        solid = self.model == "solid_resistance"
+        solid = self.solid
+        voronoi = self.model == "voronoi"
+        porosity = self.porosity
         ratio = engine.table["gas_over_solid"] if solid else None
         tabulated = self.kinds_tabulated is not None
         kind_of = self.kind_func() if tabulated else None
@@ -192,8 +202,14 @@ class GasGapWall(_GasGap):
                                 value = ((1.0 - fraction) * table[k, index]
                                          + fraction * table[k, index + 1])
                 if integrate:
-                    value = gas_gap.plane_solid_gap_integral(
-                        c.radius_i, distance, lens, min_gap, ratio[c.material_i, c.material_j])
+                    if ti.static(voronoi):
+                        value = gas_gap.plane_voronoi_gap_integral(
+                            c.radius_i, distance, lens, min_gap,
+                            ratio[c.material_i, c.material_j], porosity)
+                    else:
+                        value = gas_gap.plane_solid_gap_integral(
+                            c.radius_i, distance, lens, min_gap,
+                            ratio[c.material_i, c.material_j])
                 out.conductance += k_gas * value
             else:
                 out.conductance += k_gas * gas_gap.plane_gap_integral(
@@ -233,8 +249,8 @@ class GasGapPair(_GasGap):
                 if ratio is None:
                     v = gas_gap.pair_table(ra, rb, lens, min_gap, "isothermal")
                 else:
-                    v = gas_gap.pair_table(ra, rb, lens, min_gap, "solid_resistance",
-                                           ratio[ma], ratio[mb])
+                    v = gas_gap.pair_table(ra, rb, lens, min_gap, self.model,
+                                           ratio[ma], ratio[mb], self.porosity)
                 values[a, b] = values[b, a] = v
                 ranges[a, b] = ranges[b, a] = gas_gap.table_range(min(ra, rb), max(ra, rb),
                                                                   lens, min_gap)
@@ -244,7 +260,9 @@ class GasGapPair(_GasGap):
 
     def contact_func(self, engine):
         k_gas, lens, min_gap = self.parameters
-        solid = self.model == "solid_resistance"
+        solid = self.solid
+        voronoi = self.model == "voronoi"
+        porosity = self.porosity
         ratio = engine.table["gas_over_solid"] if solid else None
         tabulated = self.kinds_tabulated is not None
         kind_of = self.kind_func() if tabulated else None
@@ -269,7 +287,12 @@ class GasGapPair(_GasGap):
                             value = ((1.0 - fraction) * table[a, b, index]
                                      + fraction * table[a, b, index + 1])
             if integrate:
-                if ti.static(solid):
+                if ti.static(voronoi):
+                    value = gas_gap.pair_voronoi_gap_integral(
+                        c.radius_i, c.radius_j, distance, lens, min_gap,
+                        ratio[c.material_i, c.material_j], ratio[c.material_j, c.material_i],
+                        porosity)
+                elif ti.static(solid):
                     value = gas_gap.pair_solid_gap_integral(
                         c.radius_i, c.radius_j, distance, lens, min_gap,
                         ratio[c.material_i, c.material_j], ratio[c.material_j, c.material_i])
@@ -531,7 +554,10 @@ class Temperature(Effect):
 
 
 MODEL_WORDS = {"isothermal": "isothermal surfaces (Rong & Horio / Musser; Morris et al.)",
-               "solid_resistance": "with the solid's resistance in series (Cheng, Yu & Zulli)"}
+               "solid_resistance": "with the solid's resistance in series from the centre "
+                                   "planes (Zhou, Yu & Zulli)",
+               "voronoi": "with the solid's resistance in series from the Voronoi cones "
+                          "(Cheng, Yu & Zulli)"}
 
 
 def thermal_effects(scene) -> list:
@@ -553,7 +579,8 @@ def thermal_effects(scene) -> list:
                 f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
                 f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]}; pairs "
                 f"within the lens are listed and handed to the contact law)",
-                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model))
+                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model,
+                th.gas_gap_porosity))
     hot = [w.name for w in list(scene.walls) + list(scene.bodies) if w.temperature is not None]
     if th.wall_conduction and hot:
         out.append(WallConduction("conduction to isothermal " + ", ".join(hot)))
@@ -562,7 +589,8 @@ def thermal_effects(scene) -> list:
                 f"conduction through the gas gap to {', '.join(hot)} (fluid lens "
                 f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
                 f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]})",
-                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model))
+                th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model,
+                th.gas_gap_porosity))
     gas = th.gas
     if gas is not None and not gas.plug_flow:
         out.append(Convection(f"convection to a {gas.model} gas at {gas.temperature:g} K "

@@ -152,26 +152,30 @@ GAUSS_W_SOLID = tuple(float(w) for w in _WS)
 
 
 @ti.func
-def _solid_denominator(w, distance, ri2, rj2, gi, gj, min_gap):
-    """g_i u_i + g_j u_j + max(gap, S) at w = r^2 (a plane: rj2 = 0, gj = 0), m."""
+def _solid_denominator(w, distance, ri2, rj2, gi, gj, min_gap, ci, cj):
+    """g_i p_i + g_j p_j + max(gap, S) at w = r^2 (a plane: rj2 = 0, gj = 0), m, with the
+    solid paths p = u - c r (c = 0: from the centre plane; c > 0: from the cone of the
+    "voronoi" model, never negative)."""
     ui = ti.sqrt(ti.max(ri2 - w, 0.0))
     uj = ti.sqrt(ti.max(rj2 - w, 0.0))
-    return gi * ui + gj * uj + ti.max(distance - ui - uj, min_gap)
+    r = ti.sqrt(ti.max(w, 0.0))
+    return (gi * ti.max(ui - ci * r, 0.0) + gj * ti.max(uj - cj * r, 0.0)
+            + ti.max(distance - ui - uj, min_gap))
 
 
 @ti.func
-def _solid_integral(w0, w1, distance, ri2, rj2, gi, gj, min_gap):
+def _solid_integral(w0, w1, distance, ri2, rj2, gi, gj, min_gap, ci, cj):
     """Int_{w0}^{w1} pi dw / denominator(w) for the positive, nearly linear denominator:
     Gauss-Legendre in q = ln(line), line the chord of the denominator through its ends."""
-    d0 = _solid_denominator(w0, distance, ri2, rj2, gi, gj, min_gap)
-    d1 = _solid_denominator(w1, distance, ri2, rj2, gi, gj, min_gap)
+    d0 = _solid_denominator(w0, distance, ri2, rj2, gi, gj, min_gap, ci, cj)
+    d1 = _solid_denominator(w1, distance, ri2, rj2, gi, gj, min_gap, ci, cj)
     result = 0.0 * w0
     if w1 > w0:
         slope = (d1 - d0) / (w1 - w0)
         if ti.abs(d1 - d0) < 1e-6 * d0:
             # (nearly) constant: the midpoint rule is exact enough
             result = math.pi * (w1 - w0) / _solid_denominator(0.5 * (w0 + w1), distance, ri2,
-                                                              rj2, gi, gj, min_gap)
+                                                              rj2, gi, gj, min_gap, ci, cj)
         else:
             q0 = ti.log(d0)
             half = 0.5 * (ti.log(d1) - q0)
@@ -180,7 +184,7 @@ def _solid_integral(w0, w1, distance, ri2, rj2, gi, gj, min_gap):
                 line = ti.exp(q0 + half * (ti.static(GAUSS_X_SOLID[k]) + 1.0))
                 w = ti.min(ti.max(w0 + (line - d0) / slope, w0), w1)
                 total += ti.static(GAUSS_W_SOLID[k]) * line / _solid_denominator(
-                    w, distance, ri2, rj2, gi, gj, min_gap)
+                    w, distance, ri2, rj2, gi, gj, min_gap, ci, cj)
             result = math.pi * half * total / slope
     return result
 
@@ -196,7 +200,7 @@ def plane_solid_gap_integral(radius, distance, lens, min_gap, gas_over_solid):
         out2 = ti.min(lens_radius * lens_radius - distance * distance, r2)
         in2 = ti.max(r2 - distance * distance, 0.0)
         result = _solid_integral(in2, out2, distance, r2, 0.0 * r2, gas_over_solid, 0.0 * r2,
-                                 min_gap)
+                                 min_gap, 0.0 * r2, 0.0 * r2)
     return result
 
 
@@ -211,8 +215,128 @@ def pair_solid_gap_integral(radius_i, radius_j, distance, lens, min_gap, gas_ove
     big, small, ri2, rj2, in2, out2, reaches = _pair_lens(radius_i, radius_j, distance, lens)
     result = 0.0 * distance
     if reaches:
-        result = _solid_integral(in2, out2, distance, ri2, rj2, g_big, g_small, min_gap)
+        result = _solid_integral(in2, out2, distance, ri2, rj2, g_big, g_small, min_gap,
+                                 0.0 * ri2, 0.0 * ri2)
     return result
+
+
+# ------------------------------------------------- Voronoi cones (Cheng, Yu & Zulli 1999)
+# Cheng, Yu & Zulli (1999, Chem. Eng. Sci. 54:4199) confine the heat between two neighbours to
+# the double cone whose apexes are the particle centres and whose base is their shared Voronoi
+# face, and take the cone surfaces (not the centre planes) as each particle's isotherm: along a
+# line parallel to the line of centres at radius r the solid path runs from the cone to the
+# sphere's surface, p = u - r D / r_ij, then the gas gap, then the partner's path:
+#
+#     G = k_g Int_{r_in}^{r_sf} 2 pi r dr / (g_i p_i + g_j p_j + max(S, gap)),   g = k_g / k_s
+#
+# D the distance from the centre to the face (the radical plane, (R_i^2 - R_j^2 + d^2) / (2 d)),
+# r_ij the face's radius from the packing's porosity e (Yang, Zou & Yu 2000 for random
+# packings: r_ij = 0.56 R (1 - e)^(-1/3)), r_sf = R r_ij / sqrt(r_ij^2 + D^2) where the cone
+# leaves the (smaller) sphere; the other particle's cone is taken through the same circle
+# (p = 0 there for both: c = sqrt(R^2 - r_sf^2) / r_sf), as Gan, Zhou & Yu (2016) do for unequal
+# spheres. A wall is the mirror plane of an equal pair (D = the centre's distance, g_w = 0). The
+# solid paths are shorter than the centre-plane ones ("solid_resistance") away from the axis,
+# so the conductance lies between that model's and the isothermal one's.
+VORONOI_FACE = 0.56
+
+
+def voronoi_face_radius(radius: float, porosity: float) -> float:
+    """r_ij (m) of a random packing of spheres of ``radius`` (m) at ``porosity`` (1)."""
+    return VORONOI_FACE * radius * (1.0 - porosity) ** (-1.0 / 3.0)
+
+
+@ti.func
+def _voronoi_cone(radius_small, radius_big, distance, porosity):
+    """(r_sf^2, cone slope of the smaller sphere, of the larger) of a pair (m^2, 1, 1)."""
+    face = VORONOI_FACE * 0.5 * (radius_small + radius_big) * (1.0 - porosity) ** (-1.0 / 3.0)
+    d_small = (radius_small * radius_small - radius_big * radius_big + distance * distance) / (
+        2.0 * distance)
+    sf2 = radius_small * radius_small * face * face / (face * face + d_small * d_small)
+    sf = ti.sqrt(sf2)
+    return (sf2, ti.sqrt(ti.max(radius_small * radius_small - sf2, 0.0)) / sf,
+            ti.sqrt(ti.max(radius_big * radius_big - sf2, 0.0)) / sf)
+
+
+@ti.func
+def pair_voronoi_gap_integral(radius_i, radius_j, distance, lens, min_gap, gas_over_solid_i,
+                              gas_over_solid_j, porosity):
+    """The Voronoi-cone conductance integral of two spheres (m; times k_g: W/K); 0 beyond
+    ``lens`` radii of the larger sphere (the neighbour list's reach)."""
+    g_big, g_small = gas_over_solid_i, gas_over_solid_j
+    if radius_j > radius_i:
+        g_big, g_small = gas_over_solid_j, gas_over_solid_i
+    big = ti.max(radius_i, radius_j)
+    small = ti.min(radius_i, radius_j)
+    result = 0.0 * distance
+    if distance < big + small + lens * big:
+        sf2, c_small, c_big = _voronoi_cone(small, big, distance, porosity)
+        in2 = 0.0 * distance
+        if distance < big + small:
+            cos_in = (big * big - small * small + distance * distance) / (2.0 * big * distance)
+            in2 = big * big * ti.max(1.0 - cos_in * cos_in, 0.0)
+        result = _solid_integral(in2, sf2, distance, big * big, small * small, g_big, g_small,
+                                 min_gap, c_big, c_small)
+    return result
+
+
+@ti.func
+def plane_voronoi_gap_integral(radius, distance, lens, min_gap, gas_over_solid, porosity):
+    """The Voronoi-cone integral of a sphere and a wall (the mirror plane of an equal pair),
+    m; 0 beyond the lens."""
+    result = 0.0 * radius
+    if distance < radius * (1.0 + lens):
+        face = VORONOI_FACE * radius * (1.0 - porosity) ** (-1.0 / 3.0)
+        sf2 = radius * radius * face * face / (face * face + distance * distance)
+        in2 = ti.max(radius * radius - distance * distance, 0.0)
+        result = _solid_integral(in2, sf2, distance, radius * radius, 0.0 * radius,
+                                 gas_over_solid, 0.0 * radius, min_gap, distance / face,
+                                 0.0 * radius)
+    return result
+
+
+def pair_voronoi_gap_integral_reference(radius_i, radius_j, distance, lens, min_gap,
+                                        gas_over_solid_i, gas_over_solid_j, porosity,
+                                        panels=4000):
+    """The Voronoi-cone pair integral by brute-force quadrature in r (m); for tests, tables."""
+    if radius_j > radius_i:
+        radius_i, radius_j = radius_j, radius_i
+        gas_over_solid_i, gas_over_solid_j = gas_over_solid_j, gas_over_solid_i
+    big, small = radius_i, radius_j
+    if distance >= big + small + lens * big:
+        return 0.0
+    face = voronoi_face_radius(0.5 * (big + small), porosity)
+    d_small = (small ** 2 - big ** 2 + distance ** 2) / (2 * distance)
+    r_sf = small * face / math.sqrt(face ** 2 + d_small ** 2)
+    c_small = math.sqrt(max(small ** 2 - r_sf ** 2, 0.0)) / r_sf
+    c_big = math.sqrt(max(big ** 2 - r_sf ** 2, 0.0)) / r_sf
+    r_in = 0.0
+    if distance < big + small:
+        cos_in = (big ** 2 - small ** 2 + distance ** 2) / (2 * big * distance)
+        r_in = big * math.sqrt(max(1 - cos_in ** 2, 0.0))
+
+    def denominator(r):
+        ui = np.sqrt(np.maximum(big ** 2 - r ** 2, 0.0))
+        uj = np.sqrt(np.maximum(small ** 2 - r ** 2, 0.0))
+        return (gas_over_solid_i * np.maximum(ui - c_big * r, 0.0)
+                + gas_over_solid_j * np.maximum(uj - c_small * r, 0.0)
+                + np.maximum(distance - ui - uj, min_gap))
+    return _integrate(denominator, r_in, r_sf, panels)
+
+
+def plane_voronoi_gap_integral_reference(radius, distance, lens, min_gap, gas_over_solid,
+                                         porosity, panels=4000):
+    """The Voronoi-cone sphere-wall integral by brute-force quadrature (m)."""
+    if distance >= radius * (1.0 + lens):
+        return 0.0
+    face = voronoi_face_radius(radius, porosity)
+    r_sf = radius * face / math.sqrt(face ** 2 + distance ** 2)
+    r_in = math.sqrt(max(radius ** 2 - distance ** 2, 0.0))
+
+    def denominator(r):
+        u = np.sqrt(np.maximum(radius ** 2 - r ** 2, 0.0))
+        return (gas_over_solid * np.maximum(u - distance / face * r, 0.0)
+                + np.maximum(distance - u, min_gap))
+    return _integrate(denominator, r_in, r_sf, panels)
 
 
 # ---------------------------------------------------------------- references (numpy, slow)
@@ -341,11 +465,16 @@ def table_separations(radius_small, radius_big, lens, min_gap) -> np.ndarray:
 
 
 def pair_table(radius_i, radius_j, lens, min_gap, model, gas_over_solid_i=0.0,
-               gas_over_solid_j=0.0) -> np.ndarray:
+               gas_over_solid_j=0.0, porosity=0.4) -> np.ndarray:
     """The pair integral (m) at ``table_separations`` for two kinds of sphere; ``model``
-    "isothermal" or "solid_resistance" (with k_g / k_s of each)."""
+    "isothermal", "solid_resistance" or "voronoi" (with k_g / k_s of each; the packing's
+    porosity for "voronoi")."""
     small, big = min(radius_i, radius_j), max(radius_i, radius_j)
     s = table_separations(small, big, lens, min_gap)
+    if model == "voronoi":
+        return np.array([pair_voronoi_gap_integral_reference(
+            radius_i, radius_j, radius_i + radius_j + x, lens, min_gap, gas_over_solid_i,
+            gas_over_solid_j, porosity, TABLE_PANELS) for x in s])
     if model == "solid_resistance":
         return np.array([pair_solid_gap_integral_reference(
             radius_i, radius_j, radius_i + radius_j + x, lens, min_gap, gas_over_solid_i,
@@ -354,9 +483,15 @@ def pair_table(radius_i, radius_j, lens, min_gap, model, gas_over_solid_i=0.0,
                                                  lens, min_gap, TABLE_PANELS) for x in s])
 
 
-def plane_table(radius, lens, min_gap, gas_over_solid) -> np.ndarray:
-    """The sphere-plane integral with the solid's resistance (m) at ``table_separations``."""
+def plane_table(radius, lens, min_gap, gas_over_solid, model="solid_resistance",
+                porosity=0.4) -> np.ndarray:
+    """The sphere-plane integral with the solid's resistance (m) at ``table_separations``
+    ("solid_resistance" or "voronoi")."""
     s = table_separations(radius, radius, lens, min_gap)
+    if model == "voronoi":
+        return np.array([plane_voronoi_gap_integral_reference(
+            radius, radius + x, lens, min_gap, gas_over_solid, porosity, TABLE_PANELS)
+            for x in s])
     return np.array([plane_solid_gap_integral_reference(radius, radius + x, lens, min_gap,
                                                         gas_over_solid, TABLE_PANELS)
                      for x in s])

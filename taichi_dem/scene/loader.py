@@ -49,7 +49,8 @@ SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
 THERMAL_KEYS = ("conduction", "wall_conduction", "radiation", "gas", "contact_radius_correction",
                 "radiation_to", "radiation_region", "evaporation_temperature", "latent_heat",
                 "water_heat_capacity", "gas_gap", "gap_gas_conductivity", "gas_gap_lens",
-                "gas_gap_min_gap", "gas_gap_pairs", "time_scale", "gas_gap_model")
+                "gas_gap_min_gap", "gas_gap_pairs", "time_scale", "gas_gap_model",
+                "gas_gap_porosity")
 DRAG_MODELS = ("di_felice", "schiller_naumann")
 MECHANICS_GAS_KEYS = ("velocity", "density", "viscosity", "drag")
 GAS_KEYS = ("drag", "model", "temperature", "velocity", "correlation", "porosity", "density",
@@ -1258,7 +1259,7 @@ class _Parser:
         if "gas_gap" in t:
             kw["gas_gap"] = self.boolean(t["gas_gap"], f"{key}.gas_gap")
         for k in ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap", "gas_gap_pairs",
-                  "gas_gap_model"):
+                  "gas_gap_model", "gas_gap_porosity"):
             if k in t and not kw.get("gas_gap"):
                 raise self.err(f"{key}.{k}", "given but gas_gap is off; set gas_gap = true")
         if kw.get("gas_gap"):
@@ -1280,10 +1281,22 @@ class _Parser:
                 kw["gas_gap_pairs"] = self.boolean(t["gas_gap_pairs"], f"{key}.gas_gap_pairs")
             if "gas_gap_model" in t:
                 model = t["gas_gap_model"]
-                if model not in ("isothermal", "solid_resistance"):
-                    raise self.err(f"{key}.gas_gap_model", f"must be \"isothermal\" or "
-                                                           f"\"solid_resistance\", not {model!r}")
+                if model not in ("isothermal", "solid_resistance", "voronoi"):
+                    raise self.err(f"{key}.gas_gap_model", f"must be \"isothermal\", "
+                                                           f"\"solid_resistance\" or \"voronoi\", "
+                                                           f"not {model!r}")
                 kw["gas_gap_model"] = model
+            if "gas_gap_porosity" in t:
+                porosity = self.positive(t["gas_gap_porosity"], "dimensionless",
+                                         f"{key}.gas_gap_porosity")
+                if not 0.2 <= porosity <= 0.9:
+                    raise self.err(f"{key}.gas_gap_porosity", f"the porosity of the packing the "
+                                                              f"Voronoi cones are sized for: 0.2 to "
+                                                              f"0.9, got {porosity:g}")
+                if kw.get("gas_gap_model") != "voronoi":
+                    raise self.err(f"{key}.gas_gap_porosity", "only the \"voronoi\" gas_gap_model "
+                                                              "uses it")
+                kw["gas_gap_porosity"] = porosity
         settings = ThermalSettings(**kw)
         if settings.gas_gap:
             hot = [w.name for w in list(walls) + list(bodies) if w.temperature is not None]

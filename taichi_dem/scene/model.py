@@ -217,7 +217,10 @@ class ThermalSettings:
     # "solid_resistance": the particle's own resistance in series with the gas along each
     # line (Cheng, Yu & Zulli 1999); "isothermal": isothermal surfaces (Rong & Horio 1999,
     # Musser 2011, Morris et al. 2015), an upper bound where k_g/k_s is not small
+    # "voronoi": the solid's resistance from the Voronoi cones, not the centre planes (Cheng,
+    # Yu & Zulli 1999), with the packing's porosity gas_gap_porosity setting the cones
     gas_gap_model: str = "solid_resistance"
+    gas_gap_porosity: float = 0.4
     # thermal time scaling: every heat capacity divided by time_scale S, so temperatures move
     # S times faster than the mechanics; thermal time = S x simulated time (series
     # thermal_time); heat flows (W) stay physical

@@ -233,7 +233,7 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
 # The DEM packed-bed conductivities of the same beads with the same gas-gap settings (lens
 # 0.2 R, minimum gap 1 um, air 0.0262), measured by tests/verification/packed_bed.py (BENCHMARKS.md
 # "Gas-gap conduction"), and that experiment's core porosity: inputs of the DEM-consistent model.
-PACKED_BED_K = {"solid_resistance": 0.084, "isothermal": 0.288}
+PACKED_BED_K = {"solid_resistance": 0.084, "isothermal": 0.288, "voronoi": 0.124}
 PACKED_BED_POROSITY = 0.407
 
 
@@ -244,6 +244,9 @@ def wall_particle_conductance(model, radius=1e-3, k_gas=0.0262, lens=0.2, min_ga
     from thermal import gas_gap
     if model == "isothermal":
         return k_gas * gas_gap.plane_gap_integral_reference(radius, radius, lens, min_gap)
+    if model == "voronoi":
+        return k_gas * gas_gap.plane_voronoi_gap_integral_reference(
+            radius, radius, lens, min_gap, k_gas / k_solid, 0.4)
     return k_gas * gas_gap.plane_solid_gap_integral_reference(radius, radius, lens, min_gap,
                                                               k_gas / k_solid)
 

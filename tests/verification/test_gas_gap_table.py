@@ -34,16 +34,20 @@ def _check(values, separations, reference, contact):
 
 
 @pytest.mark.parametrize("radii", [(0.015, 0.015), (0.001, 0.0015)])
-@pytest.mark.parametrize("model", ["isothermal", "solid_resistance"])
+@pytest.mark.parametrize("model", ["isothermal", "solid_resistance", "voronoi"])
 def test_pair_table_interpolates_the_reference(radii, model):
     ri, rj = radii
     g = 0.026 / 0.3
-    values = gas_gap.pair_table(ri, rj, LENS, MIN_GAP, model, g, g)
+    values = gas_gap.pair_table(ri, rj, LENS, MIN_GAP, model, g, g, 0.4)
     s = gas_gap.table_separations(min(radii), max(radii), LENS, MIN_GAP)
     assert len(values) == gas_gap.TABLE_NODES and s[gas_gap.TABLE_NODES_OVERLAP - 1] == 0.0
     if model == "isothermal":
         def reference(x):
             return gas_gap.pair_gap_integral_reference(ri, rj, ri + rj + x, LENS, MIN_GAP)
+    elif model == "voronoi":
+        def reference(x):
+            return gas_gap.pair_voronoi_gap_integral_reference(ri, rj, ri + rj + x, LENS,
+                                                                MIN_GAP, g, g, 0.4)
     else:
         def reference(x):
             return gas_gap.pair_solid_gap_integral_reference(ri, rj, ri + rj + x, LENS, MIN_GAP,
@@ -56,19 +60,26 @@ def test_pair_table_interpolates_the_reference(radii, model):
     assert abs(values[-1]) < 1e-12 * contact and values[-2] > 1e-9 * contact
 
 
-def test_plane_table_interpolates_the_reference():
+@pytest.mark.parametrize("model", ["solid_resistance", "voronoi"])
+def test_plane_table_interpolates_the_reference(model):
     r, g = 0.015, 0.026 / 0.3
-    values = gas_gap.plane_table(r, LENS, MIN_GAP, g)
+    values = gas_gap.plane_table(r, LENS, MIN_GAP, g, model, 0.4)
     s = gas_gap.table_separations(r, r, LENS, MIN_GAP)
 
     def reference(x):
+        if model == "voronoi":
+            return gas_gap.plane_voronoi_gap_integral_reference(r, r + x, LENS, MIN_GAP, g, 0.4)
         return gas_gap.plane_solid_gap_integral_reference(r, r + x, LENS, MIN_GAP, g)
     error = _check(values, s, reference, values[gas_gap.TABLE_NODES_OVERLAP - 1])
-    assert error < 1e-5
+    print(f"\n  plane {model}: interpolation error {error:.2e} of the contact value")
+    # the Voronoi cone's end r_sf moves with the distance (its integrand ends where the solid
+    # path reaches zero): 1.4e-5 measured, still 10x under the step's 1e-4
+    assert error < (3e-5 if model == "voronoi" else 1e-5)
 
 
 @pytest.mark.parametrize("model,relative", [("isothermal", 1 - 1e-4), ("solid_resistance", 1.001),
-                                            ("solid_resistance", 1 - 0.02)])
+                                            ("solid_resistance", 1 - 0.02), ("voronoi", 1.001),
+                                            ("voronoi", 1 - 0.02)])
 def test_the_step_through_the_tables_matches_the_quadrature(tmp_path, monkeypatch, relative,
                                                             model):
     distance = relative * 2 * R

@@ -15,6 +15,16 @@ parallel in the solid), and ZBS lies between them. Asserted: that bracket for gl
 where the solid barely matters, the isothermal model within 25 % of ZBS (the scatter of the
 measurements ZBS was fitted to) and the two models within 25 % of each other. Both runs use the
 same settled packing (same seed); the porosity is measured, and ZBS evaluated at it.
+Then the Voronoi-cone model ("voronoi": Cheng, Yu & Zulli 1999, the solid's path from the cone
+between the particle's centre and the shared Voronoi face rather than from the centre plane;
+thermal/gas_gap.py), which is the one of the three that the correlation can be asserted
+against: measured (same packing) glass 0.1241 at lens 0.2 and 0.1323 at lens 0.4, i.e. 0.75 and
+0.80 x ZBS; steel 0.349 / 0.357, 0.79 / 0.81 x ZBS. Asserted: within 25 % of ZBS for both (the
+scatter of the measurements ZBS was fitted to, VDI Heat Atlas D6.3), at lens 0.4 (the upper
+end of the published 0.2 - 0.4 R, and the margin: 0.80 against the 0.75 limit; the centre-plane
+series model at lens 0.4 gives glass 0.1245, 0.75 x, at the limit). The DEM runs low by ~20 % in both:
+the contact spots of the softened beads are sized by the contact-radius correction, and the
+cones end at r_sf ~ 0.55 R, so gas beyond them is not counted.
 """
 import pytest
 
@@ -43,3 +53,15 @@ def test_steel_bed_near_zehner_schlunder():
           f"solid resistance {abs(solid['k_eff']):.4f}, Zehner-Schlünder {zbs:.4f} W/(m K)")
     assert abs(iso["k_eff"]) == pytest.approx(zbs, rel=0.25)
     assert abs(solid["k_eff"]) == pytest.approx(abs(iso["k_eff"]), rel=0.25)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("material", ["glass", "steel"])
+def test_voronoi_model_within_25_percent_of_zehner_schlunder(material):
+    r = packed_bed_conductivity(material, model="voronoi", count=900, lens=0.4)
+    zbs = r["zehner_schlunder"]
+    print(f"\n  {material}, porosity {r['porosity']:.3f}: voronoi {abs(r['k_eff']):.4f}, "
+          f"Zehner-Schlünder {zbs:.4f} W/(m K) ({abs(r['k_eff']) / zbs:.3f} x)")
+    assert r["r2"] > 0.95
+    assert 0.36 < r["porosity"] < 0.45
+    assert abs(r["k_eff"]) == pytest.approx(zbs, rel=0.25)
