@@ -748,10 +748,16 @@ def test_gas_gap_and_time_scale_keys_load():
     th = load(d).thermal
     assert (th.gas_gap_model, th.gas_gap_pairs, th.time_scale) == ("isothermal", False, 50.0)
     assert load(_thermal_base()).thermal.gas_gap_model == "solid_resistance"
+    d = _thermal_base()
+    d["thermal"].update(gas_gap_model="voronoi", gas_gap_porosity=0.45)
+    th = load(d).thermal
+    assert (th.gas_gap_model, th.gas_gap_porosity) == ("voronoi", 0.45)
+    d["thermal"].pop("gas_gap_porosity")
+    assert load(d).thermal.gas_gap_porosity == 0.4
 
 
 @pytest.mark.parametrize("key, value, frag", [
-    ("gas_gap_model", "lumped", "\"isothermal\" or \"solid_resistance\""),
+    ("gas_gap_model", "lumped", "\"solid_resistance\" or \"voronoi\""),
     ("time_scale", 0.5, "at least 1"),
     ("time_scale", -2.0, "must be > 0"),
     ("gas_gap_pairs", "yes", "true or false"),
@@ -760,6 +766,17 @@ def test_gas_gap_and_time_scale_errors(key, value, frag):
     d = _thermal_base()
     d["thermal"][key] = value
     error(d, f"thermal.{key}", frag)
+
+
+@pytest.mark.parametrize("model, value, frag", [
+    ("voronoi", 0.05, "0.2 to 0.9"),
+    ("voronoi", "high", "number"),
+    ("solid_resistance", 0.4, "only the \"voronoi\" gas_gap_model"),
+])
+def test_gas_gap_porosity_errors(model, value, frag):
+    d = _thermal_base()
+    d["thermal"].update(gas_gap_model=model, gas_gap_porosity=value)
+    error(d, "thermal.gas_gap_porosity", frag)
 
 
 def test_gas_gap_keys_without_gas_gap():
