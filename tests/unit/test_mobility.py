@@ -282,6 +282,20 @@ solid_fraction_threshold = 0.1
 """
 
 
+def turning_lattice(tmp_path, omega):
+    """Spheres of 1.5 mm on a 4.4 mm lattice (not touching) filling the drum of DRUM_SCENE to
+    68 mm, each moving with it at ``omega`` rad/s about z (v = omega x r), written to p.csv;
+    returns their positions (m)."""
+    ax = np.arange(-0.066, 0.0661, 0.0044)
+    az = np.arange(0.0022, 0.05, 0.0044)
+    x = np.array(np.meshgrid(ax, ax, az, indexing="ij")).reshape(3, -1).T
+    x = x[np.hypot(x[:, 0], x[:, 1]) < 0.068]
+    v = np.column_stack([-omega * x[:, 1], omega * x[:, 0], np.zeros(len(x))])
+    np.savetxt(tmp_path / "p.csv", np.column_stack([x, np.full(len(x), 0.0015), v]),
+               delimiter=",", header="x,y,z,radius,vx,vy,vz", comments="")
+    return x
+
+
 @pytest.mark.parametrize("mode", ["body_frame", "at_rest"])
 def test_body_frame_carries_a_bed_that_turns_with_its_drum(tmp_path, mode):
     """Spheres on a lattice (not touching, no gravity) inside a drum turning at 1 rad/s, each
@@ -290,13 +304,7 @@ def test_body_frame_carries_a_bed_that_turns_with_its_drum(tmp_path, mode):
     particle inactive all along sits at R(omega t) x0 to 1e-9 m with v = omega x r (Rodrigues,
     exact). In "at_rest" the same bed is moving, so none of it is inactive."""
     omega = 1.0
-    ax = np.arange(-0.066, 0.0661, 0.0044)
-    az = np.arange(0.0022, 0.05, 0.0044)
-    x = np.array(np.meshgrid(ax, ax, az, indexing="ij")).reshape(3, -1).T
-    x = x[np.hypot(x[:, 0], x[:, 1]) < 0.068]
-    v = np.column_stack([-omega * x[:, 1], omega * x[:, 0], np.zeros(len(x))])
-    np.savetxt(tmp_path / "p.csv", np.column_stack([x, np.full(len(x), 0.0015), v]),
-               delimiter=",", header="x,y,z,radius,vx,vy,vz", comments="")
+    x = turning_lattice(tmp_path, omega)
     text = DRUM_SCENE.format(speed=omega, mode=mode,
                              body='body = "drum"' if mode == "body_frame" else "")
     with td.Simulation.from_text(text, base_dir=str(tmp_path)) as sim:
@@ -392,13 +400,7 @@ def test_body_frame_books_what_carries_the_core_on_the_drum(tmp_path):
     particle touches it) while in the full model the same weight would reach it through the
     bed: a frozen core in a drum read 10 % low in torque (bench/mobility_deep_drum.py)."""
     omega = 1.0
-    ax = np.arange(-0.066, 0.0661, 0.0044)
-    az = np.arange(0.0022, 0.05, 0.0044)
-    x = np.array(np.meshgrid(ax, ax, az, indexing="ij")).reshape(3, -1).T
-    x = x[np.hypot(x[:, 0], x[:, 1]) < 0.068]
-    v = np.column_stack([-omega * x[:, 1], omega * x[:, 0], np.zeros(len(x))])
-    np.savetxt(tmp_path / "p.csv", np.column_stack([x, np.full(len(x), 0.0015), v]),
-               delimiter=",", header="x,y,z,radius,vx,vy,vz", comments="")
+    turning_lattice(tmp_path, omega)
     text = DRUM_SCENE.format(speed=omega, mode="body_frame", body='body = "drum"')
     text = text.replace("gravity = [0.0, 0.0, 0.0]", "gravity = [0.0, -9.81, 0.0]")
     text += "\n[output]\ninterval = 1e-4\n"                  # 5 steps of 2e-5 s
