@@ -55,7 +55,9 @@ vertex from its axis, less a largest radius: outside a drum's shell), and measur
 solid fraction against its volume within that reach: otherwise the shell would count as a free
 surface and a cell cut by it as dilute, and every cell along the shell would stay mobile with
 the layer inside it active (measured: a 19 d deep bed then froze at most 10 % of its particles
-at any threshold; with the reach, 31 %).
+at any threshold; with the reach, 24 - 39 %). That assumes the body encloses the bed (a drum
+shell): a particle centre in a cell wholly beyond the reach (a frame body that is a paddle
+shaft, say) drops the reach for the rest of the run, with a warning.
 
 Defaults (scene/loader.py): the threshold is 1e-5 g d_max, i.e. fluctuations of 0.3 % of
 sqrt(g d): for the seed's 2.24 mm beads 2.2e-7 (m/s)^2. A frozen cell keeps the contact forces
@@ -75,6 +77,7 @@ after 0.4 s, so it is not on by default.
 # (no postponed annotations: Taichi reads the kernels' argument types)
 
 import math
+import sys
 
 import numpy as np
 import taichi as ti
@@ -121,9 +124,13 @@ class Mobility(Effect):
         # 1: the cell lies beyond the frame body's reach (outside a drum's shell): no particle
         # can be there, so its being empty is no free surface
         self.block_beyond = tree.add("mobility_beyond", ti.i32, self.n_blocks)
+        # 1: the cell lies wholly outside the frame body's reach itself: a particle centre there
+        # means the body does not enclose the bed, and the reach is dropped (``update``)
+        self.block_outside = tree.add("mobility_outside", ti.i32, self.n_blocks)
         self.block_mobile = tree.add("mobility_mobile", ti.i32, self.n_blocks)
         self.block_status = tree.add("mobility_status", ti.i32, self.n_blocks)
-        self.counts = tree.add("mobility_counts", ti.i32, 4)   # [inactive particles, cells by status..]
+        # [inactive particles, cells inactive, active, mobile, particles outside the reach]
+        self.counts = tree.add("mobility_counts", ti.i32, 5)
 
     def upload(self, engine):
         """The volume (m^3) of each mobility cell inside the domain (a non-periodic axis's last
@@ -137,8 +144,11 @@ class Mobility(Effect):
             lo = np.minimum(lo, g.hi[k])
             edges.append(np.diff(lo))
         vol = edges[0][:, None, None] * edges[1][None, :, None] * edges[2][None, None, :]
+        self.plain_volume = np.maximum(vol, 1e-30).reshape(-1)
         beyond = np.zeros(vol.shape, np.int32)
+        outside = np.zeros(vol.shape, np.int32)
         reach = self.frame_reach(engine)
+        self.reach_in_use = reach is not None
         if reach is not None:
             # where particle centres can be: a largest radius inside the body's reach; a cell
             # of which less than a quarter is there may well hold no centre in a full drum
@@ -147,10 +157,16 @@ class Mobility(Effect):
                                           max(radius - engine.max_radius, 0.0))
             vol = vol * inside
             beyond = (inside < 0.25).astype(np.int32)
-        npf = np.float64 if engine.real == ti.f64 else np.float32
-        self.block_volume.from_numpy(np.maximum(vol, 1e-30).reshape(-1).astype(npf))
-        self.block_beyond.from_numpy(beyond.reshape(-1))
+            outside = (self.fraction_within(engine, edges, point, axis, radius) == 0.0
+                       ).astype(np.int32)
+        self._upload_volumes(engine, np.maximum(vol, 1e-30).reshape(-1), beyond.reshape(-1))
+        self.block_outside.from_numpy(outside.reshape(-1))
         self.particle_active.fill(1)
+
+    def _upload_volumes(self, engine, volume, beyond):
+        npf = np.float64 if engine.real == ti.f64 else np.float32
+        self.block_volume.from_numpy(volume.astype(npf))
+        self.block_beyond.from_numpy(beyond.astype(np.int32))
 
     @staticmethod
     def frame_reach(engine):
@@ -180,14 +196,16 @@ class Mobility(Effect):
         lows = [g.lo[k] + np.concatenate([[0.0], np.cumsum(edges[k])[:-1]]) for k in range(3)]
         u = (np.arange(samples) + 0.5) / samples
         coords = [lows[k][:, None] + edges[k][:, None] * u[None, :] for k in range(3)]  # (n_k, s)
-        X, Y, Z = np.meshgrid(coords[0].ravel(), coords[1].ravel(), coords[2].ravel(),
-                              indexing="ij")
-        r = np.stack([X, Y, Z], axis=-1) - point
-        radial_sq = np.sum(r ** 2, axis=-1) - (r @ axis) ** 2
-        within = (radial_sq <= radius ** 2).astype(float)
         n = [len(e) for e in edges]
-        within = within.reshape(n[0], samples, n[1], samples, n[2], samples)
-        return within.mean(axis=(1, 3, 5))
+        out = np.empty(n)
+        for i in range(n[0]):               # one slab of cells at a time: bounded memory
+            X, Y, Z = np.meshgrid(coords[0][i], coords[1].ravel(), coords[2].ravel(),
+                                  indexing="ij")
+            r = np.stack([X, Y, Z], axis=-1) - point
+            radial_sq = np.sum(r ** 2, axis=-1) - (r @ axis) ** 2
+            within = (radial_sq <= radius ** 2).astype(float)
+            out[i] = within.reshape(samples, n[1], samples, n[2], samples).mean(axis=(0, 2, 4))
+        return out
 
     # ------------------------------------------------------------------ kernels
     def compile(self, engine):
@@ -212,7 +230,7 @@ class Mobility(Effect):
         count, temp, speed_sq = self.block_count, self.block_temperature, self.block_mean_speed_sq
         phi, volume, flag = self.block_solid_fraction, self.block_volume, self.block_flag
         mobile, status = self.block_mobile, self.block_status
-        beyond = self.block_beyond
+        beyond, outside = self.block_beyond, self.block_outside
         mesh = engine.mesh
         frame = engine.mobility_frame
         body_frame = frame >= 0
@@ -255,7 +273,7 @@ class Mobility(Effect):
 
         @ti.kernel
         def update(n: ti.i32, t: ti.f64, serial_loops: ti.template()):
-            for k in ti.static(range(4)):
+            for k in ti.static(range(5)):
                 counts[k] = 0
             ti.loop_config(serialize=serial_loops)
             for b in range(n_blocks):
@@ -295,6 +313,8 @@ class Mobility(Effect):
                                 u = s.velocity[i] - rigid_velocity(s.position[i], t) - mean
                                 fluctuation += u.dot(u)
                 count[b] = number
+                if outside[b] != 0 and number > 0:
+                    ti.atomic_add(counts[4], number)
                 temp[b] = fluctuation / (3.0 * ti.max(number, 1))
                 speed_sq[b] = mean.dot(mean) / 3.0
                 phi[b] = solid / volume[b]
@@ -443,6 +463,20 @@ class Mobility(Effect):
     # ------------------------------------------------------------------ driver
     def update(self, engine, n: int, time: float):
         self._update(n, time)
+        if self.reach_in_use and int(self.counts[4]) > 0:
+            # a particle centre beyond the frame body's reach: the body does not enclose the
+            # bed (a paddle shaft, not a drum shell), so its reach says nothing about where
+            # particles can be; judge again with the plain cell volumes and every empty cell
+            body = engine.scene.bodies[engine.mobility_frame].name
+            print(f"taichi-dem: warning: [mobility] {int(self.counts[4])} particles lie beyond "
+                  f"the reach of body '{body}'; mode \"body_frame\" counts cells outside the "
+                  f"frame body as walls only when the body encloses the bed (a drum shell); "
+                  f"judging with the plain cell volumes from now on", file=sys.stderr)
+            self.reach_in_use = False
+            self._upload_volumes(engine, self.plain_volume,
+                                 np.zeros(len(self.plain_volume), np.int32))
+            self.block_outside.fill(0)
+            self._update(n, time)
 
     def statistics(self) -> dict:
         """Counts from the last update: inactive particles; cells inactive, active, mobile."""

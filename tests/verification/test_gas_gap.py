@@ -235,3 +235,22 @@ def test_voronoi_two_spheres_equals_quadrature(voronoi_kernels, ratio, g):
     swapped = np.zeros(len(distance))
     pair(small, R, distance, 0.4, 1e-6, 2 * g, g, 0.4, swapped)
     np.testing.assert_allclose(swapped, got, rtol=1e-12)
+
+
+@pytest.mark.parametrize("offset", [-1e-3, 0.0, 1e-3, 0.1])
+@pytest.mark.parametrize("porosity", [0.36, 0.45])
+def test_voronoi_without_solid_resistance_is_the_isothermal_lens_to_the_cone(kernels, offset,
+                                                                            porosity):
+    """With k_s infinite (k_g/k_s = 0) the Voronoi-cone model is the isothermal-surface
+    integral out to where the cone leaves the sphere, r_sf = R r_ij / sqrt(r_ij^2 + D^2),
+    r_ij = 0.56 R (1 - e)^-1/3 (Cheng, Yu & Zulli; Yang, Zou & Yu): against the sphere-plane
+    closed form (Morris et al.) with the lens set to end at r_sf, to 1e-6."""
+    run_plane, _ = kernels
+    d = R * (1.0 + offset)
+    face = 0.56 * R * (1.0 - porosity) ** (-1.0 / 3.0)
+    r_sf = R * face / math.sqrt(face ** 2 + d ** 2)
+    lens = math.sqrt(r_sf ** 2 + d ** 2) / R - 1.0
+    closed = run_plane(R, [d], lens, 1e-6)[0]
+    cone = gas_gap.plane_voronoi_gap_integral_reference(R, d, 0.4, 1e-6, 0.0, porosity)
+    assert closed > 0.0
+    assert cone == pytest.approx(closed, rel=1e-6)
