@@ -129,15 +129,15 @@ interval = {interval}
 """
 
 
-def measure(sim, first: int, thetas, axial, inactive) -> dict:
+def measure(sim, first: int, thetas, inactive) -> dict:
     """Window means: torque (N m), axial speed (m/s) from the throughput through the mid-slice
     plane (every crossing counted: u = mass flow x slice length / bed mass), dynamic angle
     (deg), inactive fraction."""
     torque = np.asarray(sim.series["bodies/drum/axial_torque"][first:], float)
-    flow = float(np.nanmean(sim.series["sensors/axial/mass_flow"][first:]))
     bed_mass = float(np.sum(sim.particles()["mass"]))
     flows = np.asarray(sim.series["sensors/axial/mass_flow"][first:], float)
     flows = flows[np.isfinite(flows)]
+    flow = float(np.mean(flows))
     # standard errors of the window means from the samples' scatter (samples of 0.1 s taken
     # as independent: an estimate of the noise an error must exceed to be seen)
     se = dict(torque_se=float(np.std(torque, ddof=1) / np.sqrt(len(torque))),
@@ -185,7 +185,7 @@ def main(argv=None):
         checkpoint.restore(s, snap)
         s.step(1)                                   # compile and the first rebuild, untimed
         sims[v] = s
-        state[v] = dict(first=len(s.series["time"]), wall=0.0, thetas=[], axial=[], inactive=[])
+        state[v] = dict(first=len(s.series["time"]), wall=0.0, thetas=[], inactive=[])
     try:
         start = sims[names[0]].time
         chunks = int(round(args.window / args.interval))
@@ -198,7 +198,6 @@ def main(argv=None):
                 p = s.particles()
                 st["thetas"].append(analysis.bed_surface(p["position"][:, 1], p["position"][:, 2],
                                                          p["radius"], 2 * R_P)[0])
-                st["axial"].append(float(np.mean(p["velocity"][:, 0])))
                 if s.engine.mobility is not None:
                     st["inactive"].append(s.engine.mobility.statistics()["inactive_particles"]
                                           / s.particle_count)
@@ -207,10 +206,7 @@ def main(argv=None):
                           f"{st['inactive'][-1] if st['inactive'] else 0:.1%}  torque "
                           f"{s.series['bodies/drum/axial_torque'][-1]:.3f} N m", flush=True)
         results = {v: dict(measure(sims[v], state[v]["first"], state[v]["thetas"],
-                                   state[v]["axial"], state[v]["inactive"]),
-                           wall=state[v]["wall"], axial_sd=float(np.std(state[v]["axial"])),
-                           torque_sd=float(np.std(sims[v].series["bodies/drum/axial_torque"]
-                                                  [state[v]["first"]:])))
+                                   state[v]["inactive"]), wall=state[v]["wall"])
                    for v in names}
     finally:
         for s in sims.values():
