@@ -44,7 +44,7 @@ def contact_types(real):
 
 
 def make_geometry(real, thermal: bool):
-    """ti.funcs building a ``Contact``: (sphere_sphere, sphere_surface).
+    """ti.funcs building a ``Contact``: (sphere_sphere, sphere_surface, sphere_sphere_gap).
 
     sphere_sphere(d, dist_sq, particle i's and j's state ...) for two particles whose centres
     are ``d`` = x_i - x_j apart (minimum image, m); sphere_surface(...) for a particle on a
@@ -78,6 +78,24 @@ def make_geometry(real, thermal: bool):
             temperature_difference=temperature_difference, conducts=1)
 
     @ti.func
+    def sphere_sphere_gap(d, distance_sq, ri, rj, mi, mj, ti_, tj_):
+        """``sphere_sphere`` for two particles apart (a gap, within an effect's margin): only
+        what heat effects read; the motion is not loaded (no mechanics acts across a gap, and
+        a near pair is as common as a touching one in a bed with the gas gap on)."""
+        dist = ti.sqrt(distance_sq)
+        normal_overlap = ri + rj - dist
+        temperature_difference = 0.0 * ri
+        if ti.static(thermal):
+            temperature_difference = tj_ - ti_
+        vec0 = ti.Vector([0.0, 0.0, 0.0]) * ri
+        return Contact(
+            normal=d / dist, normal_overlap=normal_overlap, arm_i=ri - 0.5 * normal_overlap,
+            arm_j=rj - 0.5 * normal_overlap, v_rel=vec0, w_rel=vec0, normal_acceleration=0.0 * ri,
+            r_eff=ri * rj / (ri + rj), m_eff=0.0 * ri, inertia_eff=0.0 * ri,
+            rolling_inertia=0.0 * ri, radius_i=ri, radius_j=rj, material_i=mi, material_j=mj,
+            temperature_difference=temperature_difference, conducts=1)
+
+    @ti.func
     def sphere_surface(normal, normal_overlap, ri, vi, wi, ai, mass_i, inv_mi, inv_ii, mi, mj,
                        surface_velocity, surface_spin, temperature_difference, conducts):
         arm = ri - 0.5 * normal_overlap
@@ -93,4 +111,4 @@ def make_geometry(real, thermal: bool):
             radius_i=ri, radius_j=0.0 * ri, material_i=mi, material_j=mj,
             temperature_difference=temperature_difference, conducts=conducts)
 
-    return sphere_sphere, sphere_surface
+    return sphere_sphere, sphere_surface, sphere_sphere_gap

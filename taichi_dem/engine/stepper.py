@@ -152,6 +152,7 @@ class Engine:
             self.process = ProcessDevice(self, t)
         t.finalize()
         self.removed_batches: list = []    # removal-log entries drained at rebuilds
+        self.before_rebuild = None         # host hook (engine) before a rebuild in advance
         npf = np.float64 if real == ti.f64 else np.float32
         self.max_radius = max_radius          # (the uploads below may read it)
         for name, values in table_values.items():
@@ -373,7 +374,7 @@ class Engine:
         effects = self.effect_list
         # the contact geometry of each kind and the contact law composed from the enabled
         # effects (contacts/): the same law runs on pairs, planes and triangles
-        sphere_sphere, sphere_surface = make_geometry(real, self.thermal)
+        sphere_sphere, sphere_surface, sphere_sphere_gap = make_geometry(real, self.thermal)
         _, _, History = contact_types(real)
         pair_law = make_contact_law(effects, "pair", real, self)
         plane_law = make_contact_law(effects, "plane", real, self)
@@ -419,6 +420,32 @@ class Engine:
         core_internal = mobility and self.mobility_frame >= 0
 
         @ti.func
+        def touching_contact(d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j, temperature_i):
+            """The whole Contact of particle i (its state passed in) with particle j."""
+            return sphere_sphere(d, distance_sq, ri, s.radius[j], vi, s.velocity[j], wi,
+                                 s.angular_velocity[j], ai, s.acceleration[j], inv_mi,
+                                 s.inverse_mass[j], inv_ii, s.inverse_inertia[j], mi,
+                                 s.material[j], temperature_i, temperature_of(j))
+
+        @ti.func
+        def pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
+                         temperature_i):
+            """The Contact of particle i with particle j (``d`` = x_i - x_j, m): the whole
+            contact when ``touching``, else (a pair within a heat effect's margin, apart) the
+            geometry only: no mechanics acts across a gap, and with the gas gap on a near
+            pair is as common as a touching one, so its partner's motion is not loaded."""
+            if ti.static(pair_margin > 0.0):
+                c = sphere_sphere_gap(d, distance_sq, ri, s.radius[j], mi, s.material[j],
+                                      temperature_i, temperature_of(j))
+                if touching:
+                    c = touching_contact(d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
+                                         temperature_i)
+                return c
+            else:
+                return touching_contact(d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
+                                        temperature_i)
+
+        @ti.func
         def pair_particle(i, dt, full):
             """The owned contacts of particle i in one step: their geometry, the contact law,
             the owner's sums and the partner's shares stored at the entry (no atomics).
@@ -458,35 +485,45 @@ class Engine:
                 if ti.static(pair_margin > 0.0):
                     reach += ti.static(pair_margin) * ti.max(ri, rj)
                 if distance_sq < reach * reach and distance_sq > 0.0:
-                    c = sphere_sphere(d, distance_sq, ri, rj, vi, s.velocity[j], wi,
-                                      s.angular_velocity[j], ai, s.acceleration[j], inv_mi,
-                                      s.inverse_mass[j], inv_ii, s.inverse_inertia[j], mi,
-                                      s.material[j], temperature_i, temperature_of(j))
-                    history = History(tangential=p.tangential_history[k], rolling=vec0)
-                    if ti.static(epsd):
-                        history.rolling = p.rolling_history[k]
+                    # a pair within the margin but apart (heat only): its geometry without the
+                    # motion; touching: the whole contact
+                    touching = True
+                    if ti.static(pair_margin > 0.0):
+                        touching = distance_sq < (ri + rj) * (ri + rj)
+                    c = pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
+                                     temperature_i)
+                    history = History(tangential=vec0, rolling=vec0)
+                    if touching:
+                        history.tangential = p.tangential_history[k]
+                        if ti.static(epsd):
+                            history.rolling = p.rolling_history[k]
                     out, history = pair_law(c, history, dt)
-                    if c.normal_overlap <= 0.0:
-                        # near, not touching (heat only): no spring to carry
-                        history.tangential = vec0
-                        history.rolling = vec0
                     if ti.static(pair_heat):
                         owned_heat += out.heat
                         owned_conductance += out.conductance
                         p.partner_heat[k] = -out.heat
                         p.pair_conductance[k] = out.conductance
-                    inner = False
-                    if ti.static(core_internal):
-                        inner = inactive_i and active[j] == 0
-                    if not inner:
-                        owned_force += out.force
-                        owned_torque += out.torque_i
-                    p.partner_force[k] = -out.force
-                    p.partner_torque[k] = out.torque_j
-                    p.tangential_history[k] = history.tangential
-                    if ti.static(epsd):
-                        p.rolling_history[k] = history.rolling
-                    p.contact[k] = ti.cast(ti.select(c.normal_overlap > 0.0, 1, 2), ti.u8)
+                    if c.normal_overlap > 0.0:
+                        inner = False
+                        if ti.static(core_internal):
+                            inner = inactive_i and active[j] == 0
+                        if not inner:
+                            owned_force += out.force
+                            owned_torque += out.torque_i
+                        p.partner_force[k] = -out.force
+                        p.partner_torque[k] = out.torque_j
+                        p.tangential_history[k] = history.tangential
+                        if ti.static(epsd):
+                            p.rolling_history[k] = history.rolling
+                        p.contact[k] = ti.u8(1)
+                    else:
+                        # near, not touching: no force (the gather reads the partner's share
+                        # of touching pairs only) and no spring to carry
+                        if p.contact[k] == 1:
+                            p.tangential_history[k] = vec0
+                            if ti.static(epsd):
+                                p.rolling_history[k] = vec0
+                        p.contact[k] = ti.u8(2)
                 elif p.contact[k] != 0:
                     # the contact opened: its history is discarded
                     p.contact[k] = ti.u8(0)
@@ -541,7 +578,7 @@ class Engine:
                     for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
                         m = p.mirror[k]
                         if m >= 0:
-                            if p.contact[m] != 0:
+                            if p.contact[m] == 1:          # touching (2: near, heat only)
                                 force += p.partner_force[m]
                                 torque += p.partner_torque[m]
                 elif ti.static(core_internal):
@@ -550,7 +587,7 @@ class Engine:
                     for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
                         m = p.mirror[k]
                         if m >= 0:
-                            if p.contact[m] != 0 and active[p.neighbour[k]] != 0:
+                            if p.contact[m] == 1 and active[p.neighbour[k]] != 0:
                                 force += p.partner_force[m]
                                 torque += p.partner_torque[m]
                 heat = 0.0           # W into the particle
@@ -712,7 +749,12 @@ class Engine:
         return self.count
 
     def rebuild(self, n: int):
-        """Drop dead particles, re-sort and rebuild the neighbour lists."""
+        """Drop dead particles, re-sort and rebuild the neighbour lists; first the
+        ``before_rebuild`` hook, which may insert particles (mid-step: drifted, forces
+        pending) so that this rebuild lists them too."""
+        if self.before_rebuild is not None:
+            self.before_rebuild(self)
+            n = self.count
         self.flags[Flag.REBUILD] = 0
         if self.process is not None and self.process.log_enabled:
             batch = self.process.drain()

@@ -98,6 +98,10 @@ class FactorySet:
         self.density = [scene.materials[f.material].density for f in self.factories]
         self.heat_capacity = [scene.materials[f.material].heat_capacity for f in self.factories]
         self.npf = np.float64 if sim.precision == "f64" else np.float32
+        self.gravity = np.asarray(scene.simulation.gravity, float)
+        # the step the current run of steps ends at when factories are due there (else None):
+        # what insert_at_rebuild may insert early (Simulation.step sets it)
+        self.window_end = None
 
     # ------------------------------------------------------------------ radii
     def _sample_radius(self, k: int) -> float:
@@ -146,7 +150,9 @@ class FactorySet:
 
     def insert_due(self, step: int, time: float):
         """Insert for every factory due at ``step`` (state at a whole step, time s)."""
-        due = self.due(step)
+        # a factory served at a neighbour rebuild before this step (insert_at_rebuild) has
+        # nothing left to insert unless part of its batch found no room
+        due = [k for k in self.due(step) if self.every[k] is None or self._has_due(k, time)]
         if not due:
             return
         t0 = time_module.perf_counter()
@@ -155,7 +161,45 @@ class FactorySet:
         finally:
             self.wall_seconds += time_module.perf_counter() - t0
 
-    def _insert(self, due: list[int], time: float):
+    def _has_due(self, k: int, time: float) -> bool:
+        """Whether factory k (not a sheet) has a whole particle due by ``time`` (s); else its
+        behind-schedule mass is brought up to date."""
+        target = self.factories[k].mass_rate.mass_until(time)
+        m = self.particle_mass(k, self.next_radius[k])
+        if self.inserted_mass[k] + 0.5 * m > target:
+            self.behind[k] = max(target - self.inserted_mass[k], 0.0)
+            return False
+        return True
+
+    def insert_at_rebuild(self, engine):
+        """The engine's hook before a neighbour rebuild within a run of steps: insert now what
+        the factories due at the run's last step (``window_end``, set by Simulation.step) would
+        insert then, so that one rebuild serves both; a rebuild costs several steps of a small
+        scene, and insertions alone forced one every ~40 steps in the main demo (half of its
+        rebuilds). The batch is the scheduled mass at the due time, so at most one run early
+        (an insertion interval, <= MAX_INTERVAL) and never across an output sample (a run ends
+        at each). The state is mid-step (drifted, forces pending): a new particle gets
+        v0 - g dt/2, which the coming half kick of its free flight brings to v0. Sheet
+        factories keep their exact layer spacing and insert at their due steps only."""
+        end = self.window_end
+        if end is None:
+            return
+        due_time = end * self.sim.dt
+        due = [k for k in self.due(end) if self.every[k] is not None]
+        due = [k for k in due if self._has_due(k, due_time)]
+        if not due:
+            return
+        t0 = time_module.perf_counter()
+        try:
+            self._insert(due, engine.time, schedule_time=due_time, mid_step=True)
+        finally:
+            self.wall_seconds += time_module.perf_counter() - t0
+
+    def _insert(self, due: list[int], time: float, schedule_time: "float | None" = None,
+                mid_step: bool = False):
+        """Insert the batches of factories ``due`` at ``time`` (s), with the scheduled mass
+        at ``schedule_time`` (default ``time``); ``mid_step``: the engine is between its drift
+        and its forces (insert_at_rebuild)."""
         engine = self.sim.engine
         n = engine.count
         # what is in the simulation now (the placement avoids it)
@@ -176,7 +220,7 @@ class FactorySet:
                         rad = np.concatenate([rad, batch["radius"]])
                 batches.extend(new)
                 continue
-            batch = self._batch(k, time, pos, rad)
+            batch = self._batch(k, time, pos, rad, time if schedule_time is None else schedule_time)
             if batch is not None:
                 batches.append(batch)
                 pos = np.concatenate([pos, batch["position"]])
@@ -184,6 +228,10 @@ class FactorySet:
         if not batches:
             return
         arrays = {key: np.concatenate([b[key] for b in batches]) for key in batches[0]}
+        if mid_step:
+            # velocities at t - dt/2 like every other particle's: the half kick of free flight
+            # that follows brings them to the factory's velocity at t
+            arrays["velocity"] = arrays["velocity"] - 0.5 * self.sim.dt * self.gravity
         m = len(arrays["radius"])
         free = engine.state.capacity - n
         if m > free:
@@ -215,9 +263,12 @@ class FactorySet:
             self.inserted_energy += float(np.sum(arrays["temperature"] / arrays["inverse_thermal_mass"]))
         engine.insert(arrays)
 
-    def _batch(self, k: int, time: float, pos: np.ndarray, rad: np.ndarray):
+    def _batch(self, k: int, time: float, pos: np.ndarray, rad: np.ndarray,
+               schedule_time: float):
+        """Factory k's particles due by ``schedule_time`` (s), placed at ``time`` (s) clear of
+        ``pos``/``rad``; None if none."""
         f = self.factories[k]
-        target = f.mass_rate.mass_until(time)
+        target = f.mass_rate.mass_until(schedule_time)
         radii, masses = [], []
         planned = self.inserted_mass[k]
         # whole particles up to the scheduled mass (a particle goes in once half of it is due)

@@ -198,6 +198,8 @@ class Simulation:
         if scene.factories:
             from ..process.factories import FactorySet
             self.factories = FactorySet(self, first_serial=self.n_initial)
+            # a batch due at the end of a run of steps goes in at a rebuild within it
+            self.engine.before_rebuild = self.factories.insert_at_rebuild
         if scene.factories or scene.outlets or scene.sensors:
             from ..process.accounting import ProcessAccounts
             self.accounts = ProcessAccounts(self)
@@ -343,6 +345,8 @@ class Simulation:
                 chunk = min(remaining, to_output)
                 if self.factories is not None:
                     chunk = min(chunk, self.factories.steps_to_next(self.step_count))
+                    end = self.step_count + chunk
+                    self.factories.window_end = end if self.factories.due(end) else None
                 self.engine.advance(chunk, record_last=(chunk == to_output))
                 self.step_count += chunk
                 self.time = self.step_count * self.dt
