@@ -173,6 +173,8 @@ class MeshContacts:
         self.triangle_image = make_triangle_image(engine.grid, self.expand)
         self.binned_time = 0.0
         self.interval_steps = 0
+        # the ti.func bodies of the kernels (Broadphase.fused_rebuild runs them in one launch)
+        self.bodies = {}
         self._compile_static_kernels()
 
     def _np_real(self):
@@ -276,8 +278,8 @@ class MeshContacts:
         self.set_frames = set_frames
         heat_loads = self.particle_load_heat is not None
 
-        @ti.kernel
-        def flush_loads(n: ti.i32, serial_loops: ti.template()):
+        @ti.func
+        def flush_loads_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 for b in ti.static(range(nb)):
@@ -289,8 +291,13 @@ class MeshContacts:
                         m.heat_sum[b] += m.particle_load_heat[i, b]
                         m.particle_load_heat[i, b] = 0.0
 
+        @ti.kernel
+        def flush_loads(n: ti.i32, serial_loops: ti.template()):
+            flush_loads_body(n, serial_loops)
+
         self._update_frames = update_frames     # (a few bodies: always serial)
         self._flush_loads = self.e.serial_switch(flush_loads)
+        self.bodies["flush_loads"] = flush_loads_body
         self._compile_binning()
         self._compile_rows()
 
@@ -350,8 +357,8 @@ class MeshContacts:
                             else:
                                 ti.atomic_add(m.tri_cell_count[cid], 1)
 
-        @ti.kernel
-        def count_bins(serial_loops: ti.template()) -> ti.i32:
+        @ti.func
+        def count_bins_body(serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for c in range(n_cells):
                 m.tri_cell_count[c] = 0
@@ -363,13 +370,23 @@ class MeshContacts:
             return m.tri_cell_start[n_cells]
 
         @ti.kernel
-        def fill_bins(serial_loops: ti.template()):
+        def count_bins(serial_loops: ti.template()) -> ti.i32:
+            return count_bins_body(serial_loops)
+
+        @ti.func
+        def fill_bins_body(serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for t in range(nt):
                 visit_cells(t, True)
 
+        @ti.kernel
+        def fill_bins(serial_loops: ti.template()):
+            fill_bins_body(serial_loops)
+
         self._count_bins = self.e.serial_switch(count_bins)
         self._fill_bins = self.e.serial_switch(fill_bins)
+        self.bodies.update(count_bins=count_bins_body, fill_bins=fill_bins_body)
+        self.e.broadphase.fused = None
 
     def _compile_rows(self):
         m = self
@@ -380,8 +397,8 @@ class MeshContacts:
         width = self.scratch_width
         scratch = self.scratch
 
-        @ti.kernel
-        def save_rows(n: ti.i32, serial_loops: ti.template()):
+        @ti.func
+        def save_rows_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 pid = s.particle_id[i]
@@ -395,7 +412,11 @@ class MeshContacts:
                         m.old_rolling_history[k] = m.rolling_history[k]
 
         @ti.kernel
-        def find_candidates(n: ti.i32, serial_loops: ti.template()) -> ti.i32:
+        def save_rows(n: ti.i32, serial_loops: ti.template()):
+            save_rows_body(n, serial_loops)
+
+        @ti.func
+        def find_candidates_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 c = s.cell[i]
@@ -420,8 +441,14 @@ class MeshContacts:
             exclusive_scan(m.mesh_count, m.mesh_start, n)
             return longest
 
+        @ti.kernel
+        def find_candidates(n: ti.i32, serial_loops: ti.template()) -> ti.i32:
+            return find_candidates_body(n, serial_loops)
+
         self._save_rows = self.e.serial_switch(save_rows)
         self._find_candidates = self.e.serial_switch(find_candidates)
+        self.bodies.update(save_rows=save_rows_body, find_candidates=find_candidates_body)
+        self.e.broadphase.fused = None
         self._compile_compact()
 
     def _compile_compact(self):
@@ -432,8 +459,8 @@ class MeshContacts:
 
         old_rolling = m.old_rolling_history if epsd else m.old_history  # (unused without EPSD)
 
-        @ti.kernel
-        def compact_and_carry(n: ti.i32, serial_loops: ti.template()):
+        @ti.func
+        def compact_and_carry_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 pid = s.particle_id[i]
@@ -454,7 +481,13 @@ class MeshContacts:
                         if ti.static(epsd):
                             m.rolling_history[k] = old_rolling[old]
 
+        @ti.kernel
+        def compact_and_carry(n: ti.i32, serial_loops: ti.template()):
+            compact_and_carry_body(n, serial_loops)
+
         self._compact_and_carry = self.e.serial_switch(compact_and_carry)
+        self.bodies["compact_and_carry"] = compact_and_carry_body
+        self.e.broadphase.fused = None
 
     # --------------------------------------------------------------- contact law
     def make_particle_contacts(self, triangle_law, surface_law, sphere_surface):

@@ -105,6 +105,11 @@ class Broadphase:
         self.total = t.add("total", ti.i32, 2)    # [pair entries, alive particles]
         t.finalize()
         self.rebuilds = 0
+        # the ti.func bodies of the rebuild's kernels, for the one-launch rebuild of the serial
+        # mode (fused_rebuild: compiled on use, dropped whenever one of them is recompiled)
+        self.bodies = {}
+        self.fused = None
+        self.fused_stages = [0, 0, 0]     # fused rebuilds that stopped SEARCHED, LISTED, DONE
         self._compile_particle_kernels()
 
     # ------------------------------------------------------------------ kernels
@@ -125,8 +130,8 @@ class Broadphase:
             c = ti.max(ti.min(c, dims - 1), 0)
             return (c[0] * dims[1] + c[1]) * dims[2] + c[2]
 
-        @ti.kernel
-        def save_rows(n: ti.i32, serial_loops: ti.template()):
+        @ti.func
+        def save_rows_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 pid = s.particle_id[i]
@@ -134,7 +139,11 @@ class Broadphase:
                 s.old_row_count_by_id[pid] = s.row_owned[i]
 
         @ti.kernel
-        def sort_by_cell(n: ti.i32, serial_loops: ti.template()):
+        def save_rows(n: ti.i32, serial_loops: ti.template()):
+            save_rows_body(n, serial_loops)
+
+        @ti.func
+        def sort_by_cell_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for c in range(n_cells):
                 cell_count[c] = 0
@@ -158,7 +167,11 @@ class Broadphase:
                     s.order[slot] = i
 
         @ti.kernel
-        def permute(n: ti.i32, serial_loops: ti.template()):
+        def sort_by_cell(n: ti.i32, serial_loops: ti.template()):
+            sort_by_cell_body(n, serial_loops)
+
+        @ti.func
+        def permute_body(n, serial_loops: ti.template()):
             # new slot k takes old particle order[k]; every per-particle array moves together
             for f in ti.static(vec_fields):
                 ti.loop_config(serialize=serial_loops)
@@ -201,9 +214,16 @@ class Broadphase:
                 s.cell[k] = cell_of(s.position[k])
                 s.reference_position[k] = s.position[k]
 
+        @ti.kernel
+        def permute(n: ti.i32, serial_loops: ti.template()):
+            permute_body(n, serial_loops)
+
         serial = self.e.serial_switch
         self._save_rows, self._sort_by_cell, self._permute = (
             serial(save_rows), serial(sort_by_cell), serial(permute))
+        self.bodies.update(save_rows=save_rows_body, sort_by_cell=sort_by_cell_body,
+                           permute=permute_body)
+        self.fused = None
         self._compile_search(32)
 
     def _compile_search(self, width: int):
@@ -229,8 +249,8 @@ class Broadphase:
 
         minimum_image = g.make_minimum_image()
 
-        @ti.kernel
-        def find_candidates(n: ti.i32, serial_loops: ti.template()) -> ti.i32:
+        @ti.func
+        def find_candidates_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 c = s.cell[i]
@@ -279,7 +299,13 @@ class Broadphase:
             total[0] = s.row_start[n]
             return longest
 
+        @ti.kernel
+        def find_candidates(n: ti.i32, serial_loops: ti.template()) -> ti.i32:
+            return find_candidates_body(n, serial_loops)
+
         self._find_candidates = self.e.serial_switch(find_candidates)
+        self.bodies["find_candidates"] = find_candidates_body
+        self.fused = None
 
     def _make_compact(self, pairs: "PairState"):
         """Kernel copying the scratch rows into the CSR list, owned pairs (partner id larger)
@@ -289,8 +315,8 @@ class Broadphase:
         scratch_field = lambda: self.scratch  # noqa: E731  (the scratch may be reallocated)
         scratch = scratch_field()
 
-        @ti.kernel
-        def compact(n: ti.i32, serial_loops: ti.template()):
+        @ti.func
+        def compact_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 front = s.row_start[i]
@@ -305,6 +331,12 @@ class Broadphase:
                         p.neighbour[back] = j
                         back -= 1
                 s.row_owned[i] = front - s.row_start[i]
+
+        @ti.kernel
+        def compact(n: ti.i32, serial_loops: ti.template()):
+            compact_body(n, serial_loops)
+        self.bodies["compact"] = compact_body
+        self.fused = None
         return self.e.serial_switch(compact)
 
     def compile_pair_kernels(self, pairs: PairState):
@@ -315,8 +347,8 @@ class Broadphase:
         carried = [(getattr(p, n), getattr(p, "old_" + n)) for n in p.contact_field_names]
         self._compact = self._make_compact(p)
 
-        @ti.kernel
-        def save_pairs(n: ti.i32, serial_loops: ti.template()):
+        @ti.func
+        def save_pairs_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
@@ -326,7 +358,11 @@ class Broadphase:
                         f[1][k] = f[0][k]
 
         @ti.kernel
-        def link_and_carry(n: ti.i32, serial_loops: ti.template()):
+        def save_pairs(n: ti.i32, serial_loops: ti.template()):
+            save_pairs_body(n, serial_loops)
+
+        @ti.func
+        def link_and_carry_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 pid = s.particle_id[i]
@@ -355,13 +391,97 @@ class Broadphase:
                             p.mirror[k] = m
                             break
 
+        @ti.kernel
+        def link_and_carry(n: ti.i32, serial_loops: ti.template()):
+            link_and_carry_body(n, serial_loops)
+
         self._save_pairs = self.e.serial_switch(save_pairs)
         self._link_and_carry = self.e.serial_switch(link_and_carry)
+        self.bodies.update(save_pairs=save_pairs_body, link_and_carry=link_and_carry_body)
+        self.fused = None
 
     # ------------------------------------------------------------------ driver
-    def rebuild(self, n: int) -> int:
-        """Re-sort particles and rebuild the neighbour list; returns the alive count."""
+    # stages the one-launch rebuild reached (fused_rebuild)
+    SEARCHED, LISTED, DONE = 1, 2, 3
+
+    def _compile_fused(self):
+        """One serial launch for a whole rebuild: the serial mode's answer to a rebuild of ~20
+        launches and field reads (~1 ms of host time on these machines, several steps of a
+        small scene). The same ti.func bodies as the separate kernels, in the same order;
+        where an array is too small it stops and says at which stage (the host then grows
+        the array and finishes with the separate kernels, every stage being repeatable)."""
         e = self.e
+        b = self.bodies
+        mesh = e.mesh
+        has_mesh = mesh is not None
+        save_rows, save_pairs, sort_by_cell, permute, find_candidates, compact, link_and_carry = (
+            b[k] for k in ("save_rows", "save_pairs", "sort_by_cell", "permute",
+                           "find_candidates", "compact", "link_and_carry"))
+        width, pair_capacity = self.scratch_width, e.pairs.capacity
+        total = self.total
+        flush_loads = mesh_save_rows = count_bins = fill_bins = mesh_find = compact_and_carry = None
+        set_frames = mesh_start = None
+        items_capacity = mesh_width = entries_capacity = 0
+        if has_mesh:
+            mb = mesh.bodies
+            flush_loads, mesh_save_rows, count_bins, fill_bins, mesh_find, compact_and_carry = (
+                mb[k] for k in ("flush_loads", "save_rows", "count_bins", "fill_bins",
+                                "find_candidates", "compact_and_carry"))
+            set_frames, mesh_start = mesh.set_frames, mesh.mesh_start
+            items_capacity, mesh_width = mesh.items_capacity, mesh.scratch_width
+            entries_capacity = mesh.entries_capacity
+        SEARCHED, LISTED, DONE = self.SEARCHED, self.LISTED, self.DONE
+
+        @ti.kernel
+        def fused_rebuild(n: ti.i32, time: e.real) -> ti.types.vector(2, ti.i32):
+            """rebuild(n) at ``time`` (s, the bodies' pose) on one thread; returns (alive
+            particles, the stage reached)."""
+            save_rows(n, True)
+            save_pairs(n, True)
+            if ti.static(has_mesh):
+                flush_loads(n, True)
+                mesh_save_rows(n, True)
+            sort_by_cell(n, True)
+            alive = total[1]
+            permute(n, True)
+            longest = find_candidates(alive, True)
+            stage = SEARCHED
+            if longest <= width and total[0] <= pair_capacity:
+                compact(alive, True)
+                link_and_carry(alive, True)
+                stage = LISTED
+                if ti.static(has_mesh):
+                    set_frames(time)
+                    if count_bins(True) <= items_capacity:
+                        fill_bins(True)
+                        mesh_longest = mesh_find(alive, True)
+                        if mesh_longest <= mesh_width and mesh_start[alive] <= entries_capacity:
+                            compact_and_carry(alive, True)
+                            stage = DONE
+                if ti.static(not has_mesh):
+                    stage = DONE
+            return ti.Vector([alive, stage])
+
+        self.fused = fused_rebuild
+
+    def rebuild(self, n: int) -> int:
+        """Re-sort particles and rebuild the neighbour list; returns the alive count. In the
+        serial mode one launch (fused_rebuild) unless an array must grow."""
+        e = self.e
+        if e.pairs is not None and e.serial and e.fused_rebuilds:
+            if self.fused is None:
+                self._compile_fused()
+            alive, stage = (int(v) for v in self.fused(n, e.time))
+            self.fused_stages[stage - 1] += 1
+            if stage == self.SEARCHED:
+                self._list(alive)
+            elif stage == self.LISTED:
+                if e.mesh.rebuild_rows(alive, e.time):
+                    e.recompile_pair_kernels()
+            elif e.mesh is not None:
+                e.mesh.binned_time = e.time
+            self.rebuilds += 1
+            return alive
         if e.pairs is not None:
             self._save_rows(n)
             self._save_pairs(n)
@@ -374,6 +494,14 @@ class Broadphase:
         self._sort_by_cell(n)
         alive = int(self.total[1])
         self._permute(n)
+        self._list(alive)
+        self.rebuilds += 1
+        return alive
+
+    def _list(self, alive: int):
+        """The neighbour rows of the ``alive`` particles, sorted and permuted (and the mesh
+        candidate rows): search, grow what is too small, compact, carry the history."""
+        e = self.e
         longest = int(self._find_candidates(alive))
         if longest > self.scratch_width:
             self._compile_search(int(longest * 1.5) + 1)
@@ -387,6 +515,3 @@ class Broadphase:
         self._link_and_carry(alive)
         if e.mesh is not None and e.mesh.rebuild_rows(alive, e.time):
             e.recompile_pair_kernels()     # the mesh entry arrays were reallocated
-        self.rebuilds += 1
-        self.entries = entries
-        return alive

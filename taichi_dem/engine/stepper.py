@@ -48,6 +48,13 @@ from .state import FieldTree, Flag, PairState, ParticleState, Reduction, Thermal
 PARALLEL_FROM = 5000
 
 
+class InsertColumn:
+    """Columns of the f64 array Engine.insert hands its kernel."""
+    POSITION, VELOCITY, RADIUS, MASS, BIRTH_TIME = 0, 3, 6, 7, 8
+    TEMPERATURE, INVERSE_THERMAL_MASS, MOISTURE = 9, 10, 11
+    SIZE = 12
+
+
 class Engine:
     """Owns the device state of one simulation and the kernels that advance it."""
 
@@ -153,6 +160,9 @@ class Engine:
         t.finalize()
         self.removed_batches: list = []    # removal-log entries drained at rebuilds
         self.before_rebuild = None         # host hook (engine) before a rebuild in advance
+        # the serial mode rebuilds in one launch (Broadphase.fused_rebuild); False: the
+        # separate kernels (tests compare the two)
+        self.fused_rebuilds = True
         npf = np.float64 if real == ti.f64 else np.float32
         self.max_radius = max_radius          # (the uploads below may read it)
         for name, values in table_values.items():
@@ -858,31 +868,30 @@ class Engine:
         ``arrays``: position, velocity (n,3) m, m/s; radius m, mass kg, key (slot keys not in
         use), serial, origin (n,), birth_time s; temperature K and inverse_thermal_mass 1/(J/K)
         when thermal; moisture kg/kg when drying. The state must be at a whole step (between
-        ``advance`` calls)."""
+        ``advance`` calls), or mid-step before a rebuild (drifted, forces pending: the
+        ``before_rebuild`` hook) with velocities at t - dt/2 like the other particles'."""
         k = len(arrays["radius"])
         if k == 0:
             return
         if self.count + k > self.state.capacity:
             raise RuntimeError("particle capacity exceeded")
-        # the device's precision (an f32 field assigned from f64 would warn at compile time)
-        npf = np.float64 if self.real == ti.f64 else np.float32
-        npt = np.float64 if self.state.compensated else npf
-        zeros = np.zeros(k, npf)
-        self._insert(self.count, k,
-                     np.ascontiguousarray(arrays["position"], npf),
-                     np.ascontiguousarray(arrays["velocity"], npf),
-                     np.ascontiguousarray(arrays["radius"], npf),
-                     np.ascontiguousarray(arrays["mass"], npf),
-                     np.ascontiguousarray(arrays["material"], np.int32),
-                     np.ascontiguousarray(arrays["key"], np.int32),
-                     np.ascontiguousarray(arrays["serial"], np.int32),
-                     np.ascontiguousarray(arrays["origin"], np.int32),
-                     np.ascontiguousarray(arrays["birth_time"], npf),  # (residence: f32 is
-                     # 4e-6 s at 100 s)
-                     # f64 where an f64 residual keeps what f32 cannot (thermal/precision.py)
-                     np.ascontiguousarray(arrays.get("temperature", zeros), npt),
-                     np.ascontiguousarray(arrays.get("inverse_thermal_mass", zeros), npf),
-                     np.ascontiguousarray(arrays.get("moisture", zeros), npt))
+        # two arrays (each ndarray argument costs a launch ~25 us: an insertion every few
+        # dozen steps paid ~0.3 ms for thirteen); f64 columns, rounded to the device's
+        # precision in the kernel (the temperature and moisture keep f64 where an f64
+        # residual holds what f32 cannot, thermal/precision.py)
+        reals = np.zeros((k, InsertColumn.SIZE), np.float64)
+        reals[:, InsertColumn.POSITION:InsertColumn.POSITION + 3] = arrays["position"]
+        reals[:, InsertColumn.VELOCITY:InsertColumn.VELOCITY + 3] = arrays["velocity"]
+        for name, column in (("radius", InsertColumn.RADIUS), ("mass", InsertColumn.MASS),
+                             ("birth_time", InsertColumn.BIRTH_TIME),
+                             ("temperature", InsertColumn.TEMPERATURE),
+                             ("inverse_thermal_mass", InsertColumn.INVERSE_THERMAL_MASS),
+                             ("moisture", InsertColumn.MOISTURE)):
+            if name in arrays:
+                reals[:, column] = arrays[name]
+        ints = np.stack([np.asarray(arrays[name], np.int64) for name in
+                         ("material", "key", "serial", "origin")], axis=1).astype(np.int32)
+        self._insert(self.count, k, reals, ints)
         self.count += k
 
     def occupied(self) -> dict:
@@ -930,55 +939,54 @@ class Engine:
         compensated_add, split_f64 = make_compensated_add(real)
         mobility = self.mobility is not None
         active = self.mobility.particle_active if mobility else None
+        C = InsertColumn
 
         @ti.kernel
-        def insert(start: ti.i32, k: ti.i32, position: ti.types.ndarray(),
-                   velocity: ti.types.ndarray(), radius: ti.types.ndarray(),
-                   mass: ti.types.ndarray(), material: ti.types.ndarray(),
-                   key: ti.types.ndarray(), serial: ti.types.ndarray(),
-                   origin: ti.types.ndarray(), birth_time: ti.types.ndarray(),
-                   temperature: ti.types.ndarray(), inverse_thermal_mass: ti.types.ndarray(),
-                   moisture: ti.types.ndarray(), serial_loops: ti.template()):
+        def insert(start: ti.i32, k: ti.i32, reals: ti.types.ndarray(dtype=ti.f64, ndim=2),
+                   ints: ti.types.ndarray(dtype=ti.i32, ndim=2), serial_loops: ti.template()):
+            """Particles ``start`` .. ``start + k - 1`` from the rows of ``reals`` (columns:
+            InsertColumn) and ``ints`` (material, key, serial, origin)."""
             ti.loop_config(serialize=serial_loops)
             for q in range(k):
                 i = start + q
-                x = ti.Vector([position[q, 0], position[q, 1], position[q, 2]])
+                x = ti.Vector([ti.cast(reals[q, C.POSITION + a], real) for a in ti.static(range(3))])
                 s.position[i] = x
                 s.reference_position[i] = x
-                s.velocity[i] = ti.Vector([velocity[q, 0], velocity[q, 1], velocity[q, 2]])
+                s.velocity[i] = ti.Vector([ti.cast(reals[q, C.VELOCITY + a], real)
+                                           for a in ti.static(range(3))])
                 s.angular_velocity[i] = ti.Vector([0.0, 0.0, 0.0])
                 # inserted clear of every contact: free flight is the first step's acceleration
                 s.acceleration[i] = gravity
                 s.angular_acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
-                r = radius[q]
-                m = mass[q]
+                r = ti.cast(reals[q, C.RADIUS], real)
+                m = ti.cast(reals[q, C.MASS], real)
                 s.radius[i] = r
                 s.mass[i] = m
                 s.inverse_mass[i] = 1.0 / m
                 s.inverse_inertia[i] = 1.0 / (0.4 * m * r * r)
-                s.material[i] = material[q]
-                s.particle_id[i] = key[q]
+                s.material[i] = ints[q, 0]
+                s.particle_id[i] = ints[q, 1]
                 s.alive[i] = 1
                 if ti.static(mobility):
                     active[i] = 1     # until the rebuild this insertion flags judges it
                 if ti.static(process):
-                    s.serial[i] = serial[q]
-                    s.origin[i] = origin[q]
-                    s.birth_time[i] = birth_time[q]
+                    s.serial[i] = ints[q, 2]
+                    s.origin[i] = ints[q, 3]
+                    s.birth_time[i] = ti.cast(reals[q, C.BIRTH_TIME], real)
                 if ti.static(thermal and compensated):
-                    t_part, t_rest = split_f64(ti.cast(temperature[q], ti.f64))
+                    t_part, t_rest = split_f64(reals[q, C.TEMPERATURE])
                     s.temperature[i] = t_part
                     s.temperature_residual[i] = t_rest
-                    s.inverse_thermal_mass[i] = inverse_thermal_mass[q]
+                    s.inverse_thermal_mass[i] = ti.cast(reals[q, C.INVERSE_THERMAL_MASS], real)
                 elif ti.static(thermal):
-                    s.temperature[i] = temperature[q]
-                    s.inverse_thermal_mass[i] = inverse_thermal_mass[q]
+                    s.temperature[i] = ti.cast(reals[q, C.TEMPERATURE], real)
+                    s.inverse_thermal_mass[i] = ti.cast(reals[q, C.INVERSE_THERMAL_MASS], real)
                 if ti.static(drying and compensated):
-                    x_part, x_rest = split_f64(ti.cast(moisture[q], ti.f64))
+                    x_part, x_rest = split_f64(reals[q, C.MOISTURE])
                     s.moisture[i] = x_part
                     s.moisture_residual[i] = x_rest
                 elif ti.static(drying):
-                    s.moisture[i] = moisture[q]
+                    s.moisture[i] = ti.cast(reals[q, C.MOISTURE], real)
                 # the slot may hold what a removed particle left: no rows, no history, no loads
                 s.row_owned[i] = 0
                 s.row_count[i] = 0

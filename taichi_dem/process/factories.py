@@ -102,6 +102,7 @@ class FactorySet:
         # the step the current run of steps ends at when factories are due there (else None):
         # what insert_at_rebuild may insert early (Simulation.step sets it)
         self.window_end = None
+        self._triangle_cache: dict = {}           # _candidate_triangles, per body and box
 
     # ------------------------------------------------------------------ radii
     def _sample_radius(self, k: int) -> float:
@@ -459,22 +460,54 @@ class FactorySet:
         return lo - pad, hi + pad
 
     def _triangles(self, time: float, lo, hi, r_max: float):
-        """Body triangles near [lo, hi] at their pose at ``time`` (None without bodies)."""
+        """Body triangles near [lo, hi] (within ``r_max``, m) at their pose at ``time`` (None
+        without bodies). Called at every insertion: the triangles of each body that can come
+        near the box at all are found once per box (by their extent along the body's axis,
+        which its rotation keeps), and only those are moved."""
         if not self.scene.bodies:
             return None
         kin = self.sim.engine.kinematics
+        lo_pad = np.asarray(lo, float) - r_max
+        hi_pad = np.asarray(hi, float) + r_max
         moved = []
         for k, b in enumerate(self.scene.bodies):
             m = b.motion
-            rot = rotation_matrix(np.asarray(m.axis_direction, float), kin.angle(k, time))
+            tri = self._candidate_triangles(k, lo_pad, hi_pad)
+            angle = kin.angle(k, time)
+            shift = np.asarray(m.velocity, float) * time
+            if angle != 0.0:
+                rot = rotation_matrix(np.asarray(m.axis_direction, float), angle)
+                p = np.asarray(m.axis_point, float)
+                tri = (tri - p) @ rot.T + p
+            if np.any(shift):
+                tri = tri + shift
+            keep = np.all((tri.max(axis=1) >= lo_pad) & (tri.min(axis=1) <= hi_pad), axis=1)
+            moved.append(tri[keep])
+        return _Triangles(self.scene, 2.0 * r_max, triangles=np.concatenate(moved))
+
+    def _candidate_triangles(self, k: int, lo, hi) -> np.ndarray:
+        """(T, 3, 3) m: body k's triangles at t = 0 that can come within the box [lo, hi] at
+        some pose: all of them for a translating body, else those whose span along the axis
+        meets the box's (cached per box)."""
+        key = (k, tuple(lo), tuple(hi))
+        cached = self._triangle_cache.get(key)
+        if cached is not None:
+            return cached
+        b = self.scene.bodies[k]
+        tri = np.asarray(b.vertices, float)[np.asarray(b.faces, np.int64).reshape(-1, 3)]
+        m = b.motion
+        if not np.any(np.asarray(m.velocity, float)) and len(tri):
+            u = np.asarray(m.axis_direction, float)
             p = np.asarray(m.axis_point, float)
-            v = (np.asarray(b.vertices, float) - p) @ rot.T + p + np.asarray(m.velocity) * time
-            faces = np.asarray(b.faces, np.int64).reshape(-1, 3)
-            tri = v[faces]
-            keep = np.all((tri.max(axis=1) >= lo - r_max) & (tri.min(axis=1) <= hi + r_max), axis=1)
-            moved.append(dataclasses.replace(b, vertices=v, faces=faces[keep]))
-        fake = dataclasses.replace(self.scene, bodies=tuple(moved))
-        return _Triangles(fake, 2.0 * r_max)
+            along = (tri - p) @ u                                    # (T, 3)
+            corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                                for z in (lo[2], hi[2])])
+            box = (corners - p) @ u
+            tri = tri[(along.max(axis=1) >= box.min()) & (along.min(axis=1) <= box.max())]
+        if len(self._triangle_cache) > 64:
+            self._triangle_cache.clear()
+        self._triangle_cache[key] = tri
+        return tri
 
     # ------------------------------------------------------------------ series
     def sample(self, values: dict, now):

@@ -185,6 +185,7 @@ class _Grid:
 
 
 _BRUTE_FORCE_PAIRS = 200_000     # query x point pairs below which _conflicts checks them all
+_BRUTE_FORCE_TRIANGLE_PAIRS = 20_000     # sphere x triangle pairs below which hits does
 
 
 def _conflicts(grid: _Grid, radii_pts: np.ndarray, q: np.ndarray, rq: np.ndarray,
@@ -280,10 +281,14 @@ class _Triangles:
 
     _CHUNK = 1 << 20                       # candidate cells / pairs handled at once
 
-    def __init__(self, scene: Scene, pad: float):
-        tris = [np.asarray(b.vertices, float)[np.asarray(b.faces, np.int64).reshape(-1, 3)]
-                for b in scene.bodies if len(b.faces)]
-        tri = np.concatenate(tris) if tris else np.empty((0, 3, 3))
+    def __init__(self, scene: Scene, pad: float, triangles: "np.ndarray | None" = None):
+        """``triangles``: (T, 3, 3) m, instead of the scene's bodies at t = 0."""
+        if triangles is not None:
+            tri = np.asarray(triangles, float).reshape(-1, 3, 3)
+        else:
+            tris = [np.asarray(b.vertices, float)[np.asarray(b.faces, np.int64).reshape(-1, 3)]
+                    for b in scene.bodies if len(b.faces)]
+            tri = np.concatenate(tris) if tris else np.empty((0, 3, 3))
         dlo, dhi = np.asarray(scene.domain.min, float), np.asarray(scene.domain.max, float)
         for a, ax in enumerate("xyz"):
             if ax not in scene.domain.periodic or len(tri) == 0:
@@ -320,6 +325,20 @@ class _Triangles:
         near = np.all((self.hi + reach >= plo) & (self.lo - reach <= phi), axis=1)
         tid = np.nonzero(near)[0]
         if len(tid) == 0:
+            return bad
+        if len(p) * len(tid) <= _BRUTE_FORCE_TRIANGLE_PAIRS:
+            # a factory's few candidates near a few hundred triangles: every pair at once,
+            # cheaper than binning them (the same filters and distance as below)
+            pi = np.repeat(np.arange(len(p)), len(tid))
+            tt = np.tile(tid, len(p))
+            q = p[pi]
+            lim = r[pi] * (1.0 + _CLEAR)
+            m = np.all((q >= self.lo[tt] - lim[:, None]) & (q <= self.hi[tt] + lim[:, None]),
+                       axis=1)
+            pi, tt, q, lim = pi[m], tt[m], q[m], lim[m]
+            if len(pi):
+                d2 = _closest_sq_dist(q, self.tri[tt, 0], self.tri[tt, 1], self.tri[tt, 2])
+                bad[pi[d2 < lim * lim]] = True
             return bad
         # point grid: about one point per cell, never finer than the sphere diameter
         span = np.maximum(phi - plo, 0.0)

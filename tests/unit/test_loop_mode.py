@@ -23,15 +23,17 @@ def walls_only_text():
     return head + "[[particles]]" + rest.split("[[particles]]", 1)[1]
 
 
-def run(text, parallel_from, steps):
+def run(text, parallel_from, steps, fused=True):
     sim = td.Simulation.from_text(text, parallel_from=parallel_from)
+    sim.engine.fused_rebuilds = fused
     try:
         sim.step(steps)
         p = sim.particles()
         e = sim.engine
         return dict(position=p["position"], velocity=p["velocity"],
                     temperature=p.get("temperature"), serial=e.serial, runs=e.runs,
-                    rebuilds=e.broadphase.rebuilds, time=e.time, steps=sim.step_count,
+                    rebuilds=e.broadphase.rebuilds, fused=list(e.broadphase.fused_stages),
+                    time=e.time, steps=sim.step_count,
                     series={k: np.asarray(v) for k, v in sim.series.items()})
     finally:
         sim.close()
@@ -68,6 +70,24 @@ def test_runs_of_steps_follow_a_turning_paddle():
     scale = np.max(np.abs(parallel["series"][torque]))
     assert scale > 0.0                          # the paddle did stir the beads
     assert np.max(np.abs(serial["series"][torque] - parallel["series"][torque])) < 1e-6 * scale
+
+
+def test_one_launch_rebuild_equals_the_separate_kernels():
+    """The serial mode's rebuild in one launch (Broadphase.fused_rebuild) runs the separate
+    kernels' bodies in their order: the same state bit for bit, with a turning paddle (the
+    mesh rows too); the first rebuilds stop early where an array must grow, the host
+    finishing them with the separate kernels."""
+    text = scene_text("f64", count=300)
+    fused = run(text, None, 3000)
+    separate = run(text, None, 3000, fused=False)
+    assert fused["serial"] and fused["rebuilds"] > 10
+    assert fused["rebuilds"] == separate["rebuilds"]
+    assert fused["fused"][2] > 0.9 * fused["rebuilds"]      # most rebuilds were one launch
+    assert separate["fused"] == [0, 0, 0]
+    for key in ("position", "velocity", "temperature"):
+        assert np.array_equal(fused[key], separate[key]), key
+    torque = "bodies/paddle/torque"
+    assert np.array_equal(fused["series"][torque], separate["series"][torque])
 
 
 class _Stub:
