@@ -348,6 +348,8 @@ class Simulation:
                     end = self.step_count + chunk
                     self.factories.window_end = end if self.factories.due(end) else None
                 self.engine.advance(chunk, record_last=(chunk == to_output))
+                if self.factories is not None:
+                    self.factories.window_end = None
                 self.step_count += chunk
                 self.time = self.step_count * self.dt
                 remaining -= chunk
