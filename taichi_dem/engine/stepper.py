@@ -584,34 +584,42 @@ class Engine:
                 integrates = True
                 if ti.static(mobility):
                     integrates = active[i] != 0      # inactive: held or carried, not integrated
-                if integrates:
-                    for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
-                        m = p.mirror[k]
-                        if m >= 0:
-                            if p.contact[m] == 1:          # touching (2: near, heat only)
-                                force += p.partner_force[m]
-                                torque += p.partner_torque[m]
-                elif ti.static(core_internal):
-                    # carried by the frame's body: only the shares of active partners (the
-                    # core's inner contacts cancel in the load booked below)
-                    for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
-                        m = p.mirror[k]
-                        if m >= 0:
-                            if p.contact[m] == 1 and active[p.neighbour[k]] != 0:
-                                force += p.partner_force[m]
-                                torque += p.partner_torque[m]
                 heat = 0.0           # W into the particle
                 conductance = 0.0    # W/K, for the stability check
                 if ti.static(thermal):
                     heat = s.owned_heat[i]
                     conductance = s.conductance[i]
-                if ti.static(pair_heat):
+                if integrates:
+                    # one pass over the partners' entries for their shares of force and heat
                     for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
                         m = p.mirror[k]
                         if m >= 0:
-                            if p.contact[m] != 0:
-                                heat += p.partner_heat[m]
-                                conductance += p.pair_conductance[m]
+                            contact = p.contact[m]
+                            if contact == 1:          # touching (2: near, heat only)
+                                force += p.partner_force[m]
+                                torque += p.partner_torque[m]
+                            if ti.static(pair_heat):
+                                if contact != 0:
+                                    heat += p.partner_heat[m]
+                                    conductance += p.pair_conductance[m]
+                else:
+                    if ti.static(core_internal):
+                        # carried by the frame's body: only the shares of active partners (the
+                        # core's inner contacts cancel in the load booked below)
+                        for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
+                            m = p.mirror[k]
+                            if m >= 0:
+                                if p.contact[m] == 1 and active[p.neighbour[k]] != 0:
+                                    force += p.partner_force[m]
+                                    torque += p.partner_torque[m]
+                    if ti.static(pair_heat):
+                        # held or carried, it still conducts
+                        for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
+                            m = p.mirror[k]
+                            if m >= 0:
+                                if p.contact[m] != 0:
+                                    heat += p.partner_heat[m]
+                                    conductance += p.pair_conductance[m]
                 inv_m = s.inverse_mass[i]
                 if ti.static(n_walls > 0):
                     # plane walls: the contact law on each particle-plane contact

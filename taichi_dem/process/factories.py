@@ -482,8 +482,12 @@ class FactorySet:
             if np.any(shift):
                 tri = tri + shift
             keep = np.all((tri.max(axis=1) >= lo_pad) & (tri.min(axis=1) <= hi_pad), axis=1)
-            moved.append(tri[keep])
-        return _Triangles(self.scene, 2.0 * r_max, triangles=np.concatenate(moved))
+            if keep.any():
+                moved.append(tri[keep])
+        if not moved and not self.scene.domain.periodic:
+            return None                 # (a periodic image might still come near)
+        return _Triangles(self.scene, 2.0 * r_max,
+                          triangles=np.concatenate(moved) if moved else np.empty((0, 3, 3)))
 
     def _candidate_triangles(self, k: int, lo, hi) -> np.ndarray:
         """(T, 3, 3) m: body k's triangles at t = 0 that can come within the box [lo, hi] at
