@@ -401,6 +401,16 @@ class Broadphase:
         self.fused = None
 
     # ------------------------------------------------------------------ driver
+    @property
+    def entries(self) -> int:
+        """Neighbour entries listed at the last rebuild (read from the device when asked:
+        the one-launch rebuild does not hand it back)."""
+        return int(self.total[0])
+
+    @entries.setter
+    def entries(self, value: int):
+        """(Checkpoints restore it; the restored ``total`` field already holds it.)"""
+
     # stages the one-launch rebuild reached (fused_rebuild)
     SEARCHED, LISTED, DONE = 1, 2, 3
 
