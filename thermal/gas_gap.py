@@ -309,10 +309,7 @@ def pair_voronoi_gap_integral_reference(radius_i, radius_j, distance, lens, min_
     r_sf = small * face / math.sqrt(face ** 2 + d_small ** 2)
     c_small = math.sqrt(max(small ** 2 - r_sf ** 2, 0.0)) / r_sf
     c_big = math.sqrt(max(big ** 2 - r_sf ** 2, 0.0)) / r_sf
-    r_in = 0.0
-    if distance < big + small:
-        cos_in = (big ** 2 - small ** 2 + distance ** 2) / (2 * big * distance)
-        r_in = big * math.sqrt(max(1 - cos_in ** 2, 0.0))
+    r_in = _overlap_radius(big, small, distance)
 
     def denominator(r):
         ui = np.sqrt(np.maximum(big ** 2 - r ** 2, 0.0))
@@ -364,15 +361,20 @@ def pair_gap_integral_reference(radius_i, radius_j, distance, lens, min_gap, pan
         return 0.0
     else:
         r_out = min(lens_radius * math.sqrt(1 - cos_out ** 2), small)
-    r_in = 0.0
-    if distance < big + small:
-        cos_in = (big ** 2 - small ** 2 + distance ** 2) / (2 * big * distance)
-        r_in = big * math.sqrt(max(1 - cos_in ** 2, 0.0))
+    r_in = _overlap_radius(big, small, distance)
 
     def gap(r):
         return np.maximum(distance - np.sqrt(np.maximum(big ** 2 - r ** 2, 0.0))
                           - np.sqrt(np.maximum(small ** 2 - r ** 2, 0.0)), min_gap)
     return _integrate(gap, r_in, r_out, panels)
+
+
+def _overlap_radius(big, small, distance):
+    """Radius (m) of the circle where two overlapping spheres' surfaces meet; 0 apart."""
+    if distance >= big + small:
+        return 0.0
+    cos_in = (big ** 2 - small ** 2 + distance ** 2) / (2 * big * distance)
+    return big * math.sqrt(max(1 - cos_in ** 2, 0.0))
 
 
 def _integrate(gap, a, b, panels):
@@ -418,10 +420,7 @@ def pair_solid_gap_integral_reference(radius_i, radius_j, distance, lens, min_ga
         return 0.0
     else:
         r_out = min(lens_radius * math.sqrt(1 - cos_out ** 2), small)
-    r_in = 0.0
-    if distance < big + small:
-        cos_in = (big ** 2 - small ** 2 + distance ** 2) / (2 * big * distance)
-        r_in = big * math.sqrt(max(1 - cos_in ** 2, 0.0))
+    r_in = _overlap_radius(big, small, distance)
 
     def gap(r):
         ui = np.sqrt(np.maximum(big ** 2 - r ** 2, 0.0))

@@ -44,7 +44,8 @@ def contact_types(real):
 
 
 def make_geometry(real, thermal: bool):
-    """ti.funcs building a ``Contact``: (sphere_sphere, sphere_surface, sphere_sphere_gap).
+    """ti.funcs building a ``Contact``: (sphere_sphere, sphere_surface, sphere_sphere_gap,
+    with_motion); sphere_sphere is sphere_sphere_gap completed by with_motion.
 
     sphere_sphere(d, dist_sq, particle i's and j's state ...) for two particles whose centres
     are ``d`` = x_i - x_j apart (minimum image, m); sphere_surface(...) for a particle on a
@@ -53,35 +54,10 @@ def make_geometry(real, thermal: bool):
     Contact, _, _ = contact_types(real)
 
     @ti.func
-    def sphere_sphere(d, distance_sq, ri, rj, vi, vj, wi, wj, ai, aj, inv_mi, inv_mj,
-                      inv_ii, inv_ij, mi, mj, ti_, tj_):
-        dist = ti.sqrt(distance_sq)
-        normal_overlap = ri + rj - dist
-        normal = d / dist                                   # from j to i
-        arm_i = ri - 0.5 * normal_overlap                   # centre to contact point
-        arm_j = rj - 0.5 * normal_overlap
-        inverse_mass_sum = inv_mi + inv_mj
-        m_eff = 0.0 * ri
-        if inverse_mass_sum > 0.0:
-            m_eff = 1.0 / inverse_mass_sum
-        temperature_difference = 0.0 * ri
-        if ti.static(thermal):
-            temperature_difference = tj_ - ti_
-        return Contact(
-            normal=normal, normal_overlap=normal_overlap, arm_i=arm_i, arm_j=arm_j,
-            v_rel=vi - vj - (arm_i * wi + arm_j * wj).cross(normal), w_rel=wi - wj,
-            normal_acceleration=(ai - aj).dot(normal), r_eff=ri * rj / (ri + rj), m_eff=m_eff,
-            inertia_eff=1.0 / (inv_ii + inv_ij),
-            rolling_inertia=1.0 / (rolling.rolling_inverse_inertia(inv_mi, inv_ii, ri)
-                                   + rolling.rolling_inverse_inertia(inv_mj, inv_ij, rj)),
-            radius_i=ri, radius_j=rj, material_i=mi, material_j=mj,
-            temperature_difference=temperature_difference, conducts=1)
-
-    @ti.func
     def sphere_sphere_gap(d, distance_sq, ri, rj, mi, mj, ti_, tj_):
-        """``sphere_sphere`` for two particles apart (a gap, within an effect's margin): only
-        what heat effects read; the motion is not loaded (no mechanics acts across a gap, and
-        a near pair is as common as a touching one in a bed with the gas gap on)."""
+        """The geometry of two particles only (no motion): what heat effects read. A pair apart
+        (within an effect's margin) needs no more: no mechanics acts across a gap, and a near
+        pair is as common as a touching one in a bed with the gas gap on."""
         dist = ti.sqrt(distance_sq)
         normal_overlap = ri + rj - dist
         temperature_difference = 0.0 * ri
@@ -89,11 +65,35 @@ def make_geometry(real, thermal: bool):
             temperature_difference = tj_ - ti_
         vec0 = ti.Vector([0.0, 0.0, 0.0]) * ri
         return Contact(
-            normal=d / dist, normal_overlap=normal_overlap, arm_i=ri - 0.5 * normal_overlap,
-            arm_j=rj - 0.5 * normal_overlap, v_rel=vec0, w_rel=vec0, normal_acceleration=0.0 * ri,
+            normal=d / dist, normal_overlap=normal_overlap,       # normal from j to i
+            arm_i=ri - 0.5 * normal_overlap, arm_j=rj - 0.5 * normal_overlap,  # to the contact point
+            v_rel=vec0, w_rel=vec0, normal_acceleration=0.0 * ri,
             r_eff=ri * rj / (ri + rj), m_eff=0.0 * ri, inertia_eff=0.0 * ri,
             rolling_inertia=0.0 * ri, radius_i=ri, radius_j=rj, material_i=mi, material_j=mj,
             temperature_difference=temperature_difference, conducts=1)
+
+    @ti.func
+    def with_motion(c, vi, vj, wi, wj, ai, aj, inv_mi, inv_mj, inv_ii, inv_ij):
+        """Contact ``c`` of two particles (sphere_sphere_gap) with their relative motion and
+        effective masses filled in."""
+        inverse_mass_sum = inv_mi + inv_mj
+        m_eff = 0.0 * c.radius_i
+        if inverse_mass_sum > 0.0:
+            m_eff = 1.0 / inverse_mass_sum
+        c.v_rel = vi - vj - (c.arm_i * wi + c.arm_j * wj).cross(c.normal)
+        c.w_rel = wi - wj
+        c.normal_acceleration = (ai - aj).dot(c.normal)
+        c.m_eff = m_eff
+        c.inertia_eff = 1.0 / (inv_ii + inv_ij)
+        c.rolling_inertia = 1.0 / (rolling.rolling_inverse_inertia(inv_mi, inv_ii, c.radius_i)
+                                   + rolling.rolling_inverse_inertia(inv_mj, inv_ij, c.radius_j))
+        return c
+
+    @ti.func
+    def sphere_sphere(d, distance_sq, ri, rj, vi, vj, wi, wj, ai, aj, inv_mi, inv_mj,
+                      inv_ii, inv_ij, mi, mj, ti_, tj_):
+        return with_motion(sphere_sphere_gap(d, distance_sq, ri, rj, mi, mj, ti_, tj_),
+                           vi, vj, wi, wj, ai, aj, inv_mi, inv_mj, inv_ii, inv_ij)
 
     @ti.func
     def sphere_surface(normal, normal_overlap, ri, vi, wi, ai, mass_i, inv_mi, inv_ii, mi, mj,
@@ -111,4 +111,4 @@ def make_geometry(real, thermal: bool):
             radius_i=ri, radius_j=0.0 * ri, material_i=mi, material_j=mj,
             temperature_difference=temperature_difference, conducts=conducts)
 
-    return sphere_sphere, sphere_surface, sphere_sphere_gap
+    return sphere_sphere, sphere_surface, sphere_sphere_gap, with_motion

@@ -384,7 +384,7 @@ class Engine:
         effects = self.effect_list
         # the contact geometry of each kind and the contact law composed from the enabled
         # effects (contacts/): the same law runs on pairs, planes and triangles
-        sphere_sphere, sphere_surface, sphere_sphere_gap = make_geometry(real, self.thermal)
+        _, sphere_surface, sphere_sphere_gap, with_motion = make_geometry(real, self.thermal)
         _, _, History = contact_types(real)
         pair_law = make_contact_law(effects, "pair", real, self)
         plane_law = make_contact_law(effects, "plane", real, self)
@@ -430,30 +430,24 @@ class Engine:
         core_internal = mobility and self.mobility_frame >= 0
 
         @ti.func
-        def touching_contact(d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j, temperature_i):
-            """The whole Contact of particle i (its state passed in) with particle j."""
-            return sphere_sphere(d, distance_sq, ri, s.radius[j], vi, s.velocity[j], wi,
-                                 s.angular_velocity[j], ai, s.acceleration[j], inv_mi,
-                                 s.inverse_mass[j], inv_ii, s.inverse_inertia[j], mi,
-                                 s.material[j], temperature_i, temperature_of(j))
-
-        @ti.func
         def pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
                          temperature_i):
-            """The Contact of particle i with particle j (``d`` = x_i - x_j, m): the whole
-            contact when ``touching``, else (a pair within a heat effect's margin, apart) the
-            geometry only: no mechanics acts across a gap, and with the gas gap on a near
-            pair is as common as a touching one, so its partner's motion is not loaded."""
+            """The Contact of particle i (its state passed in) with particle j (``d`` = x_i -
+            x_j, m): the geometry, and the motion when ``touching``. A pair within a heat
+            effect's margin but apart needs no more, and with the gas gap on such pairs are as
+            common as touching ones: its partner's motion is not loaded."""
+            c = sphere_sphere_gap(d, distance_sq, ri, s.radius[j], mi, s.material[j],
+                                  temperature_i, temperature_of(j))
             if ti.static(pair_margin > 0.0):
-                c = sphere_sphere_gap(d, distance_sq, ri, s.radius[j], mi, s.material[j],
-                                      temperature_i, temperature_of(j))
                 if touching:
-                    c = touching_contact(d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
-                                         temperature_i)
-                return c
+                    c = with_motion(c, vi, s.velocity[j], wi, s.angular_velocity[j], ai,
+                                    s.acceleration[j], inv_mi, s.inverse_mass[j], inv_ii,
+                                    s.inverse_inertia[j])
             else:
-                return touching_contact(d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
-                                        temperature_i)
+                c = with_motion(c, vi, s.velocity[j], wi, s.angular_velocity[j], ai,
+                                s.acceleration[j], inv_mi, s.inverse_mass[j], inv_ii,
+                                s.inverse_inertia[j])
+            return c
 
         @ti.func
         def pair_particle(i, dt, full):
