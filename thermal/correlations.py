@@ -154,6 +154,21 @@ def penetration_with_contact_resistance(alpha_ws: float, density: float, heat_ca
     return e / (alpha_ws * time) * (float(erfcx(b)) - 1.0 + 2.0 * b / math.sqrt(math.pi))
 
 
+def zehner_schlunder(k_solid: float, k_gas: float, porosity: float) -> float:
+    """Zehner-Bauer-Schlünder effective conductivity (W/(m K)) of a packed bed of spheres
+    without radiation, flattening or the Smoluchowski effect (VDI Heat Atlas D6.3: B = 1.25
+    ((1 - eps)/eps)^(10/9), kappa = k_s/k_g, N = 1 - B/kappa, k_c = (2/N) [B (kappa - 1)/(N^2
+    kappa) ln(kappa/B) - (B + 1)/2 - (B - 1)/N], k_eff = k_g [1 - sqrt(1 - eps) + sqrt(1 - eps)
+    k_c])."""
+    lam = k_solid / k_gas
+    b = 1.25 * ((1.0 - porosity) / porosity) ** (10.0 / 9.0)
+    n = 1.0 - b / lam
+    k_c = 2.0 / n * (b * (lam - 1.0) / (n * n * lam) * math.log(lam / b)
+                     - (b + 1.0) / 2.0 - (b - 1.0) / n)
+    root = math.sqrt(1.0 - porosity)
+    return k_gas * ((1.0 - root) + root * k_c)
+
+
 def schlunder_mollekopf(*, rpm: float, wetted_angle: float, diameter: float, k_gas: float,
                         bed_density: float, heat_capacity: float, bed_conductivity: float,
                         temperature: float, roughness: float = 0.0, coverage: float = 0.8,
@@ -180,4 +195,4 @@ def schlunder_mollekopf(*, rpm: float, wetted_angle: float, diameter: float, k_g
 __all__ = ["wetted_angle_from_fill", "contact_time", "accommodation_coefficient",
            "modified_mean_free_path", "wall_particle_coefficient", "radiation_coefficient",
            "wall_contact_coefficient", "penetration_coefficient",
-           "penetration_with_contact_resistance", "schlunder_mollekopf"]
+           "penetration_with_contact_resistance", "schlunder_mollekopf", "zehner_schlunder"]

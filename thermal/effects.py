@@ -6,7 +6,10 @@ contact stage (heat effects add a conductance, W/K, to the contact law's respons
   Conduction       particle-particle, through the Hertz contact spot (conduction.py)
   WallConduction   particle-wall and particle-triangle, through the contact spot
   GasGapWall       particle-wall and particle-body, through the gas gap (gas_gap.py)
+  CoarseGrainedWall particles that stand for a finer bed: its contact resistance and
+                   penetration to walls and bodies instead of the two above (coarse_grained.py)
 particle stage (add heat W and conductance W/K to the particle's load):
+  WallContactAge   how long each coarse-grained particle has rested against a wall
   Convection       a fixed (uniform) gas (convection.py)
   PlugFlowGas      the axial plug-flow gas; its cells march after the pair stage (plug_flow.py)
   Radiation        grey body to the gas, a surface or an enclosure (radiation.py)
@@ -25,6 +28,7 @@ from taichi_dem.errors import DivergenceError
 from taichi_dem.effects.regions import region_test
 from taichi_dem.engine.precision import make_compensated_add
 
+from . import coarse_grained as coarse
 from . import convection as gas_convection
 from . import gas_gap
 from . import moisture as drying
@@ -50,10 +54,11 @@ class Conduction(Effect):
 
     def contact_func(self, engine):
         factor, correction = engine.table["conductance_factor"], engine.table["radius_correction"]
+        skip_coarse = _skips_coarse(self, engine)
 
         @ti.func
         def conduction(c, out):
-            if c.normal_overlap > 0.0:
+            if c.normal_overlap > 0.0 and skip_coarse(c) == 0:
                 out.conductance += contact_conductance(
                     factor[c.material_i, c.material_j], correction[c.material_i, c.material_j],
                     c.r_eff, c.normal_overlap)
@@ -63,11 +68,43 @@ class Conduction(Effect):
 
 
 class WallConduction(Conduction):
-    """The contact-spot conduction to an isothermal wall or body (R* = r)."""
+    """The contact-spot conduction to an isothermal wall or body (R* = r); not for coarse-
+    grained particles (CoarseGrainedWall stands in)."""
 
     name = "wall_conduction"
     kinds = ("plane", "triangle")
     pair_fields = {}
+
+    def __init__(self, description, coarse_materials=False):
+        super().__init__(description)
+        self.skip_coarse = bool(coarse_materials)
+        if self.skip_coarse:
+            self.tables = Conduction.tables + ("coarse_alpha_ws",)
+
+    def table_values(self, scene, tables):
+        out = super().table_values(scene, tables)
+        if self.skip_coarse:
+            out["coarse_alpha_ws"] = CoarseGrainedWall.tables_for(scene, tables)["coarse_alpha_ws"]
+        return out
+
+
+def _skips_coarse(effect, engine):
+    """ti.func (contact) -> 1 where ``effect`` must leave the particle alone (a coarse-grained
+    material: CoarseGrainedWall stands in), else 0; a constant 0 when the scene has none."""
+    if not getattr(effect, "skip_coarse", False):
+        @ti.func
+        def never(c):
+            return 0
+        return never
+    alpha_ws = engine.table["coarse_alpha_ws"]
+
+    @ti.func
+    def coarse_grained(c):
+        out = 0
+        if alpha_ws[c.material_i, c.material_j] > 0.0:
+            out = 1
+        return out
+    return coarse_grained
 
 
 def _gas_over_solid(scene, tables, k_gas):
@@ -99,14 +136,17 @@ class _GasGap(Effect):
     MOST_KINDS = 8
 
     def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance",
-                 porosity=0.4):
+                 porosity=0.4, coarse_materials=False):
         super().__init__(description)
+        self.skip_coarse = bool(coarse_materials)    # (walls only) leave those particles alone
         self.parameters = (float(conductivity), float(lens), float(min_gap))
         self.margin = float(lens)
         self.model = model
         self.porosity = float(porosity)          # the "voronoi" model's packing porosity
         self.solid = model in SOLID_MODELS       # the particles' own resistance counts
         self.tables = ("gas_over_solid",) if self.solid else ()
+        if self.skip_coarse:
+            self.tables = self.tables + ("coarse_alpha_ws",)
         self.kinds_tabulated = None     # the species the tables are for (None: no tables)
 
     def table_values(self, scene, tables):
@@ -154,6 +194,12 @@ class GasGapWall(_GasGap):
     name = "gas_gap_wall"
     kinds = ("plane", "surface")
 
+    def table_values(self, scene, tables):
+        out = super().table_values(scene, tables)
+        if self.skip_coarse:
+            out["coarse_alpha_ws"] = CoarseGrainedWall.tables_for(scene, tables)["coarse_alpha_ws"]
+        return out
+
     def allocate(self, engine, tree):
         # the isothermal plane has a closed form: tables only for the models with the solid
         if self.solid and self._tabulate(engine):
@@ -184,10 +230,14 @@ class GasGapWall(_GasGap):
         table, table_range = (self.table, self.table_range) if tabulated else (None, None)
         last = gas_gap.TABLE_NODES
 
+        skip_coarse = _skips_coarse(self, engine)
+
         @ti.func
         def gas_gap_wall(c, out):
             distance = c.radius_i - c.normal_overlap
-            if ti.static(solid):
+            if skip_coarse(c) != 0:
+                pass
+            elif ti.static(solid):
                 integrate = True
                 value = 0.0 * distance
                 if ti.static(tabulated):
@@ -303,6 +353,113 @@ class GasGapPair(_GasGap):
             return out
 
         return gas_gap_pair
+
+
+class CoarseGrainedWall(Effect):
+    """Particles that stand for a finer bed (``[materials.X] coarse_grained``) take heat from
+    walls and bodies as that bed would: G = w A_p h(t), h(t) = alpha_WS erfcx(alpha_WS
+    sqrt(t/e)) (coarse_grained.py), t the thermal time since the particle came to rest
+    against a wall (WallContactAge). On planes and on each body's nearest surface point, once
+    per body; instead of the contact-spot and gas-gap laws for these particles."""
+
+    name = "coarse_grained_wall"
+    stage = "contact"
+    kinds = ("plane", "surface")
+    tables = ("coarse_alpha_ws", "coarse_effusivity_sq")
+    particle_fields = {"wall_contact_steps": (False, "int"), "wall_touch": (False, "int")}
+
+    def __init__(self, description, reach, time_scale):
+        super().__init__(description)
+        self.reach = float(reach)        # of the radius: the gap at which the weight reaches 0
+        self.margin = self.reach
+        self.time_scale = float(time_scale)
+
+    @staticmethod
+    def reference_temperature(scene, material: str) -> float:
+        """K, for the gas's mean free path in alpha_WS: the mean of the heat-exchanging walls'
+        and bodies' mean temperature and the hottest temperature the material's particles
+        are filled or fed at."""
+        hot = [w.temperature for w in list(scene.walls) + list(scene.bodies)
+               if w.temperature is not None]
+        fed = [f.temperature for f in list(scene.fills) + list(scene.factories)
+               if f.material == material and f.temperature is not None]
+        wall = sum(hot) / len(hot)
+        return 0.5 * (wall + (max(fed) if fed else wall))
+
+    @staticmethod
+    def represented(scene) -> dict:
+        """{material name: coarse_grained.represented_bed(...) at its reference temperature}."""
+        th = scene.thermal
+        out = {}
+        for name, mat in scene.materials.items():
+            if mat.coarse_grained is not None:
+                out[name] = coarse.represented_bed(
+                    mat, mat.coarse_grained, th.gap_gas_conductivity,
+                    CoarseGrainedWall.reference_temperature(scene, name))
+        return out
+
+    @staticmethod
+    def tables_for(scene, tables) -> dict:
+        """(M, M) tables: [a, :] = alpha_WS (W/(m^2 K)) and e = rho_b c k_bed of material a's
+        represented bed, 0 where a is not coarse-grained."""
+        beds = CoarseGrainedWall.represented(scene)
+        m = len(tables.names)
+        alpha, effusivity = np.zeros((m, m)), np.zeros((m, m))
+        for a, name in enumerate(tables.names):
+            if name in beds:
+                alpha[a, :] = beds[name]["alpha_ws"]
+                effusivity[a, :] = beds[name]["effusivity_sq"]
+        return {"coarse_alpha_ws": alpha, "coarse_effusivity_sq": effusivity}
+
+    def table_values(self, scene, tables):
+        return self.tables_for(scene, tables)
+
+    def contact_func(self, engine):
+        s = engine.state
+        alpha_ws, effusivity_sq = engine.table["coarse_alpha_ws"], engine.table["coarse_effusivity_sq"]
+        reach = self.reach
+        thermal_dt = engine.dt * self.time_scale       # a step of thermal time (s)
+        area = coarse.MONOLAYER_AREA
+
+        @ti.func
+        def coarse_grained_wall(c, out):
+            a = alpha_ws[c.material_i, c.material_j]
+            if a > 0.0:
+                # 1 touching, to 0 at a gap of `reach` radii: no jump as the particle lifts off
+                weight = ti.min(1.0, 1.0 + c.normal_overlap / (ti.static(reach) * c.radius_i))
+                if weight > 0.0:
+                    i = c.particle
+                    s.wall_touch[i] = 1
+                    # the heat of this step: h at the middle of the step's thermal time
+                    age = (s.wall_contact_steps[i] + 0.5) * ti.static(thermal_dt)
+                    h = coarse.bed_coefficient(a, effusivity_sq[c.material_i, c.material_j], age)
+                    out.conductance += weight * h * ti.static(area) * c.radius_i * c.radius_i
+            return out
+
+        return coarse_grained_wall
+
+
+class WallContactAge(Effect):
+    """How many steps each coarse-grained particle has rested against a heat-exchanging wall
+    or body without a break (what CoarseGrainedWall's h(t) reads): counted on while it
+    touches, back to 0 the first step it does not."""
+
+    name = "wall_contact_age"
+    stage = "particle"
+
+    def particle_func(self, engine):
+        s = engine.state
+
+        @ti.func
+        def wall_contact_age(i, load):
+            if s.wall_touch[i] != 0:
+                s.wall_contact_steps[i] += 1
+                s.wall_touch[i] = 0
+            else:
+                s.wall_contact_steps[i] = 0
+            return load
+
+        return wall_contact_age
 
 
 class Convection(Effect):
@@ -582,15 +739,30 @@ def thermal_effects(scene) -> list:
                 th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model,
                 th.gas_gap_porosity))
     hot = [w.name for w in list(scene.walls) + list(scene.bodies) if w.temperature is not None]
+    coarse_names = sorted(n for n, m in scene.materials.items() if m.coarse_grained is not None)
     if th.wall_conduction and hot:
-        out.append(WallConduction("conduction to isothermal " + ", ".join(hot)))
+        but = (f" (not for {', '.join(coarse_names)}: coarse-grained)") if coarse_names else ""
+        out.append(WallConduction("conduction to isothermal " + ", ".join(hot) + but,
+                                  coarse_materials=bool(coarse_names)))
+        if coarse_names:
+            words = "; ".join(
+                f"{n} for {scene.materials[n].coarse_grained.represented_diameter * 1e6:g} um "
+                f"particles, bed porosity {scene.materials[n].coarse_grained.bed_porosity:g}"
+                for n in coarse_names)
+            out.append(CoarseGrainedWall(
+                f"coarse-grained particles to {', '.join(hot)} as the bed they stand for: "
+                f"Schlünder's contact coefficient in series with penetration for the time each "
+                f"has rested on the wall ({words}; reach {th.gas_gap_lens:g} R)",
+                th.gas_gap_lens, th.time_scale))
+            out.append(WallContactAge("the time each coarse-grained particle has rested "
+                                      "against a wall or body"))
         if th.gas_gap:
             out.append(GasGapWall(
                 f"conduction through the gas gap to {', '.join(hot)} (fluid lens "
                 f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
                 f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]})",
                 th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model,
-                th.gas_gap_porosity))
+                th.gas_gap_porosity, coarse_materials=bool(coarse_names)))
     gas = th.gas
     if gas is not None and not gas.plug_flow:
         out.append(Convection(f"convection to a {gas.model} gas at {gas.temperature:g} K "

@@ -604,6 +604,7 @@ class MeshContacts:
                                        wall_velocity, m.angular_velocity[body],
                                        body_temperature - temperature_i,
                                        1 if body_temperature >= 0.0 else 0)
+                    c.particle = i
                     out, history = triangle_law(c, history, dt)
                     if ti.static(heat_loads):
                         heat += out.heat
@@ -633,6 +634,7 @@ class MeshContacts:
                         c = sphere_surface(vec0, ri - nearest[bb], ri, vi, wi, ai, mass_i,
                                            inv_mi, inverse_inertia_i, mi, m.body_material[bb],
                                            vec0, vec0, body_temperature - temperature_i, 1)
+                        c.particle = i
                         out, _ = surface_law(c, History(tangential=vec0, rolling=vec0), dt)
                         heat += out.heat
                         conductance += out.conductance

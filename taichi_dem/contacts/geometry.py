@@ -30,13 +30,14 @@ def contact_types(real):
     ``Response``: force on i (N), torques on i and on the partner about their centres (N m),
     heat into i (W), conductance (W/K), and the normal force (N) and normal stiffness (N/m)
     that later effects (rolling) read. ``History``: the tangential spring (m) and the rolling
-    spring torque (N m) a contact carries from step to step."""
+    spring torque (N m) a contact carries from step to step. ``Contact.particle``: particle
+    i's index where a wall or body contact law needs its state (coarse_grained.py), else -1."""
     vec3 = ti.types.vector(3, real)
     contact = ti.types.struct(
         normal=vec3, normal_overlap=real, arm_i=real, arm_j=real, v_rel=vec3, w_rel=vec3,
         normal_acceleration=real, r_eff=real, m_eff=real, inertia_eff=real,
         rolling_inertia=real, radius_i=real, radius_j=real, material_i=ti.i32,
-        material_j=ti.i32, temperature_difference=real, conducts=ti.i32)
+        material_j=ti.i32, temperature_difference=real, conducts=ti.i32, particle=ti.i32)
     response = ti.types.struct(force=vec3, torque_i=vec3, torque_j=vec3, heat=real,
                                conductance=real, normal_force=real, normal_stiffness=real)
     history = ti.types.struct(tangential=vec3, rolling=vec3)
@@ -70,7 +71,7 @@ def make_geometry(real, thermal: bool):
             v_rel=vec0, w_rel=vec0, normal_acceleration=0.0 * ri,
             r_eff=ri * rj / (ri + rj), m_eff=0.0 * ri, inertia_eff=0.0 * ri,
             rolling_inertia=0.0 * ri, radius_i=ri, radius_j=rj, material_i=mi, material_j=mj,
-            temperature_difference=temperature_difference, conducts=1)
+            temperature_difference=temperature_difference, conducts=1, particle=-1)
 
     @ti.func
     def with_motion(c, vi, vj, wi, wj, ai, aj, inv_mi, inv_mj, inv_ii, inv_ij):
@@ -109,6 +110,6 @@ def make_geometry(real, thermal: bool):
             inertia_eff=1.0 / inv_ii,
             rolling_inertia=1.0 / rolling.rolling_inverse_inertia(inv_mi, inv_ii, ri),
             radius_i=ri, radius_j=0.0 * ri, material_i=mi, material_j=mj,
-            temperature_difference=temperature_difference, conducts=conducts)
+            temperature_difference=temperature_difference, conducts=conducts, particle=-1)
 
     return sphere_sphere, sphere_surface, sphere_sphere_gap, with_motion

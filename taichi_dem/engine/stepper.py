@@ -629,6 +629,7 @@ class Engine:
                             ti.static(walls[w][2]), vec0, vec0,
                             ti.static(wall_temperature[w]) - temperature_i,
                             ti.static(1 if isothermal else 0))
+                        c.particle = i
                         history = History(tangential=s.wall_tangential_history[i, w], rolling=vec0)
                         if ti.static(has_wall_rolling):
                             history.rolling = wall_rolling[i, w]

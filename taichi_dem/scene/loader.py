@@ -19,7 +19,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ..errors import SceneError
-from .model import (Body, Domain, Factory, Interaction, Material, Motion, Outlet, Output,
+from .model import (Body, CoarseGraining, Domain, Factory, Interaction, Material, Motion, Outlet, Output,
                     MobilitySettings, ParticleFill, PlaneWall, RadiusDistribution, RateSchedule, Region, Scene,
                     Sensor, SheetInlet, SimulationSettings, SpeedSchedule, GasSettings, ThermalSettings,
                     DragSettings)
@@ -65,7 +65,8 @@ SIMULATION_KEYS = ("end_time", "dt", "rayleigh_fraction", "gravity", "precision"
                    "max_particles")
 DOMAIN_KEYS = ("min", "max", "periodic")
 MATERIAL_KEYS = ("density", "youngs_modulus", "poisson_ratio", "thermal_conductivity",
-                 "heat_capacity", "emissivity", "real_youngs_modulus")
+                 "heat_capacity", "emissivity", "real_youngs_modulus", "coarse_grained")
+COARSE_GRAINED_KEYS = ("represented_diameter", "bed_porosity", "surface_coverage", "roughness")
 INTERACTION_KEYS = ("pair", "restitution", "friction", "rolling_friction", "model",
                     "rolling_damping")
 ROLLING_MODELS = ("constant_torque", "epsd")
@@ -283,6 +284,7 @@ class _Parser:
         sources = tuple(fills) + factories
         self.check_coverage(interactions, sources, walls, bodies)
         thermal = self.parse_thermal(doc["thermal"], sources, walls, bodies) if "thermal" in doc else None
+        self.check_coarse_grained(thermal, sources, walls, bodies)
         if thermal is None:
             for f in sources:
                 if f.moisture is not None:
@@ -798,9 +800,58 @@ class _Parser:
                     raise self.err(k, f"the real (unsoftened) modulus {x:g} Pa must be >= "
                                       f"youngs_modulus = {e:g} Pa")
                 kw["real_youngs_modulus"] = x
+            if "coarse_grained" in m:
+                kw["coarse_grained"] = self.parse_coarse_grained(m["coarse_grained"],
+                                                                 f"{key}.coarse_grained")
             out[name] = Material(name=name, density=density, youngs_modulus=e,
                                  poisson_ratio=nu, **kw)
         return out
+
+    def check_coarse_grained(self, thermal, sources, walls, bodies) -> None:
+        """A coarse_grained material must be a particle material, in a scene with [thermal]
+        whose wall conduction reaches a wall or body with a temperature: the law acts there
+        and nowhere else, so anything less would be a key that silently does nothing."""
+        used = {f.material for f in sources}
+        for w in list(walls) + list(bodies):
+            if self.materials[w.material].coarse_grained is not None and w.material not in used:
+                raise self.err(f"materials.{w.material}.coarse_grained",
+                               f"'{w.name}' is made of it: coarse graining describes particles "
+                               f"that stand for finer ones, not a wall")
+        for name in sorted(used):
+            if self.materials[name].coarse_grained is None:
+                continue
+            key = f"materials.{name}.coarse_grained"
+            if thermal is None:
+                raise self.err(key, "is a heat law: add a [thermal] section")
+            hot = [w for w in list(walls) + list(bodies) if w.temperature is not None]
+            if not (thermal.wall_conduction and hot):
+                raise self.err(key, "acts between particles and walls or bodies with a "
+                                    "temperature, and there is none with [thermal] "
+                                    "wall_conduction on: give a wall or body a temperature, "
+                                    "or drop coarse_grained")
+
+    def parse_coarse_grained(self, value: Any, key: str) -> CoarseGraining:
+        """[materials.NAME] coarse_grained = { represented_diameter, bed_porosity,
+        surface_coverage, roughness }."""
+        t = self.table(value, key, "an inline table { represented_diameter = ... }")
+        self.check_keys(t, key, COARSE_GRAINED_KEYS, required=("represented_diameter",))
+        kw: dict[str, Any] = {"represented_diameter": self.positive(
+            t["represented_diameter"], "length", f"{key}.represented_diameter")}
+        if "bed_porosity" in t:
+            x = self.positive(t["bed_porosity"], "dimensionless", f"{key}.bed_porosity")
+            if not 0.2 <= x <= 0.9:
+                raise self.err(f"{key}.bed_porosity", f"the porosity of the represented bed: "
+                                                      f"0.2 to 0.9, got {x:g}")
+            kw["bed_porosity"] = x
+        if "surface_coverage" in t:
+            x = self.positive(t["surface_coverage"], "dimensionless", f"{key}.surface_coverage")
+            if x > 1.0:
+                raise self.err(f"{key}.surface_coverage", f"the fraction of the wall the first "
+                                                          f"layer covers: at most 1, got {x:g}")
+            kw["surface_coverage"] = x
+        if "roughness" in t:
+            kw["roughness"] = self.nonnegative(t["roughness"], "length", f"{key}.roughness")
+        return CoarseGraining(**kw)
 
     def parse_interactions(self, items: list[dict]):
         out: dict[frozenset, Interaction] = {}

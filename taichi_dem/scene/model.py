@@ -37,6 +37,16 @@ class Domain:
 
 
 @dataclass(frozen=True)
+class CoarseGraining:
+    """[materials.NAME] coarse_grained: the particles stand for a bed of finer ones, and take
+    heat from walls and bodies as that bed would (thermal/coarse_grained.py)."""
+    represented_diameter: float          # m, the real particles' diameter
+    bed_porosity: float = 0.4            # of the real bed: its bulk density and conductivity
+    surface_coverage: float = 0.8        # Schlünder's phi_A, the wall's coverage by the first layer
+    roughness: float = 0.0               # m, Schlünder's delta, added to the mean free path
+
+
+@dataclass(frozen=True)
 class Material:
     name: str
     density: float                       # kg/m^3
@@ -46,6 +56,7 @@ class Material:
     heat_capacity: Optional[float] = None          # J/(kg K)
     emissivity: Optional[float] = None
     real_youngs_modulus: Optional[float] = None    # Pa, unsoftened (conduction correction)
+    coarse_grained: Optional[CoarseGraining] = None  # heat to walls as the represented bed
 
     @property
     def shear_modulus(self) -> float:

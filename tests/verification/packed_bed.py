@@ -21,25 +21,13 @@ import math
 import numpy as np
 
 import taichi_dem
+from thermal.correlations import zehner_schlunder  # re-exported: drum_wall_heat.py imports it here
 
 MATERIALS = {
     # name: (density kg/m^3, real Young's modulus Pa, Poisson, conductivity W/(m K), c J/(kg K))
     "glass": (2500.0, 63e9, 0.22, 1.0, 840.0),
     "steel": (7800.0, 200e9, 0.3, 45.0, 480.0),
 }
-
-
-def zehner_schlunder(k_solid: float, k_gas: float, porosity: float) -> float:
-    """Zehner-Bauer-Schlünder effective conductivity of a packed bed of spheres without
-    radiation, flattening or the Smoluchowski effect (VDI Heat Atlas D6.3, eq. for k_c with
-    B = 1.25 ((1 - eps)/eps)^(10/9)), W/(m K)."""
-    lam = k_solid / k_gas
-    b = 1.25 * ((1.0 - porosity) / porosity) ** (10.0 / 9.0)
-    n = 1.0 - b / lam
-    k_c = 2.0 / n * (b * (lam - 1.0) / (n * n * lam) * math.log(lam / b)
-                     - (b + 1.0) / 2.0 - (b - 1.0) / n)
-    root = math.sqrt(1.0 - porosity)
-    return k_gas * ((1.0 - root) + root * k_c)
 
 
 def scene_text(material: str, radius: float, count: int, width: float, lens: float,
