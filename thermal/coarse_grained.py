@@ -25,7 +25,9 @@ wall element warmed when the paddles or the drum renew it.
     alpha_WS = phi_A alpha_WP + (1 - phi_A) 2 k_g / (sqrt(2) d + 2 (l + delta))   Schlünder's
     first-layer coefficient of particles of the represented diameter d (correlations.py)
     rho_b = rho_s (1 - eps), k_bed = Zehner-Bauer-Schlünder (k_s, k_g, eps) of the real bed
-    A_p = 2 sqrt(3) R^2: the wall area per particle of a hexagonal monolayer of radius R
+    A_p = pi R^2 / phi_A: the wall area per particle of the first layer, at the coverage
+        phi_A (``surface_coverage``, 0.8) that alpha_WS assumes (a random monolayer of spheres
+        at a wall covers about 0.8 of it; a hexagonal one 0.91)
     w = 1 touching, falling linearly to 0 at a gap of ``reach`` R (no jump as a particle
     lifts off)
 
@@ -44,8 +46,12 @@ import taichi as ti
 from .correlations import erfcx as erfcx_reference
 from .correlations import wall_contact_coefficient, zehner_schlunder
 
-# the wall area per particle of a hexagonal monolayer (m^2 per R^2)
-MONOLAYER_AREA = 2.0 * math.sqrt(3.0)
+
+
+def wall_area_per_particle(radius: float, coverage: float) -> float:
+    """A_p = pi R^2 / phi_A (m^2): the wall area each first-layer particle of radius R (m)
+    stands for at the coverage phi_A."""
+    return math.pi * radius * radius / coverage
 
 # Numerical Recipes' Chebyshev fit of erfc (Press et al., "erfcc", fractional error below
 # 1.2e-7 for every x >= 0): erfc(x) = t exp(-x^2 + P(t)), t = 1/(1 + x/2), so exp(x^2) erfc(x)
@@ -98,9 +104,9 @@ def represented_bed(material, coarse, k_gas: float, temperature: float) -> dict:
     density = material.density * (1.0 - coarse.bed_porosity)
     k_bed = zehner_schlunder(material.thermal_conductivity, k_gas, coarse.bed_porosity)
     return {"alpha_ws": ws["alpha_ws"], "free_path": ws["free_path"], "bed_density": density,
-            "bed_conductivity": k_bed,
+            "bed_conductivity": k_bed, "area_over_r2": math.pi / coarse.surface_coverage,
             "effusivity_sq": density * material.heat_capacity * k_bed}
 
 
-__all__ = ["MONOLAYER_AREA", "erfcx", "bed_coefficient", "bed_coefficient_reference",
+__all__ = ["wall_area_per_particle", "erfcx", "bed_coefficient", "bed_coefficient_reference",
            "bed_heat_reference", "represented_bed"]

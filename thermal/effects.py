@@ -365,7 +365,7 @@ class CoarseGrainedWall(Effect):
     name = "coarse_grained_wall"
     stage = "contact"
     kinds = ("plane", "surface")
-    tables = ("coarse_alpha_ws", "coarse_effusivity_sq")
+    tables = ("coarse_alpha_ws", "coarse_effusivity_sq", "coarse_area_over_r2")
     particle_fields = {"wall_contact_steps": (False, "int"), "wall_touch": (False, "int")}
 
     def __init__(self, description, reach, time_scale):
@@ -401,15 +401,18 @@ class CoarseGrainedWall(Effect):
     @staticmethod
     def tables_for(scene, tables) -> dict:
         """(M, M) tables: [a, :] = alpha_WS (W/(m^2 K)) and e = rho_b c k_bed of material a's
-        represented bed, 0 where a is not coarse-grained."""
+        represented bed and its wall area per particle A_p / R^2 = pi / phi_A, 0 where a is
+        not coarse-grained."""
         beds = CoarseGrainedWall.represented(scene)
         m = len(tables.names)
-        alpha, effusivity = np.zeros((m, m)), np.zeros((m, m))
+        alpha, effusivity, area = np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m))
         for a, name in enumerate(tables.names):
             if name in beds:
                 alpha[a, :] = beds[name]["alpha_ws"]
                 effusivity[a, :] = beds[name]["effusivity_sq"]
-        return {"coarse_alpha_ws": alpha, "coarse_effusivity_sq": effusivity}
+                area[a, :] = beds[name]["area_over_r2"]
+        return {"coarse_alpha_ws": alpha, "coarse_effusivity_sq": effusivity,
+                "coarse_area_over_r2": area}
 
     def table_values(self, scene, tables):
         return self.tables_for(scene, tables)
@@ -417,9 +420,9 @@ class CoarseGrainedWall(Effect):
     def contact_func(self, engine):
         s = engine.state
         alpha_ws, effusivity_sq = engine.table["coarse_alpha_ws"], engine.table["coarse_effusivity_sq"]
+        area_over_r2 = engine.table["coarse_area_over_r2"]
         reach = self.reach
         thermal_dt = engine.dt * self.time_scale       # a step of thermal time (s)
-        area = coarse.MONOLAYER_AREA
 
         @ti.func
         def coarse_grained_wall(c, out):
@@ -433,7 +436,8 @@ class CoarseGrainedWall(Effect):
                     # the heat of this step: h at the middle of the step's thermal time
                     age = (s.wall_contact_steps[i] + 0.5) * ti.static(thermal_dt)
                     h = coarse.bed_coefficient(a, effusivity_sq[c.material_i, c.material_j], age)
-                    out.conductance += weight * h * ti.static(area) * c.radius_i * c.radius_i
+                    area = area_over_r2[c.material_i, c.material_j] * c.radius_i * c.radius_i
+                    out.conductance += weight * h * area
             return out
 
         return coarse_grained_wall

@@ -49,9 +49,15 @@ def scene_text(*, drum_radius=0.05, length=0.008, radius=1e-3, count=1000, rpm_m
                t_wall=373.15, softened_modulus=5e6, segments=72, time_scale=1.0,
                lens=0.2, min_gap=1e-6, k_gas=0.0262, model="solid_resistance",
                friction=0.5, wall_friction=0.5, rolling_friction=0.02, restitution=0.5,
-               output_interval=0.05, rayleigh_fraction=0.3, dt=None, seed=1) -> str:
+               output_interval=0.05, rayleigh_fraction=0.3, dt=None, seed=1,
+               represented_diameter=None) -> str:
     g, s = GLASS, STEEL
     step = "" if dt is None else f"dt = {dt!r}\n"
+    # coarse graining: the beads stand for finer ones (thermal/coarse_grained.py), the bed's
+    # porosity that of the DEM's packed bed
+    coarse = ("" if represented_diameter is None else
+              f"coarse_grained = {{ represented_diameter = {represented_diameter!r}, "
+              f"bed_porosity = {PACKED_BED_POROSITY!r} }}\n")
     box = drum_radius * 1.05
     return f"""
 [simulation]
@@ -71,7 +77,7 @@ real_youngs_modulus = {g['youngs']!r}
 poisson_ratio = {g['poisson']!r}
 thermal_conductivity = {g['k']!r}
 heat_capacity = {g['c']!r}
-[materials.steel]
+{coarse}[materials.steel]
 density = {s['density']!r}
 youngs_modulus = {softened_modulus!r}
 real_youngs_modulus = {s['youngs']!r}
@@ -142,7 +148,7 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
                    time_scale=1.0, settle=1.0, startup=None, measure=None, t_wall=373.15,
                    t_bed=293.15, model="solid_resistance", softened_modulus=5e6,
                    rolling_friction=0.02, segments=72, output_interval=0.05, threads=1,
-                   dt=None, seed=1, verbose=False) -> dict:
+                   dt=None, seed=1, verbose=False, represented_diameter=None) -> dict:
     """Run the experiment at thermal speed ``rpm`` (the mechanics turn at time_scale x rpm).
 
     settle: s of simulated time rolling before the bed is made cold; startup: s after that
@@ -163,7 +169,7 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
                       rpm_mech=rpm_mech, t_wall=t_wall, softened_modulus=softened_modulus,
                       segments=segments, time_scale=time_scale, model=model,
                       rolling_friction=rolling_friction, output_interval=output_interval,
-                      dt=dt, seed=seed)
+                      dt=dt, seed=seed, represented_diameter=represented_diameter)
     t0 = _time.perf_counter()
     with taichi_dem.Simulation.from_text(text, precision="f64", threads=threads) as sim:
         sim.run(settle)
@@ -317,10 +323,14 @@ if __name__ == "__main__":
     ap.add_argument("--startup", type=float, default=1.2)
     ap.add_argument("--measure", type=float, default=0.6)
     ap.add_argument("--dt", type=float, default=None)
+    ap.add_argument("--radius", type=float, default=1e-3, help="bead radius (m)")
+    ap.add_argument("--represented-diameter", type=float, default=None,
+                    help="coarse graining: the beads stand for beads of this diameter (m)")
     ap.add_argument("--json", default="")
     a = ap.parse_args()
     kw = dict(rpm=a.rpm, time_scale=a.time_scale, fill=a.fill, length=a.length, model=a.model,
-              settle=a.settle, startup=a.startup, measure=a.measure, dt=a.dt)
+              settle=a.settle, startup=a.startup, measure=a.measure, dt=a.dt, radius=a.radius,
+              represented_diameter=a.represented_diameter)
     r = drum_wall_heat(**kw)
     r["kwargs"] = kw
     if a.json:

@@ -183,7 +183,7 @@ def test_represented_bed_is_schlunders_first_layer_and_zbs():
 def _expected_temperature(time):
     bed = _bed()
     mass = RHO * 4.0 / 3.0 * math.pi * R ** 3
-    area = cg.MONOLAYER_AREA * R * R
+    area = cg.wall_area_per_particle(R, 0.8)
     heat = cg.bed_heat_reference(bed["alpha_ws"], bed["effusivity_sq"], time)
     return T_W + (T_0 - T_W) * math.exp(-area * heat / (mass * C))
 
@@ -223,7 +223,7 @@ def test_weight_falls_with_the_gap_and_ends_at_the_reach(tmp_path, gap_over_r, b
     dt = 1e-4
 
     def law(age):
-        return (weight * cg.MONOLAYER_AREA * R * R * (T_0 - T_W)
+        return (weight * cg.wall_area_per_particle(R, 0.8) * (T_0 - T_W)
                 * cg.bed_coefficient_reference(bed["alpha_ws"], bed["effusivity_sq"], age))
     if body:
         # a body's series is the mean over the output interval (sensors/loads.py): of the
@@ -252,7 +252,7 @@ def test_the_big_spheres_own_wall_laws_stay_off_for_coarse_particles_only(tmp_pa
     both_plain = run(False)          # two big spheres, spot + gas gap each
     mixed = run(True)
     bed = _bed(1e12)
-    law = cg.MONOLAYER_AREA * R * R * cg.bed_coefficient_reference(
+    law = cg.wall_area_per_particle(R, 0.8) * cg.bed_coefficient_reference(
         bed["alpha_ws"], bed["effusivity_sq"], 0.05 - 0.5e-4) * (T_0 - T_W)
     # by symmetry each plain sphere carried half of both_plain
     assert mixed == pytest.approx(0.5 * both_plain + law, rel=1e-6)
@@ -277,3 +277,45 @@ def test_coarse_grained_without_a_hot_wall_is_refused(tmp_path):
     text = "\n".join(x for x in text.splitlines() if not x.startswith(("gas_gap", "gap_gas")))
     with pytest.raises(SceneError, match="coarse_grained"):
         taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path))
+
+
+# --- a rotating drum of coarse-grained glass beads against Schlünder-Mollekopf -------------
+#
+# The experiment of tests/verification/drum_wall_heat.py (0.1 m drum slice, periodic, 15 %
+# fill, a 72-sided shell at 100 C, the bed switched to 20 C once it rolls, mechanics at 12 rpm
+# with time_scale 2: the thermal contact time of 6 rpm), with 4 mm beads that stand for 2 mm
+# ones (coarse graining x2). The model for 2 mm glass beads (the same function and inputs as
+# test_drum_wall_heat.py) gives 147 W/(m^2 K) at the run's measured wetted angle; without the
+# law, the default gas-gap law gives the real 2 mm beads 0.57 x of it (test_drum_wall_heat.py).
+#
+# Measured (docs/verification/drum_wall_heat.md "Coarse-grained beads"): 117.7 W/(m^2 K) over the
+# wetted arc (0.80 x), 163.4 over the touched triangles (1.11 x; the 4 mm beads leave 27 % of
+# the triangles under the bed untouched at a sample, so that area under-reads here). Asserted:
+# both within 25 % of the model (the same budget as test_drum_wall_heat.py: the model's own
+# uncertainty ~20 %; here the coarse bed adds that beads arrive at the wall from a bed only ~4
+# beads deep, warmer than its mean, and the lumped first layer: at 6 rpm the penetration depth
+# sqrt(pi a t_c) = 1.1 mm is half a bead's radius). At 2 rpm (t_c 9 s: a depth of 2 mm, the bead's
+# radius, where the law's lumping limit bites) the arc value is 0.73 x: documented, not asserted.
+
+
+@pytest.fixture(scope="module")
+def coarse_drum():
+    from drum_wall_heat import drum_wall_heat, models
+    r = drum_wall_heat(rpm=6.0, time_scale=2.0, radius=0.002, length=0.016, fill=0.15,
+                       settle=0.8, startup=1.2, measure=0.6, represented_diameter=0.002)
+    r["kwargs"] = {"model": "solid_resistance"}
+    model = models(r, radius=1e-3)["physical"]
+    print(f"\n  coarse-grained drum, 6 rpm: DEM {r['h']:.1f} (arc {r['h_arc']:.1f}) W/(m^2 K), "
+          f"model {model['alpha']:.1f}; wetted angle {math.degrees(r['wetted_angle']):.0f} deg, "
+          f"t_c {r['contact_time']:.2f} s, {r['wall_seconds']:.0f} s wall")
+    return r, model
+
+
+@pytest.mark.slow
+def test_coarse_grained_drum_against_schlunder_mollekopf(coarse_drum):
+    r, model = coarse_drum
+    assert r["lost"] == 0 and r["froude_mech"] < 0.01
+    assert r["h_arc"] == pytest.approx(model["alpha"], rel=0.25)
+    assert r["h"] == pytest.approx(model["alpha"], rel=0.25)
+    # the first layer barely warms (the law's premise): its bed part is > 10 x its contact part
+    assert r["h_bed"] > 10.0 * r["h_contact"]
