@@ -74,24 +74,26 @@ def main(argv=None):
                     help="the state at t = 45 s (written if missing)")
     ap.add_argument("--steps", type=int, default=4000, help="steps per window (full)")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--scene", default=SCENE, help="another scene file (default the demo's)")
     args = ap.parse_args(argv)
+    scene = args.scene
     if args.phase == "filling":
         rows = []
         for _ in range(args.repeats):
-            with taichi_dem.Simulation.from_toml(SCENE, h5="") as sim:
+            with taichi_dem.Simulation.from_toml(scene, h5="") as sim:
                 sim.run(2.0)
                 rows.append(window(sim, lambda: sim.run(8.0)))
                 n = sim.particle_count
         report(rows, n)
         return
     if not os.path.exists(args.state):
-        with taichi_dem.Simulation.from_toml(SCENE, h5="") as sim:
+        with taichi_dem.Simulation.from_toml(scene, h5="") as sim:
             t = time.perf_counter()
             sim.run(45.0)
             print(f"ran the demo scene to 45 s in {time.perf_counter() - t:.0f} s; "
                   f"state written to {args.state}", flush=True)
             checkpoint.write(args.state, checkpoint.capture(sim))
-    sim = taichi_dem.Simulation.from_toml(SCENE, h5="")
+    sim = taichi_dem.Simulation.from_toml(scene, h5="")
     checkpoint.restore(sim, checkpoint.load(args.state))
     sim.step(2000)                      # JIT, first rebuilds
     rows = [window(sim, lambda: sim.step(args.steps)) for _ in range(args.repeats)]
