@@ -45,9 +45,13 @@ def run(seed: int, heat: dict | None = None) -> tuple[float, float, int]:
 
 if __name__ == "__main__":
     seeds = [int(a) for a in sys.argv[1:]] or [1, 2, 3]
-    rows = [run(s) for s in seeds]
-    for s, (t, r, n) in zip(seeds, rows):
-        print(f"seed {s}: axial torque {t:.4g} N m, median residence {r:.4g} s ({n} particles)")
+    heats = [{} for _ in seeds]
+    rows = [run(s, h) for s, h in zip(seeds, heats)]
+    for s, (t, r, n), h in zip(seeds, rows, heats):
+        print(f"seed {s}: axial torque {t:.4g} N m, median residence {r:.4g} s ({n} particles), "
+              f"shell heat flow {h['shell_heat_flow']:.5g} W")
+    q = np.array([h["shell_heat_flow"] for h in heats])
+    print(f"shell heat flow mean {q.mean():.5g} std {q.std(ddof=1) if len(q) > 1 else 0:.3g}")
     t = np.array([r[0] for r in rows])
     r = np.array([r[1] for r in rows])
     print(f"torque mean {t.mean():.4g} std {t.std(ddof=1) if len(t) > 1 else 0:.3g}; "
