@@ -247,6 +247,11 @@ def test_the_big_spheres_own_wall_laws_stay_off_for_coarse_particles_only(tmp_pa
         text = _scene(tmp_path, [(0.0, 0.0, R * (1 - 1e-4))], end=0.05, heat_capacity=1e12,
                       other=(0.05, 0.05, R * (1 - 1e-4)), coarse=coarse)
         with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
+            names = {e.name for e in sim.effects}
+            held = hasattr(sim.engine.state, "wall_contact_steps")
+            # without the key nothing of the law is compiled or allocated
+            assert ("coarse_grained_wall" in names) == coarse == held
+            assert ("coarse_alpha_ws" in sim.engine.table) == coarse
             sim.run()
             return abs(sim.series["walls/plate/heat_flow"][-1])
     both_plain = run(False)          # two big spheres, spot + gas gap each
