@@ -47,11 +47,11 @@ from .correlations import erfcx as erfcx_reference
 from .correlations import wall_contact_coefficient, zehner_schlunder
 
 
-
 def wall_area_per_particle(radius: float, coverage: float) -> float:
     """A_p = pi R^2 / phi_A (m^2): the wall area each first-layer particle of radius R (m)
     stands for at the coverage phi_A."""
     return math.pi * radius * radius / coverage
+
 
 # Numerical Recipes' Chebyshev fit of erfc (Press et al., "erfcc", fractional error below
 # 1.2e-7 for every x >= 0): erfc(x) = t exp(-x^2 + P(t)), t = 1/(1 + x/2), so exp(x^2) erfc(x)
@@ -98,13 +98,14 @@ def represented_bed(material, coarse, k_gas: float, temperature: float) -> dict:
     """What the law needs of a coarse-grained material (a scene Material with its
     ``coarse_grained`` settings): alpha_WS (W/(m^2 K)) of particles of the represented diameter
     at ``temperature`` (K, for the gas's mean free path), the bed's density rho_b (kg/m^3),
-    conductivity k_bed (W/(m K)) and e = rho_b c k_bed."""
+    conductivity k_bed (W/(m K)), e = rho_b c k_bed, and A_p / R^2 (the kernel's factor)."""
     ws = wall_contact_coefficient(coarse.represented_diameter, k_gas, temperature,
                                   roughness=coarse.roughness, coverage=coarse.surface_coverage)
     density = material.density * (1.0 - coarse.bed_porosity)
     k_bed = zehner_schlunder(material.thermal_conductivity, k_gas, coarse.bed_porosity)
     return {"alpha_ws": ws["alpha_ws"], "free_path": ws["free_path"], "bed_density": density,
-            "bed_conductivity": k_bed, "area_over_r2": math.pi / coarse.surface_coverage,
+            "bed_conductivity": k_bed,
+            "area_over_r2": wall_area_per_particle(1.0, coarse.surface_coverage),
             "effusivity_sq": density * material.heat_capacity * k_bed}
 
 

@@ -943,6 +943,15 @@ class Engine:
         mobility = self.mobility is not None
         active = self.mobility.particle_active if mobility else None
         C = InsertColumn
+        # what effects keep per particle beyond what is inserted (a coarse-grained particle's
+        # wall-contact clock): zero, not what a removed particle left in the slot
+        inserted = {"temperature", "temperature_residual", "inverse_thermal_mass", "moisture",
+                    "moisture_residual"}
+        fresh = {}
+        for e in self.effect_list:
+            fresh.update({n: v for n, (v, _) in e.particle_fields.items() if n not in inserted})
+        fresh_scalars = [getattr(s, n) for n, vec in fresh.items() if not vec]
+        fresh_vectors = [getattr(s, n) for n, vec in fresh.items() if vec]
 
         @ti.kernel
         def insert(start: ti.i32, k: ti.i32, reals: ti.types.ndarray(dtype=ti.f64, ndim=2),
@@ -993,6 +1002,10 @@ class Engine:
                 # the slot may hold what a removed particle left: no rows, no history, no loads
                 s.row_owned[i] = 0
                 s.row_count[i] = 0
+                for f in ti.static(fresh_scalars):
+                    f[i] = 0
+                for f in ti.static(fresh_vectors):
+                    f[i] = ti.Vector([0.0, 0.0, 0.0])
                 for f in ti.static(wall_fields):
                     for w in ti.static(range(n_walls)):
                         f[i, w] = ti.Vector([0.0, 0.0, 0.0])

@@ -145,9 +145,18 @@ def _bed(heat_capacity=C):
     return cg.represented_bed(_Material, _Coarse, K_G, 0.5 * (T_0 + T_W))
 
 
+class _Owner:
+    """Stands for a simulation on the shared runtime (engine/backend.py: the one ti.init)."""
+
+    def _mark_stale(self, reason):
+        pass
+
+
 def test_bed_coefficient_and_its_limits():
     import taichi as ti
-    ti.init(arch=ti.cpu, default_fp=ti.f64)
+    from taichi_dem.engine import backend
+    owner = _Owner()
+    backend.acquire(owner, "cpu", "f64")
     ages = np.array([0.0, 1e-6, 1e-3, 0.1, 1.0, 10.0, 1e3, 1e6])
     out = ti.field(ti.f64, len(ages))
     a, e = 3000.0, 870.0 * 0.55 * 800.0 * 0.12
@@ -324,3 +333,34 @@ def test_coarse_grained_drum_against_schlunder_mollekopf(coarse_drum):
     assert r["h"] == pytest.approx(model["alpha"], rel=0.25)
     # the first layer barely warms (the law's premise): its bed part is > 10 x its contact part
     assert r["h_bed"] > 10.0 * r["h_contact"]
+
+
+def test_an_inserted_particle_starts_with_no_wall_contact_age(tmp_path):
+    # a factory reuses the slot of a removed particle: the wall-contact clock must start at 0,
+    # not at what the slot held (else the new particle's first wall contact would count as old)
+    text = _scene(tmp_path, [(0.0, 0.0, R * (1 - 1e-4))], end=0.1) + f"""
+[[factories]]
+name = "inlet"
+material = "ash"
+radius = {R}
+region = {{ box = {{ min = [0.03, 0.03, 0.03], max = [0.07, 0.07, 0.07] }} }}
+velocity = [0.0, 0.0, 0.0]
+temperature = {T_0}
+mass_rate = [[0.0, "0.01 t/h"]]
+"""
+    with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
+        engine = sim.engine
+        s = engine.state
+        n = engine.count
+        steps, touch = s.wall_contact_steps.to_numpy(), s.wall_touch.to_numpy()
+        steps[n], touch[n] = 12345, 1                   # left by a removed particle
+        s.wall_contact_steps.from_numpy(steps)
+        s.wall_touch.from_numpy(touch)
+        mass = RHO * 4.0 / 3.0 * math.pi * R ** 3
+        engine.insert({"position": np.array([[0.05, 0.05, 0.05]]), "velocity": np.zeros((1, 3)),
+                       "radius": np.array([R]), "mass": np.array([mass]),
+                       "material": np.array([0]), "key": np.array([n]), "serial": np.array([n]),
+                       "origin": np.array([0]), "birth_time": np.array([0.0]),
+                       "temperature": np.array([T_0]),
+                       "inverse_thermal_mass": np.array([1.0 / (mass * C)])})
+        assert s.wall_contact_steps.to_numpy()[n] == 0 and s.wall_touch.to_numpy()[n] == 0
