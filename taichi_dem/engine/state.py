@@ -152,6 +152,14 @@ class ParticleState:
             # heat flow (W) of the owned pairs; sum of the conductances (W/K) of the last step
             self.owned_heat = t.add("owned_heat", real, capacity)
             self.conductance = t.add("conductance", real, capacity)
+        # the serial mode's partner shares (Engine: ``scatter``): the owner adds its partner's
+        # force (N), torque (N m), heat (W) and conductance (W/K) here directly - one thread,
+        # no race - and the particle stage reads and clears them; zero between steps
+        self.scattered_force = t.add("scattered_force", real, capacity, vector=True)
+        self.scattered_torque = t.add("scattered_torque", real, capacity, vector=True)
+        if thermal:
+            self.scattered_heat = t.add("scattered_heat", real, capacity)
+            self.scattered_conductance = t.add("scattered_conductance", real, capacity)
         self.cell = t.add("cell", ti.i32, capacity)
         self.order = t.add("order", ti.i32, capacity)
         self.inverse_order = t.add("inverse_order", ti.i32, capacity)

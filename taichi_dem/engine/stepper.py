@@ -105,6 +105,10 @@ class Engine:
         # integration; "body_frame" carries them with that body (its index, else -1)
         self.mobility = by_name.get("mobility")
         self.mobility_frame = -1
+        # the serial mode's pair stage adds partner shares to the partner directly, with no
+        # mirror index and no gather through it (one thread: no race); [mobility] keeps the
+        # entries (its frozen pairs re-use their stored shares)
+        self.scatter_ok = self.mobility is None
         if self.mobility is not None and scene.mobility.mode == "body_frame":
             self.mobility_frame = [b.name for b in scene.bodies].index(scene.mobility.body)
         self.trees: list[FieldTree] = []
@@ -428,6 +432,9 @@ class Engine:
         # it there is a load on that body (booked in the gather); its inner contacts cancel in
         # that sum and are left out of both sides
         core_internal = mobility and self.mobility_frame >= 0
+        # one thread (the serial mode) adds each pair's partner share to the partner directly
+        # (Engine.scatter); [mobility]'s frozen and carried pairs read theirs at the entries
+        scatter_ok = self.scatter_ok
 
         @ti.func
         def pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
@@ -450,9 +457,10 @@ class Engine:
             return c
 
         @ti.func
-        def pair_particle(i, dt, full):
+        def pair_particle(i, dt, full, scatter: ti.template()):
             """The owned contacts of particle i in one step: their geometry, the contact law,
-            the owner's sums and the partner's shares stored at the entry (no atomics).
+            the owner's sums and the partner's shares - stored at the entry (no atomics), or
+            with ``scatter`` (one thread only) added to the partner's ``scattered_*`` sums.
             ``full`` = 1 (the step of a rebuild): every pair; 0: [mobility] pairs of two
             inactive particles keep their force, torque and history (their heat flows through
             the kept conductance)."""
@@ -505,8 +513,12 @@ class Engine:
                     if ti.static(pair_heat):
                         owned_heat += out.heat
                         owned_conductance += out.conductance
-                        p.partner_heat[k] = -out.heat
-                        p.pair_conductance[k] = out.conductance
+                        if ti.static(scatter):
+                            s.scattered_heat[j] = s.scattered_heat[j] - out.heat
+                            s.scattered_conductance[j] = s.scattered_conductance[j] + out.conductance
+                        else:
+                            p.partner_heat[k] = -out.heat
+                            p.pair_conductance[k] = out.conductance
                     if c.normal_overlap > 0.0:
                         inner = False
                         if ti.static(core_internal):
@@ -514,8 +526,12 @@ class Engine:
                         if not inner:
                             owned_force += out.force
                             owned_torque += out.torque_i
-                        p.partner_force[k] = -out.force
-                        p.partner_torque[k] = out.torque_j
+                        if ti.static(scatter):
+                            s.scattered_force[j] = s.scattered_force[j] - out.force
+                            s.scattered_torque[j] = s.scattered_torque[j] + out.torque_j
+                        else:
+                            p.partner_force[k] = -out.force
+                            p.partner_torque[k] = out.torque_j
                         p.tangential_history[k] = history.tangential
                         if ti.static(epsd):
                             p.rolling_history[k] = history.rolling
@@ -545,7 +561,7 @@ class Engine:
             """pair_particle over the particles; ``serial_loops``: one thread (Engine.serial)."""
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                pair_particle(i, dt, full)
+                pair_particle(i, dt, full, ti.static(serial_loops and scatter_ok))
 
         frame = self.mobility_frame
         loads = self.mesh if core_internal else None
@@ -567,11 +583,26 @@ class Engine:
                                                     + lever.cross(residual) + torque)
 
         @ti.func
-        def gather_particle(i, dt, record, then_drift, t_next):
-            """The rest of particle i's step: its partners' shares through the mirror index,
-            its plane walls and mesh triangles, the particle effects, the integrate stage
-            and the second half kick; ``then_drift``: the next step's drift to ``t_next``
-            too. A particle removed since the last rebuild is parked and inert."""
+        def gather_particle(i, dt, record, then_drift, t_next, scatter: ti.template()):
+            """The rest of particle i's step: its partners' shares through the mirror index
+            (``scatter``: from its ``scattered_*`` sums, which it clears), its plane walls and
+            mesh triangles, the particle effects, the integrate stage and the second half kick;
+            ``then_drift``: the next step's drift to ``t_next`` too. A particle removed since
+            the last rebuild is parked and inert."""
+            scattered_force = vec0
+            scattered_torque = vec0
+            scattered_heat = 0.0
+            scattered_conductance = 0.0
+            if ti.static(scatter):
+                scattered_force = s.scattered_force[i]
+                scattered_torque = s.scattered_torque[i]
+                s.scattered_force[i] = vec0
+                s.scattered_torque[i] = vec0
+                if ti.static(pair_heat):
+                    scattered_heat = s.scattered_heat[i]
+                    scattered_conductance = s.scattered_conductance[i]
+                    s.scattered_heat[i] = 0.0
+                    s.scattered_conductance[i] = 0.0
             if s.alive[i] != 0:
                 force = s.owned_force[i]
                 torque = s.owned_torque[i]
@@ -583,7 +614,14 @@ class Engine:
                 if ti.static(thermal):
                     heat = s.owned_heat[i]
                     conductance = s.conductance[i]
-                if integrates:
+                if ti.static(scatter):
+                    # (no [mobility] here: every particle integrates)
+                    force += scattered_force
+                    torque += scattered_torque
+                    if ti.static(pair_heat):
+                        heat += scattered_heat
+                        conductance += scattered_conductance
+                elif integrates:
                     # one pass over the partners' entries for their shares of force and heat
                     for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
                         m = p.mirror[k]
@@ -687,7 +725,8 @@ class Engine:
                    serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                gather_particle(i, dt, record, then_drift, t_next)
+                gather_particle(i, dt, record, then_drift, t_next,
+                                ti.static(serial_loops and scatter_ok))
 
         self._pair_forces = self.serial_switch(pair_forces)
         self._gather = self.serial_switch(gather)
@@ -729,14 +768,14 @@ class Engine:
                 if j == 0:
                     full = full_first
                 for i in range(n):
-                    pair_particle(i, dt, full)
+                    pair_particle(i, dt, full, ti.static(scatter_ok))
                 for cell_stage in ti.static(cell_funcs):
                     cell_stage(n, dt)
                 then_drift = 1
                 if last:
                     then_drift = drift_last
                 for i in range(n):
-                    gather_particle(i, dt, record, then_drift, t + dt_time)
+                    gather_particle(i, dt, record, then_drift, t + dt_time, ti.static(scatter_ok))
                 done += 1
             return done
 
