@@ -14,18 +14,23 @@ Checks:
   inactive once the flow runs (measured: 0 at every later sample), so this is a test of the
   opening, not of frozen dead zones;
   (the speed-up itself is measured in BENCHMARKS.md, never asserted: the machine is shared);
-* the discharge mass flow with mobility on is within 3 % of the flow with it off. Why 3 %: the
+* the discharge mass flow with mobility on is within 6 % of the flow with it off. Why 6 %: the
   two runs start from the same bed but diverge chaotically, so their difference is the
-  run-to-run spread of the rate. The poster's spread over its 7 runs (13,580 beads per core) is
-  0.25 - 0.33 g/s of 92.4 (0.3 %, 0.7 % at worst); the spread of a fitted rate falls as one over
-  the square root of the beads discharged in the fit window, which is about 50 times smaller
-  here (~450 beads against the poster's tens of thousands), so ~0.3 % x 7 = 2 %, and 3 % allows
-  for the shorter window.
+  run-to-run spread of the rate. Measured (2026-12-02, this file's parameters): the settled bed
+  moved by 1e-9 m (round-off) at random, five times, and each bed discharged with mobility off
+  (six runs: 78.17 - 81.24 g/s, std 1.11) and on (four runs: 79.40 - 82.27, std 1.19): one
+  run's rate scatters by 1.45 % (pooled), the difference of two runs by sqrt(2) x 1.45 = 2.0 %,
+  and 6 % is three of those. (Only the mean difference, 80.71 against 79.67 g/s, +1.3 %, is
+  a statement about mobility: within 1.4 standard errors of zero. A tolerance of 3 % failed
+  when a change of the order of floating-point additions alone - partner shares summed in
+  another order - moved the rate off by 2.3 %.) A bed that stayed frozen over the slot would
+  not flow at that rate at all.
 
 MEASURED (this file's parameters, f32, 2-core shared machine, 2026-12-01, 39 - 60 s): settled
 bed 1276 of 1750 inactive, 544 still inactive when the slot opened, none at any later sample;
 discharge 80.26 g/s off, 79.34 g/s on (-1.15 %): a difference that comes from the first 5 ms
-alone, i.e. the chaotic spread this tolerance is sized for.
+alone, i.e. the chaotic spread this tolerance is sized for. 2026-12-02 (the serial mode's
+partner shares added directly, engine/stepper.py): 79.00 g/s off, 82.27 on (+4.1 %).
 """
 import pytest
 
@@ -57,4 +62,4 @@ def test_slot_hopper_flow_with_and_without_mobility(tmp_path):
     # the empty cells under it), else the flow starts late or never
     assert inactive[0] > 0.1 * n, inactive
     assert rate_off > 0.0
-    assert rate_on == pytest.approx(rate_off, rel=0.03), (rate_on, rate_off, window)
+    assert rate_on == pytest.approx(rate_off, rel=0.06), (rate_on, rate_off, window)
