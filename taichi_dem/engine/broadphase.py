@@ -345,7 +345,6 @@ class Broadphase:
         p = pairs
         # the state each contact carries (declared by the effects), with its previous copy
         carried = [(getattr(p, n), getattr(p, "old_" + n)) for n in p.contact_field_names]
-        scatter = self.e.scatter_ok      # the serial mode needs no mirror (Engine.scatter_ok)
         self._compact = self._make_compact(p)
 
         @ti.func
@@ -383,16 +382,14 @@ class Broadphase:
                         p.contact[k] = ti.u8(0)
                         for f in ti.static(carried):
                             f[0][k] = ti.Vector([0.0, 0.0, 0.0])
-                if ti.static(not (serial_loops and scatter)):
-                    # (the serial mode's owners add their partners' shares directly: no mirror)
-                    for k in range(owned_end, s.row_start[i] + s.row_count[i]):
-                        # not owned: the owner's entry of the same pair lies in j's owned part
-                        j = p.neighbour[k]
-                        p.mirror[k] = -1
-                        for m in range(s.row_start[j], s.row_start[j] + s.row_owned[j]):
-                            if p.neighbour[m] == i:
-                                p.mirror[k] = m
-                                break
+                for k in range(owned_end, s.row_start[i] + s.row_count[i]):
+                    # not owned: the owner's entry of the same pair lies in j's owned part
+                    j = p.neighbour[k]
+                    p.mirror[k] = -1
+                    for m in range(s.row_start[j], s.row_start[j] + s.row_owned[j]):
+                        if p.neighbour[m] == i:
+                            p.mirror[k] = m
+                            break
 
         @ti.kernel
         def link_and_carry(n: ti.i32, serial_loops: ti.template()):

@@ -106,8 +106,9 @@ class Engine:
         self.mobility = by_name.get("mobility")
         self.mobility_frame = -1
         # the serial mode's pair stage adds partner shares to the partner directly, with no
-        # mirror index and no gather through it (one thread: no race); [mobility] keeps the
-        # entries (its frozen pairs re-use their stored shares)
+        # gather through the mirror index (one thread: no race); [mobility] keeps the entries
+        # (its frozen pairs re-use their stored shares). The mirror is still built at every
+        # rebuild: a checkpoint of a serial run restores into a parallel one (or a GPU)
         self.scatter_ok = self.mobility is None
         if self.mobility is not None and scene.mobility.mode == "body_frame":
             self.mobility_frame = [b.name for b in scene.bodies].index(scene.mobility.body)
