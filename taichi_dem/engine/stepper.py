@@ -7,9 +7,10 @@ One step (velocity Verlet):
   pair:   one kernel over owned neighbour entries: the contact geometry once
           (contacts/geometry.py), then the contact law (contacts/law.py), the enabled contact
           effects unrolled on it; the owner sums its own share, the partner's share is stored
-          at the entry - no atomics
+          at the entry - no atomics (serial mode: added to the partner's sums directly)
   cell:   effects with a per-cell stage (the plug-flow gas marching cell by cell)
-  gather: each particle adds its partners' shares through the mirror index, runs the same
+  gather: each particle adds its partners' shares through the mirror index (in the serial
+          mode the owners have added them to its scattered_* sums already), runs the same
           contact law on its plane walls and mesh triangles, then the particle effects
           (gravity, convection, gas, radiation), the integrate stage (temperature, drying) and
           the second half kick v += a dt/2; within a run of steps it goes on with the next
