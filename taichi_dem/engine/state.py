@@ -117,6 +117,11 @@ class ParticleState:
     # ``birth_time`` s when it was inserted
     PROCESS = {"serial": (False, "int"), "origin": (False, "int"), "birth_time": (False, "real")}
 
+    # sums filled and emptied within one step: zero whenever the state is at a whole step, so
+    # a checkpoint written before they existed restores them as zero without a warning
+    ZERO_BETWEEN_STEPS = frozenset({"scattered_force", "scattered_torque", "scattered_heat",
+                                    "scattered_conductance"})
+
     def __init__(self, capacity: int, real, n_walls: int, particle_fields: dict,
                  contact_fields: dict, thermal: bool = False, process: bool = False):
         """``particle_fields``: {name: (is_vector, kind)} the enabled effects declare;
@@ -152,9 +157,10 @@ class ParticleState:
             # heat flow (W) of the owned pairs; sum of the conductances (W/K) of the last step
             self.owned_heat = t.add("owned_heat", real, capacity)
             self.conductance = t.add("conductance", real, capacity)
-        # the serial mode's partner shares (Engine: ``scatter``): the owner adds its partner's
+        # the serial mode's partner shares (Engine.scatter_ok): the owner adds its partner's
         # force (N), torque (N m), heat (W) and conductance (W/K) here directly - one thread,
         # no race - and the particle stage reads and clears them; zero between steps
+        # (ZERO_BETWEEN_STEPS)
         self.scattered_force = t.add("scattered_force", real, capacity, vector=True)
         self.scattered_torque = t.add("scattered_torque", real, capacity, vector=True)
         if thermal:

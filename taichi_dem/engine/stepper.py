@@ -435,7 +435,7 @@ class Engine:
         # that sum and are left out of both sides
         core_internal = mobility and self.mobility_frame >= 0
         # one thread (the serial mode) adds each pair's partner share to the partner directly
-        # (Engine.scatter); [mobility]'s frozen and carried pairs read theirs at the entries
+        # (Engine.scatter_ok); [mobility]'s frozen and carried pairs read theirs at the entries
         scatter_ok = self.scatter_ok
 
         @ti.func

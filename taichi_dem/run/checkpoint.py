@@ -293,11 +293,15 @@ def restore(sim, snap: Snapshot) -> None:
     e = sim.engine
     reallocate(e, json.loads(a["capacities"]))
     missing = []
+    zero_between_steps = e.state.ZERO_BETWEEN_STEPS
     for label, tree in field_trees(e).items():
         saved = snap.fields.get(label, {})
         for name, f in tree.fields.items():
             if name not in saved:
-                missing.append(f"{label}/{name}")
+                if tree is e.state.tree and name in zero_between_steps:
+                    f.fill(0)          # (a checkpoint from before these sums existed)
+                else:
+                    missing.append(f"{label}/{name}")
                 continue
             arr = saved[name]
             shape = f.to_numpy().shape

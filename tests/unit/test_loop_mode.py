@@ -31,8 +31,8 @@ def heap_text():
     """The planes-only scene with 260 beads poured into a 48 mm square column (four side
     walls): after 4,000 steps a heap in which many beads touch two or more others."""
     text = scene_text("f64", count=260).replace(
-        "region = {{ box = {{ min = [-0.05, -0.05, -0.053], max = [0.05, 0.05, 0.05] }} }}".format(),
-        "region = { box = { min = [-0.022, -0.022, -0.053], max = [0.022, 0.022, 0.05] } }")
+        "min = [-0.05, -0.05, -0.053], max = [0.05, 0.05, 0.05]",
+        "min = [-0.022, -0.022, -0.053], max = [0.022, 0.022, 0.05]")
     head, rest = text.split("[[bodies]]", 1)
     text = head + "[[particles]]" + rest.split("[[particles]]", 1)[1]
     side = ""
