@@ -19,11 +19,15 @@ The effects (effects/, thermal/effects.py) declare their stage, fields and table
 enabled are neither allocated nor compiled (``ti.static``). The engine never imports thermal/.
 
 Loop modes (``serial``, chosen by the particle count at each rebuild): from ``parallel_from``
-particles on, the pair and gather kernels above, each a parallel loop, one launch each per
-step; below it every loop runs on one thread (``ti.loop_config(serialize=...)``, a template
-argument of every kernel: ``serial_switch``) and ``run_steps`` does several whole steps -
-frames, pairs, cells, gather and the next drift - in one launch, until the drift flags a
-rebuild. The physics is the same ti.funcs (``pair_particle``, ``gather_particle``) in both.
+particles on, the pair and gather stages run in parallel - on a CPU with two cores or more as
+runs of whole steps in one launch on worker threads that claim chunks of particles and meet
+at spin barriers (``run_worker_steps``, WORKER_TASK), else (a GPU, one core, workers that
+stall) as the pair and gather kernels above, one launch each per step: the same results bit
+for bit. Below it every loop runs on one thread (``ti.loop_config(serialize=...)``, a
+template argument of every kernel: ``serial_switch``) and ``run_steps`` does several whole
+steps - frames, pairs, cells, gather and the next drift - in one launch, until the drift
+flags a rebuild. The physics is the same ti.funcs (``pair_particle``, ``gather_particle``)
+in all.
 """
 
 import numpy as np
@@ -47,6 +51,68 @@ from .state import FieldTree, Flag, PairState, ParticleState, Reduction, Thermal
 # ~10,000 particles - serial 1.7x faster at 4,000, parallel 1.16x faster at 16,000; the
 # cooler (0.5 us per particle-step) ~3,000. 5,000 is within ~15 % of the better mode for both.
 PARALLEL_FROM = 5000
+
+# Runs of steps on every thread (Engine.workers, CPU, from parallel_from particles on): one
+# launch runs whole steps - the pair stage, the cell stage, the particle stage with the next
+# drift - on T workers that claim chunks of WORKER_CHUNK particles from an atomic counter and
+# meet at a spin barrier after each stage (~0.1 - 0.2 us here), instead of two parallel
+# launches per step (each ~100 us to dispatch to Taichi's thread pool on these machines). The
+# stages and the ti.funcs are the parallel kernels' (the partners' shares through the mirror
+# index): each particle's sums are added in the same order whichever worker takes it, so the
+# results are the parallel kernels' bit for bit.
+WORKER_TASK = 512       # loop iterations per worker: its one active iteration is alone in its task
+# (Taichi cuts a CPU range-for into tasks of 512 - 1024 iterations - its adaptive block size,
+# which ti.loop_config(block_dim=...) does not change - or of 32 without it: iteration
+# w * 512 starts a task of its own either way, so no thread is handed two workers and waits
+# for itself; a loop of 512 iterations or fewer runs on one thread)
+WORKER_CHUNK = 128      # particles per claim: a claim costs one atomic, a chunk ~5 - 50 us
+STALL_SPINS = 20_000    # a barrier wait this long (~0.5 - 1 ms): a worker had lost its core
+PROBE_SPINS = 300_000_000   # the start-up check that the workers run at once (seconds at most)
+_probe_result: dict = {}
+
+
+def persistent_workers(threads) -> int:
+    """Workers of the runs of steps on every thread (0: not used): the CPU threads when there
+    are two or more, no more than the cores this process may run on (a worker waiting for a
+    core would spin), and once per runtime a check that they really run at once."""
+    import os
+    if not threads or threads < 2:
+        return 0
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:          # (not on Linux)
+        cores = os.cpu_count() or 1
+    if threads > cores or not _workers_run_together(threads):
+        return 0
+    return threads
+
+
+def _workers_run_together(workers: int) -> bool:
+    """Whether ``workers`` iterations WORKER_TASK apart of one CPU range-for run on as many
+    threads at once: each arrives at a barrier and waits (PROBE_SPINS at most) for the
+    others. Once per Taichi runtime (backend generation)."""
+    key = (backend.generation(), workers)
+    if key not in _probe_result:
+        arrivals = ti.field(ti.i32, 2)
+        met = ti.field(ti.i32, 1)
+
+        @ti.kernel
+        def probe():
+            arrivals[0] = 0
+            arrivals[1] = 0
+            met[0] = 0
+            for task in range(workers * WORKER_TASK):
+                if task % WORKER_TASK == 0:
+                    ti.atomic_add(arrivals[0], 1)
+                    spins = 0
+                    while ti.atomic_add(arrivals[0], arrivals[1]) < workers and spins < PROBE_SPINS:
+                        spins += 1
+                    if spins < PROBE_SPINS:
+                        ti.atomic_add(met[0], 1)
+
+        probe()
+        _probe_result[key] = int(met[0]) == workers
+    return _probe_result[key]
 
 
 class InsertColumn:
@@ -114,6 +180,22 @@ class Engine:
         if self.mobility is not None and scene.mobility.mode == "body_frame":
             self.mobility_frame = [b.name for b in scene.bodies].index(scene.mobility.body)
         self.trees: list[FieldTree] = []
+        # runs of steps on every thread above parallel_from (persistent_workers; off again,
+        # for good, if its barrier waits show the threads sharing the cores with other work)
+        self.workers = persistent_workers(self.threads) if self.runs else 0
+        self.worker_runs = 0             # runs of steps done on the workers
+        self.workers_give_way = False
+        self.worker_barriers = 0
+        self.worker_stalls = 0
+        self.worker_tree = None
+        if self.workers:
+            # (kept out of engine.trees: a checkpoint neither holds nor needs it)
+            wt = self.worker_tree = FieldTree()
+            # [arrivals at barriers, 0 (read to keep the spin-wait an atomic)]
+            self.worker_arrivals = wt.add("worker_arrivals", ti.i32, 2)
+            self.worker_claims = wt.add("worker_claims", ti.i32, 3)   # chunk counters
+            self.worker_outcome = wt.add("worker_outcome", ti.i32, 2)
+            wt.finalize()
         self.walls = scene.walls
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
         particle_fields = {}
@@ -249,6 +331,9 @@ class Engine:
         for t in self.trees:
             t.destroy()
         self.trees.clear()
+        if getattr(self, "worker_tree", None) is not None:
+            self.worker_tree.destroy()
+            self.worker_tree = None
 
     # ------------------------------------------------------------------ kernels
     def _compile_particle_kernels(self):
@@ -782,6 +867,107 @@ class Engine:
             return done
 
         self._run_steps = run_steps
+        self._run_worker_steps = None
+        workers = self.workers
+        if not workers:
+            return
+        arrivals, claims, outcome = self.worker_arrivals, self.worker_claims, self.worker_outcome
+        has_cells = len(cell_funcs) > 0
+        chunk = WORKER_CHUNK
+
+        @ti.func
+        def barrier(arrived):
+            """Arrive (the ``arrived``-th barrier of this launch) and wait for every worker;
+            returns 1 if the wait stalled (STALL_SPINS: a worker had lost its core)."""
+            ti.atomic_add(arrivals[0], 1)
+            spins = 0
+            # (an atomic read: a plain load could stay in a register across the loop)
+            while ti.atomic_add(arrivals[0], arrivals[1]) < arrived * workers:
+                spins += 1
+            return 1 if spins > STALL_SPINS else 0
+
+        @ti.func
+        def claim(stage):
+            """The next chunk of particles of ``stage`` (the counter stage % 3, which worker 0
+            zeroes one stage ahead: its last use ended two barriers ago)."""
+            return ti.atomic_add(claims[stage % 3], 1)
+
+        @ti.kernel
+        def run_worker_steps(n: ti.i32, dt: real, t_first: ti.f64, dt_time: ti.f64, steps: ti.i32,
+                             full_first: ti.i32, record_last: ti.i32,
+                             drift_last: ti.i32) -> ti.types.vector(2, ti.i32):
+            """run_steps on ``workers`` threads at once (WORKER_TASK): per step the pair
+            stage, the cell stage (worker 0) and the particle stage with the next drift, each
+            over chunks the workers claim, with a barrier after each. Returns (steps done,
+            barrier waits that stalled)."""
+            arrivals[0] = 0
+            arrivals[1] = 0
+            for k in ti.static(range(3)):
+                claims[k] = 0
+            outcome[0] = 0
+            outcome[1] = 0
+            chunks = (n + chunk - 1) // chunk
+            for task in range(workers * WORKER_TASK):
+                if task % WORKER_TASK == 0:
+                    w = task // WORKER_TASK
+                    arrived = 0
+                    stalls = 0
+                    done = 0
+                    for j in range(steps):
+                        # (read by all after the last barrier; only a drift sets it)
+                        if j > 0 and flags[Flag.REBUILD] != 0:
+                            break
+                        t = t_first + j * dt_time
+                        last = j == steps - 1
+                        record = 0
+                        if last and record_last != 0:
+                            record = 1
+                            if w == 0:
+                                for k in range(n_wall_slots):
+                                    wall_force[k] = vec0
+                                    if ti.static(thermal):
+                                        wall_heat[k] = 0.0
+                        if ti.static(has_mesh):
+                            if w == 0:
+                                set_frames(ti.cast(t, real))
+                        full = 0
+                        if j == 0:
+                            full = full_first
+                        if w == 0:
+                            claims[(arrived + 1) % 3] = 0
+                        c = claim(arrived)
+                        while c < chunks:
+                            for i in range(c * chunk, ti.min(n, (c + 1) * chunk)):
+                                pair_particle(i, dt, full, False)
+                            c = claim(arrived)
+                        arrived += 1
+                        stalls += barrier(arrived)
+                        if ti.static(has_cells):
+                            if w == 0:
+                                claims[(arrived + 1) % 3] = 0
+                                for cell_stage in ti.static(cell_funcs):
+                                    cell_stage(n, dt)
+                            arrived += 1
+                            stalls += barrier(arrived)
+                        then_drift = 1
+                        if last:
+                            then_drift = drift_last
+                        if w == 0:
+                            claims[(arrived + 1) % 3] = 0
+                        c = claim(arrived)
+                        while c < chunks:
+                            for i in range(c * chunk, ti.min(n, (c + 1) * chunk)):
+                                gather_particle(i, dt, record, then_drift, t + dt_time, False)
+                            c = claim(arrived)
+                        arrived += 1
+                        stalls += barrier(arrived)
+                        done += 1
+                    if w == 0:
+                        outcome[0] = done
+                    ti.atomic_add(outcome[1], stalls)
+            return ti.Vector([outcome[0], outcome[1]])
+
+        self._run_worker_steps = run_worker_steps
 
     # ------------------------------------------------------------------ driver
     def start(self, n: int) -> int:
@@ -826,6 +1012,11 @@ class Engine:
         if self.serial and self.runs:
             self._advance_in_runs(steps, record_last)
             return
+        if self.workers_give_way:
+            self.workers = 0
+        if self.workers and self._run_worker_steps is not None:
+            self._advance_in_runs(steps, record_last, on_workers=True)
+            return
         dt = self.dt
         for k in range(steps):
             n = self.count
@@ -852,10 +1043,33 @@ class Engine:
             # the state is left at a whole step (no pending drift) when advance returns
             self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
 
-    def _advance_in_runs(self, steps: int, record_last: bool):
-        """``advance`` with run_steps: the host only rebuilds, between runs. A run ends at a
-        rebuild the drift flags, at the last step the current binning of the bodies' triangles
-        serves, or at ``steps``."""
+    # the stalled share of barrier waits (over at least WORKER_STALLS_NOTED) at which the
+    # workers give way to the parallel kernels (None: never, for tests). Measured: alone on
+    # this noisy 2-core VM 0.5 - 1.3 % of the waits stall; two such runs at once 33 - 41 %
+    worker_stall_limit: "float | None" = 0.1
+    WORKER_STALLS_NOTED = 8
+
+    def _count_stalls(self, stalls: int):
+        """Barrier waits that stalled in the last run on workers: when more than
+        ``worker_stall_limit`` of them did, the threads are sharing the cores with other work
+        (two test processes, a sweep's workers) and each spin-wait costs a scheduler slice;
+        this engine then goes on with the parallel kernels (same results, bit for bit)."""
+        self.worker_stalls += stalls
+        limit = self.worker_stall_limit
+        if (limit is not None and not self.workers_give_way
+                and self.worker_stalls >= self.WORKER_STALLS_NOTED
+                and self.worker_stalls > limit * self.worker_barriers):
+            import sys
+            print(f"taichi-dem: note: {self.worker_stalls} of {self.worker_barriers} barrier "
+                  f"waits of the {self.workers} worker threads stalled (the cores are shared "
+                  f"with other work); going on with one parallel launch per stage",
+                  file=sys.stderr)
+            self.workers_give_way = True      # from the next advance on (a run is under way)
+
+    def _advance_in_runs(self, steps: int, record_last: bool, on_workers: bool = False):
+        """``advance`` with run_steps (``on_workers``: run_worker_steps): the host only
+        rebuilds, between runs. A run ends at a rebuild the drift flags, at the last step the
+        current binning of the bodies' triangles serves, or at ``steps``."""
         dt = self.dt
         k = 0
         while k < steps:
@@ -872,8 +1086,16 @@ class Engine:
             if self.mesh is not None:
                 run = self.mesh.steps_before_rebinning(self.time, dt, run)
             final = k + run == steps
-            done = int(self._run_steps(self.count, dt, self.time, dt, run, 1 if rebuild else 0,
-                                       1 if (record_last and final) else 0, 0 if final else 1))
+            args = (self.count, dt, self.time, dt, run, 1 if rebuild else 0,
+                    1 if (record_last and final) else 0, 0 if final else 1)
+            if on_workers:
+                done, stalls = (int(v) for v in self._run_worker_steps(*args))
+                self.worker_runs += 1
+                self.worker_barriers += done * (3 if self.cell_effects else 2)
+                if stalls:
+                    self._count_stalls(stalls)
+            else:
+                done = int(self._run_steps(*args))
             if self.mesh is not None:
                 self.mesh.interval_steps += done
             k += done

@@ -8,6 +8,7 @@ the same bits in both (the falling beads below, bit for bit); in a heap they agr
 round-off (test_direct_partner_shares_equal_the_gather_to_round_off). The times handed to
 the kernels are formed differently too (t0 + j dt on the device against a running sum on the
 host), which moves a turning body's frame by round-off."""
+import os
 import sys
 from pathlib import Path
 
@@ -46,15 +47,22 @@ def heap_text():
     return text.replace("[materials.glass]", side + "[materials.glass]")
 
 
-def run(text, parallel_from, steps, fused=True):
+def run(text, parallel_from, steps, fused=True, workers=False):
+    """``workers``: above parallel_from, runs of steps on the worker threads (the default
+    where there are two cores); else two parallel launches per step."""
     sim = td.Simulation.from_text(text, parallel_from=parallel_from)
     sim.engine.fused_rebuilds = fused
+    if workers:
+        sim.engine.worker_stall_limit = None     # (two test processes may share the cores)
+    else:
+        sim.engine.workers = 0
     try:
         sim.step(steps)
         p = sim.particles()
         e = sim.engine
         return dict(position=p["position"], velocity=p["velocity"],
                     temperature=p.get("temperature"), serial=e.serial, runs=e.runs,
+                    worker_runs=e.worker_runs,
                     rebuilds=e.broadphase.rebuilds, fused=list(e.broadphase.fused_stages),
                     time=e.time, steps=sim.step_count,
                     series={k: np.asarray(v) for k, v in sim.series.items()})
@@ -65,7 +73,7 @@ def run(text, parallel_from, steps, fused=True):
 def test_runs_of_steps_equal_parallel_steps_on_planes():
     text = walls_only_text()
     serial = run(text, None, 3000)         # 200 beads: serial, in runs
-    parallel = run(text, 0, 3000)          # every step two parallel launches
+    parallel = run(text, 0, 3000)          # every step two parallel launches (workers off)
     assert serial["serial"] and serial["runs"] and not parallel["serial"]
     # the beads fell, hit the floor and the lists were rebuilt many times (runs were cut)
     assert serial["rebuilds"] > 10 and serial["rebuilds"] == parallel["rebuilds"]
@@ -78,6 +86,72 @@ def test_runs_of_steps_equal_parallel_steps_on_planes():
         assert np.allclose(serial["series"][name], parallel["series"][name],
                            rtol=1e-9, atol=1e-12), name
         assert np.max(np.abs(parallel["series"][name])) > 0.0, name     # the floor was loaded
+
+
+needs_two_cores = pytest.mark.skipif(
+    len(os.sched_getaffinity(0)) < 2, reason="the worker threads need two cores")
+
+
+@needs_two_cores
+def test_worker_threads_equal_the_parallel_kernels_bit_for_bit():
+    """Above parallel_from a CPU with two cores runs whole steps on worker threads that claim
+    chunks of particles (Engine.workers, run_worker_steps) instead of two parallel launches
+    per step. Each particle's sums are added in the same order whichever worker takes it:
+    in the heap (many particles receive two or more partners' shares) the state is the
+    parallel kernels' bit for bit, through pouring, impacts and rebuilds."""
+    text = heap_text()
+    workers = run(text, 0, 3000, workers=True)
+    launches = run(text, 0, 3000)
+    assert not workers["serial"] and workers["worker_runs"] > 10
+    assert launches["worker_runs"] == 0
+    assert workers["rebuilds"] > 10 and workers["rebuilds"] == launches["rebuilds"]
+    for key in ("position", "velocity", "temperature"):
+        assert np.array_equal(workers[key], launches[key]), key
+    # the walls' loads are sums over particles by atomic adds in both: their order, and so
+    # the last bits, depend on the threads' timing
+    for name in ("walls/floor/force", "walls/x_lo/force", "walls/floor/heat_flow"):
+        assert np.allclose(workers["series"][name], launches["series"][name],
+                           rtol=1e-9, atol=1e-12), name
+        assert np.max(np.abs(launches["series"][name])) > 0.0, name
+
+
+@needs_two_cores
+def test_worker_threads_follow_a_turning_paddle():
+    """With a body the workers' frames come from t0 + j dt, as in the serial runs (the
+    per-step launches: a running sum on the host): equal to round-off."""
+    text = scene_text("f64", count=300)
+    workers = run(text, 0, 1500, workers=True)
+    launches = run(text, 0, 1500)
+    assert workers["worker_runs"] > 10
+    assert np.max(np.abs(workers["position"] - launches["position"])) < 1e-9
+    torque = "bodies/paddle/torque"
+    scale = np.max(np.abs(launches["series"][torque]))
+    assert scale > 0.0
+    assert np.max(np.abs(workers["series"][torque] - launches["series"][torque])) < 1e-6 * scale
+
+
+@needs_two_cores
+def test_stalled_workers_give_way_to_the_parallel_kernels(capsys):
+    """Barrier waits that stall (the threads share the cores with other work) send the engine
+    to the parallel launches from its next advance on - with a note, and the same results;
+    a stall now and then (a noisy machine) does not."""
+    text = heap_text()
+    sim = td.Simulation.from_text(text, parallel_from=0)
+    try:
+        e = sim.engine
+        sim.step(100)
+        assert e.worker_runs > 0 and e.workers
+        e.worker_barriers, e.worker_stalls = 10_000, 0
+        e._count_stalls(150)                    # 1.5 %: a noisy machine
+        sim.step(10)
+        assert e.workers and not e.workers_give_way
+        e._count_stalls(2000)                   # 21 %: the cores are shared
+        assert e.workers_give_way and "stalled" in capsys.readouterr().err
+        runs = e.worker_runs
+        sim.step(100)
+        assert e.workers == 0 and e.worker_runs == runs
+    finally:
+        sim.close()
 
 
 def test_runs_of_steps_follow_a_turning_paddle():
