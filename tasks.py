@@ -42,7 +42,11 @@ def main(argv):
             # one pytest worker per core, each test file kept on one worker (module fixtures
             # run once): the suite is bound by Taichi's single-threaded JIT compilation
             # (~4 s per new simulation with a cold kernel cache), which one worker leaves
-            # on one core
+            # on one core. Two workers fill both cores, so a simulation's own worker threads
+            # (engine/stepper.py, spin barriers) would wait for cores: the tests run the
+            # parallel mode's launches (the same results bit for bit) except where
+            # tests/unit/test_loop_mode.py asks for the threads
+            os.environ.setdefault("TAICHI_DEM_WORKERS", "0")
             run(PY, "-m", "pytest", "-q", "-n", "auto", "--dist", "loadfile", *argv[2:])
         else:
             print(__doc__)

@@ -68,21 +68,23 @@ WORKER_TASK = 512       # loop iterations per worker: its one active iteration i
 WORKER_CHUNK = 128      # particles per claim: a claim costs one atomic, a chunk ~5 - 50 us
 STALL_SPINS = 20_000    # a barrier wait this long (~0.5 - 1 ms): a worker had lost its core
 PROBE_SPINS = 300_000_000   # the start-up check that the workers run at once (seconds at most)
-_probe_result: dict = {}
+_probe_result: dict = {}     # per runtime and worker count; "gave way": see _count_stalls
 
 
 def persistent_workers(threads) -> int:
     """Workers of the runs of steps on every thread (0: not used): the CPU threads when there
     are two or more, no more than the cores this process may run on (a worker waiting for a
-    core would spin), and once per runtime a check that they really run at once."""
+    core would spin), unless an engine of this process found its workers stalling (the cores
+    are shared: later simulations start with the launches) or $TAICHI_DEM_WORKERS is 0, and
+    once per runtime a check that they really run at once."""
     import os
-    if not threads or threads < 2:
+    if not threads or threads < 2 or os.environ.get("TAICHI_DEM_WORKERS", "1") == "0":
         return 0
     try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:          # (not on Linux)
         cores = os.cpu_count() or 1
-    if threads > cores or not _workers_run_together(threads):
+    if threads > cores or _probe_result.get("gave way") or not _workers_run_together(threads):
         return 0
     return threads
 
@@ -1044,9 +1046,10 @@ class Engine:
             self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
 
     # the stalled share of barrier waits (over at least WORKER_STALLS_NOTED) at which the
-    # workers give way to the parallel kernels (None: never, for tests). Measured: alone on
-    # this noisy 2-core VM 0.5 - 1.3 % of the waits stall; two such runs at once 33 - 41 %
-    worker_stall_limit: "float | None" = 0.1
+    # workers give way to the parallel kernels (None: never, for tests). Measured on this
+    # noisy 2-core VM: alone 0.5 - 1.3 % of the waits stall; two 8k chutes at once 3.7 % (the
+    # steps then ran 6 - 7.5 M/s against 9.4 - 12 with the launches) to 41 %
+    worker_stall_limit: "float | None" = 0.02
     WORKER_STALLS_NOTED = 8
 
     def _count_stalls(self, stalls: int):
@@ -1062,9 +1065,11 @@ class Engine:
             import sys
             print(f"taichi-dem: note: {self.worker_stalls} of {self.worker_barriers} barrier "
                   f"waits of the {self.workers} worker threads stalled (the cores are shared "
-                  f"with other work); going on with one parallel launch per stage",
+                  f"with other work); going on with one parallel launch per stage, in this "
+                  f"process's later simulations too",
                   file=sys.stderr)
             self.workers_give_way = True      # from the next advance on (a run is under way)
+            _probe_result["gave way"] = True  # and later engines of this process start so
 
     def _advance_in_runs(self, steps: int, record_last: bool, on_workers: bool = False):
         """``advance`` with run_steps (``on_workers``: run_worker_steps): the host only
