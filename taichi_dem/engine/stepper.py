@@ -826,6 +826,28 @@ class Engine:
         flags = self.flags
         n_wall_slots = max(n_walls, 1)
 
+        @ti.func
+        def begin_step(j, t, last, record_last, full_first, leader):
+            """What step j of a run (at ``t``, s; ``last`` of the run) needs before its pair
+            stage, done by the thread ``leader`` marks: the wall loads zeroed when this step
+            books them, the bodies' frames set. Returns (record, full): whether the step books
+            the wall loads, whether it follows a rebuild ([mobility])."""
+            record = 0
+            if last and record_last != 0:
+                record = 1
+                if leader:
+                    for w in range(n_wall_slots):
+                        wall_force[w] = vec0
+                        if ti.static(thermal):
+                            wall_heat[w] = 0.0
+            if ti.static(has_mesh):
+                if leader:
+                    set_frames(ti.cast(t, real))
+            full = 0
+            if j == 0:
+                full = full_first
+            return record, full
+
         @ti.kernel
         def run_steps(n: ti.i32, dt: real, t_first: ti.f64, dt_time: ti.f64, steps: ti.i32,
                       full_first: ti.i32, record_last: ti.i32, drift_last: ti.i32) -> ti.i32:
@@ -844,18 +866,7 @@ class Engine:
                     break
                 t = t_first + j * dt_time
                 last = j == steps - 1
-                record = 0
-                if last and record_last != 0:
-                    record = 1
-                    for w in range(n_wall_slots):
-                        wall_force[w] = vec0
-                        if ti.static(thermal):
-                            wall_heat[w] = 0.0
-                if ti.static(has_mesh):
-                    set_frames(ti.cast(t, real))
-                full = 0
-                if j == 0:
-                    full = full_first
+                record, full = begin_step(j, t, last, record_last, full_first, True)
                 for i in range(n):
                     pair_particle(i, dt, full, ti.static(scatter_ok))
                 for cell_stage in ti.static(cell_funcs):
@@ -921,20 +932,8 @@ class Engine:
                             break
                         t = t_first + j * dt_time
                         last = j == steps - 1
-                        record = 0
-                        if last and record_last != 0:
-                            record = 1
-                            if w == 0:
-                                for k in range(n_wall_slots):
-                                    wall_force[k] = vec0
-                                    if ti.static(thermal):
-                                        wall_heat[k] = 0.0
-                        if ti.static(has_mesh):
-                            if w == 0:
-                                set_frames(ti.cast(t, real))
-                        full = 0
-                        if j == 0:
-                            full = full_first
+                        # (worker 0 zeroes and sets what the particle stage reads after a barrier)
+                        record, full = begin_step(j, t, last, record_last, full_first, w == 0)
                         if w == 0:
                             claims[(arrived + 1) % 3] = 0
                         c = claim(arrived)
