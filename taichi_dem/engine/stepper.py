@@ -68,7 +68,7 @@ WORKER_TASK = 512       # loop iterations per worker: its one active iteration i
 WORKER_CHUNK = 128      # particles per claim: a claim costs one atomic, a chunk ~5 - 50 us
 STALL_SPINS = 20_000    # a barrier wait this long (~0.5 - 1 ms): a worker had lost its core
 PROBE_SPINS = 300_000_000   # the start-up check that the workers run at once (seconds at most)
-_probe_result: dict = {}     # per runtime and worker count; "gave way": see _count_stalls
+_probe_result: dict = {}     # per worker count; "gave way": see _count_stalls
 
 
 def persistent_workers(threads) -> int:
@@ -92,8 +92,9 @@ def persistent_workers(threads) -> int:
 def _workers_run_together(workers: int) -> bool:
     """Whether ``workers`` iterations WORKER_TASK apart of one CPU range-for run on as many
     threads at once: each arrives at a barrier and waits (PROBE_SPINS at most) for the
-    others. Once per Taichi runtime (backend generation)."""
-    key = (backend.generation(), workers)
+    others. Once per process: a property of the machine (backend.acquire starts a fresh
+    runtime for a simulation when no other lives)."""
+    key = workers
     if key not in _probe_result:
         arrivals = ti.field(ti.i32, 2)
         met = ti.field(ti.i32, 1)

@@ -602,6 +602,7 @@ class Simulation:
         if getattr(self, "engine", None) is not None and not self._stale:
             self.engine.destroy()
         self.engine = None
+        backend.release(self)
 
     def __enter__(self):
         return self
