@@ -1,5 +1,6 @@
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -106,3 +107,37 @@ def small_scene_text():
     def make(precision="f64", rolling=0.05, count=200):
         return SMALL_SCENE.format(precision=precision, rolling=rolling, count=count)
     return make
+
+
+def listed_pairs(sim) -> tuple[list, list]:
+    """The neighbour lists as (owner id, partner id) pairs: those of the owned entries, and
+    those of the partner entries (each pair should stand once in each)."""
+    e = sim.engine
+    s = e.state
+    n = e.count
+    start, owned = s.row_start.to_numpy()[:n], s.row_owned.to_numpy()[:n]
+    count = s.row_count.to_numpy()[:n]
+    ids = s.particle_id.to_numpy()[:n]
+    nb = e.pairs.neighbour.to_numpy()
+    own = [(int(ids[i]), int(ids[nb[k]])) for i in range(n) for k in range(start[i], start[i] + owned[i])]
+    partner = [(int(ids[nb[k]]), int(ids[i])) for i in range(n)
+               for k in range(start[i] + owned[i], start[i] + count[i])]
+    return own, partner
+
+
+def pairs_within(sim, cutoff_extra: float) -> set:
+    """Brute force: (smaller id, larger id) of the pairs closer than r_i + r_j +
+    ``cutoff_extra`` (m), by the minimum image on the periodic axes."""
+    e = sim.engine
+    s = e.state
+    n = e.count
+    x = s.position.to_numpy()[:n].astype(float)
+    r = s.radius.to_numpy()[:n].astype(float)
+    ids = s.particle_id.to_numpy()[:n]
+    d = x[:, None, :] - x[None, :, :]
+    for k in range(3):
+        if e.grid.periodic[k]:
+            d[..., k] -= e.grid.span[k] * np.round(d[..., k] / e.grid.span[k])
+    close = np.linalg.norm(d, axis=2) < r[:, None] + r[None, :] + cutoff_extra
+    i, j = np.nonzero(close & (ids[:, None] < ids[None, :]))
+    return {(int(ids[a]), int(ids[b])) for a, b in zip(i, j)}

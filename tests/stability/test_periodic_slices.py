@@ -19,6 +19,8 @@ import pytest
 
 import taichi_dem as td
 
+from conftest import listed_pairs, pairs_within
+
 R = 0.002
 HALF = 0.05
 # soft glass beads and steel, e 0.5, mu 0.5 (the floor and drum-slice scenes)
@@ -216,38 +218,6 @@ interval = 0.05
 """
 
 
-def _pairs_listed(sim) -> list[tuple[int, int]]:
-    """(owner id, partner id) of every owned neighbour entry."""
-    e = sim.engine
-    s = e.state
-    n = e.count
-    start, owned = s.row_start.to_numpy()[:n], s.row_owned.to_numpy()[:n]
-    ids = s.particle_id.to_numpy()[:n]
-    nb = e.pairs.neighbour.to_numpy()
-    return [(int(ids[i]), int(ids[nb[k]])) for i in range(n)
-            for k in range(start[i], start[i] + owned[i])]
-
-
-def _pairs_within(sim, cutoff_extra: float) -> set[tuple[int, int]]:
-    """Brute force: pairs closer than r_i + r_j + skin by the minimum image along y."""
-    e = sim.engine
-    s = e.state
-    n = e.count
-    x = s.position.to_numpy()[:n].astype(float)
-    r = s.radius.to_numpy()[:n].astype(float)
-    ids = s.particle_id.to_numpy()[:n]
-    span = e.grid.span[1]
-    d = x[:, None, :] - x[None, :, :]
-    d[..., 1] -= span * np.round(d[..., 1] / span)
-    dist = np.linalg.norm(d, axis=2)
-    out = set()
-    for i in range(n):
-        for j in range(n):
-            if ids[i] < ids[j] and dist[i, j] < r[i] + r[j] + cutoff_extra:
-                out.add((int(ids[i]), int(ids[j])))
-    return out
-
-
 def test_thin_slab_settles_with_every_pair_once(tmp_path):
     depth = 2.5 * 2 * R           # the seed-000 hopper's periodic depth: 2.5 diameters
     body = f"""
@@ -262,8 +232,8 @@ region = {{ box = {{ min = [-0.028, 0.0, 0.004], max = [0.028, {depth!r}, 0.11] 
         assert sim.engine.grid.dims[1] == 2        # a two-cell axis: the case being tested
         sim.run()
         sim.engine.rebuild(sim.engine.count)      # the lists as of now, to compare exactly
-        listed = _pairs_listed(sim)
-        brute = _pairs_within(sim, sim.skin)
+        listed, _ = listed_pairs(sim)
+        brute = pairs_within(sim, sim.skin)
         p = sim.particles()
         count = sim.particle_count
         ke = sim.kinetic_energy()
