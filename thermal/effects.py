@@ -457,7 +457,7 @@ class WallContactAge(Effect):
         @ti.func
         def wall_contact_age(i, load):
             if s.wall_touch[i] != 0:
-                s.wall_contact_steps[i] += 1
+                s.wall_contact_steps[i] = s.wall_contact_steps[i] + 1   # (no atomic: see Engine)
                 s.wall_touch[i] = 0
             else:
                 s.wall_contact_steps[i] = 0
@@ -708,7 +708,8 @@ class Temperature(Effect):
                 s.temperature[i] = t_part
                 s.temperature_residual[i] = t_rest
             else:
-                s.temperature[i] += dt * heat * s.inverse_thermal_mass[i]
+                # (``a = a + b``: ``+=`` on a field is an atomic add on the engine's workers)
+                s.temperature[i] = s.temperature[i] + dt * heat * s.inverse_thermal_mass[i]
             s.conductance[i] = conductance
 
         return update_temperature

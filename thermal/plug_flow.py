@@ -128,8 +128,8 @@ class AxialPlugFlowGas:
                     c = n_cells - 1 - k
                 if ti.static(blocks):
                     for b in range(blocks):
-                        GC[c] += PG[b, c]
-                        SC[c] += PS[b, c]
+                        GC[c] = GC[c] + PG[b, c]      # (serial: no atomics)
+                        SC[c] = SC[c] + PS[b, c]
                         PG[b, c] = 0.0
                         PS[b, c] = 0.0
                 g_c = GC[c]
@@ -148,7 +148,7 @@ class AxialPlugFlowGas:
                 SC[c] = 0.0
                 t_gas = t_out
             totals[0] = ti.cast(total, ti.f64)
-            totals[1] += ti.cast(total, ti.f64) * ti.cast(dt, ti.f64)
+            totals[1] = totals[1] + ti.cast(total, ti.f64) * ti.cast(dt, ti.f64)
             totals[2] = ti.cast(t_gas, ti.f64)
 
         @ti.kernel
@@ -180,8 +180,9 @@ class AxialPlugFlowGas:
             for i in range(n):
                 c, h_area = particle_conductance(i)
                 if c >= 0:
-                    GC[c] += h_area
-                    SC[c] += h_area * s.temperature[i]
+                    # (one thread - the serial mode, or worker 0 - so no atomics)
+                    GC[c] = GC[c] + h_area
+                    SC[c] = SC[c] + h_area * s.temperature[i]
             march(dt)
 
         @ti.func

@@ -73,7 +73,8 @@ class Drag(Effect):
             for i in range(n):
                 if s.alive[i] != 0:
                     r = s.radius[i]
-                    cell_solid[s.cell[i]] += 4.0 / 3.0 * math.pi * r * r * r
+                    c = s.cell[i]     # (one thread - serial mode, or worker 0: no atomics)
+                    cell_solid[c] = cell_solid[c] + 4.0 / 3.0 * math.pi * r * r * r
 
         self._solid_per_cell_serial = solid_per_cell_serial
 

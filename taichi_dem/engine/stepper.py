@@ -7,10 +7,12 @@ One step (velocity Verlet):
   pair:   one kernel over owned neighbour entries: the contact geometry once
           (contacts/geometry.py), then the contact law (contacts/law.py), the enabled contact
           effects unrolled on it; the owner sums its own share, the partner's share is stored
-          at the entry - no atomics (serial mode: added to the partner's sums directly)
+          at the entry - no atomics (serial mode: added to the partner's sums directly; the
+          worker threads: added to the partner's sums in the worker's own copy)
   cell:   effects with a per-cell stage (the plug-flow gas marching cell by cell)
   gather: each particle adds its partners' shares through the mirror index (in the serial
-          mode the owners have added them to its scattered_* sums already), runs the same
+          mode the owners have added them to its scattered_* sums already; on the workers
+          it adds its sums of each copy in order), runs the same
           contact law on its plane walls and mesh triangles, then the particle effects
           (gravity, convection, gas, radiation), the integrate stage (temperature, drying) and
           the second half kick v += a dt/2; within a run of steps it goes on with the next
@@ -20,10 +22,13 @@ enabled are neither allocated nor compiled (``ti.static``). The engine never imp
 
 Loop modes (``serial``, chosen by the particle count at each rebuild): from ``parallel_from``
 particles on, the pair and gather stages run in parallel - on a CPU with two cores or more as
-runs of whole steps in one launch on worker threads that claim chunks of particles and meet
-at spin barriers (``run_worker_steps``, WORKER_TASK), else (a GPU, one core, workers that
-stall) as the pair and gather kernels above, one launch each per step: the same results bit
-for bit. Below it every loop runs on one thread (``ti.loop_config(serialize=...)``, a
+runs of whole steps in one launch on worker threads that meet at spin barriers
+(``run_worker_steps``, WORKER_TASK): each computes the pairs of a fixed range of particles
+and adds the partners' shares to a copy of the sums of its own, then they claim chunks of
+the particle stage; else (a GPU, one core, workers that stall) as the pair and gather
+kernels above, one launch each per step. The modes add a particle's partners' shares in
+different orders - the same physics to round-off; each is deterministic (the workers' for
+a given number of threads). Below it every loop runs on one thread (``ti.loop_config(serialize=...)``, a
 template argument of every kernel: ``serial_switch``) and ``run_steps`` does several whole
 steps - frames, pairs, cells, gather and the next drift - in one launch, until the drift
 flags a rebuild. The physics is the same ti.funcs (``pair_particle``, ``gather_particle``)
@@ -54,18 +59,26 @@ PARALLEL_FROM = 5000
 
 # Runs of steps on every thread (Engine.workers, CPU, from parallel_from particles on): one
 # launch runs whole steps - the pair stage, the cell stage, the particle stage with the next
-# drift - on T workers that claim chunks of WORKER_CHUNK particles from an atomic counter and
-# meet at a spin barrier after each stage (~0.1 - 0.2 us here), instead of two parallel
-# launches per step (each ~100 us to dispatch to Taichi's thread pool on these machines). The
-# stages and the ti.funcs are the parallel kernels' (the partners' shares through the mirror
-# index): each particle's sums are added in the same order whichever worker takes it, so the
-# results are the parallel kernels' bit for bit.
+# drift - on T workers that meet at a spin barrier after each stage (~0.1 - 0.2 us here),
+# instead of two parallel launches per step (each ~100 us to dispatch to Taichi's thread pool
+# on these machines). In the pair stage worker w computes the owned pairs of a fixed range of
+# cell-sorted particles (cut at equal shares of the neighbour entries) and adds each
+# partner's share to copy w of the partners' sums, as the serial mode does to its one copy:
+# no race, no store of the share at the entry and no second pass through the mirror index
+# (1.27x the chunk-claiming pair stage at 32k, BENCHMARKS.md stop 18); fixed ranges keep
+# every sum's order, and so the results, independent of the threads' timing. In the particle
+# stage the workers claim chunks of WORKER_CHUNK particles from an atomic counter; each
+# particle adds its copies in order. Where shares must stay at the entries ([mobility]:
+# Engine.scatter_ok) the pair stage claims chunks too and the particle stage gathers through
+# the mirror: the parallel kernels' results bit for bit.
 WORKER_TASK = 512       # loop iterations per worker: its one active iteration is alone in its task
 # (Taichi cuts a CPU range-for into tasks of 512 - 1024 iterations - its adaptive block size,
 # which ti.loop_config(block_dim=...) does not change - or of 32 without it: iteration
 # w * 512 starts a task of its own either way, so no thread is handed two workers and waits
 # for itself; a loop of 512 iterations or fewer runs on one thread)
 WORKER_CHUNK = 128      # particles per claim: a claim costs one atomic, a chunk ~5 - 50 us
+WORKER_COPIES = True    # False: the pair stage claims chunks and stores shares at the entries
+                        # in every scene, as under [mobility] (tests, bench A/B)
 STALL_SPINS = 20_000    # a barrier wait this long (~0.5 - 1 ms): a worker had lost its core
 PROBE_SPINS = 300_000_000   # the start-up check that the workers run at once (seconds at most)
 _probe_result: dict = {}     # per worker count; "gave way": see _count_stalls
@@ -190,7 +203,10 @@ class Engine:
         self.workers_give_way = False
         self.worker_barriers = 0
         self.worker_stalls = 0
+        self.window_barriers = 0          # (_count_stalls)
+        self.window_stalls = 0
         self.worker_tree = None
+        self.worker_copies = 0
         if self.workers:
             # (kept out of engine.trees: a checkpoint neither holds nor needs it)
             wt = self.worker_tree = FieldTree()
@@ -198,6 +214,19 @@ class Engine:
             self.worker_arrivals = wt.add("worker_arrivals", ti.i32, 2)
             self.worker_claims = wt.add("worker_claims", ti.i32, 3)   # chunk counters
             self.worker_outcome = wt.add("worker_outcome", ti.i32, 2)
+            # the workers' partner shares (Engine.worker_copies): worker w adds the shares of
+            # the pairs it computes to copy w - copy 0 is the serial mode's scattered_* sums
+            # (ParticleState), these are copies 1 .. T-1 - and the particle stage adds a
+            # particle's copies in order and clears them; zero between steps, so a
+            # checkpoint neither holds nor needs them
+            self.worker_copies = self.workers if (self.scatter_ok and WORKER_COPIES) else 0
+            extra = max(self.worker_copies - 1, 0)
+            if extra:
+                self.copy_force = wt.add("copy_force", real, (extra, capacity), vector=True)
+                self.copy_torque = wt.add("copy_torque", real, (extra, capacity), vector=True)
+                if self.thermal:
+                    self.copy_heat = wt.add("copy_heat", real, (extra, capacity))
+                    self.copy_conductance = wt.add("copy_conductance", real, (extra, capacity))
             wt.finalize()
         self.walls = scene.walls
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
@@ -385,7 +414,7 @@ class Engine:
                 if not frozen:
                     v = s.velocity[i] + 0.5 * dt * s.acceleration[i]
                     s.velocity[i] = v
-                    s.angular_velocity[i] += 0.5 * dt * s.angular_acceleration[i]
+                    s.angular_velocity[i] = s.angular_velocity[i] + 0.5 * dt * s.angular_acceleration[i]
                     x_new = x_old + dt * v
                 x = x_new
                 inside = True
@@ -546,11 +575,48 @@ class Engine:
                                 s.inverse_inertia[j])
             return c
 
+        extra_copies = max(self.worker_copies - 1, 0)
+        copy_force = self.copy_force if extra_copies else None
+        copy_torque = self.copy_torque if extra_copies else None
+        copy_heat = self.copy_heat if (extra_copies and self.thermal) else None
+        copy_conductance = self.copy_conductance if (extra_copies and self.thermal) else None
+
         @ti.func
-        def pair_particle(i, dt, full, scatter: ti.template()):
+        def add_partner_share(copy, j, force, torque):
+            """Add a pair's partner share - force (N) and torque (N m) - to partner j's sums
+            of copy ``copy``: 0 the serial mode's ``scattered_*``, w > 0 worker w's (only that
+            worker writes it). (``a = a + b``: an augmented assignment would be an atomic.)"""
+            if ti.static(extra_copies > 0):
+                if copy == 0:
+                    s.scattered_force[j] = s.scattered_force[j] + force
+                    s.scattered_torque[j] = s.scattered_torque[j] + torque
+                else:
+                    copy_force[copy - 1, j] = copy_force[copy - 1, j] + force
+                    copy_torque[copy - 1, j] = copy_torque[copy - 1, j] + torque
+            else:
+                s.scattered_force[j] = s.scattered_force[j] + force
+                s.scattered_torque[j] = s.scattered_torque[j] + torque
+
+        @ti.func
+        def add_partner_heat(copy, j, heat, conductance):
+            """add_partner_share for the heat flow (W) and conductance (W/K)."""
+            if ti.static(extra_copies > 0):
+                if copy == 0:
+                    s.scattered_heat[j] = s.scattered_heat[j] + heat
+                    s.scattered_conductance[j] = s.scattered_conductance[j] + conductance
+                else:
+                    copy_heat[copy - 1, j] = copy_heat[copy - 1, j] + heat
+                    copy_conductance[copy - 1, j] = copy_conductance[copy - 1, j] + conductance
+            else:
+                s.scattered_heat[j] = s.scattered_heat[j] + heat
+                s.scattered_conductance[j] = s.scattered_conductance[j] + conductance
+
+        @ti.func
+        def pair_particle(i, dt, full, scatter: ti.template(), copy):
             """The owned contacts of particle i in one step: their geometry, the contact law,
             the owner's sums and the partner's shares - stored at the entry (no atomics), or
-            with ``scatter`` (one thread only) added to the partner's ``scattered_*`` sums.
+            with ``scatter`` added to the partner's sums of copy ``copy`` (add_partner_share:
+            one thread, or worker ``copy`` alone writing that copy).
             ``full`` = 1 (the step of a rebuild): every pair; 0: [mobility] pairs of two
             inactive particles keep their force, torque and history (their heat flows through
             the kept conductance)."""
@@ -604,8 +670,7 @@ class Engine:
                         owned_heat += out.heat
                         owned_conductance += out.conductance
                         if ti.static(scatter):
-                            s.scattered_heat[j] = s.scattered_heat[j] - out.heat
-                            s.scattered_conductance[j] = s.scattered_conductance[j] + out.conductance
+                            add_partner_heat(copy, j, -out.heat, out.conductance)
                         else:
                             p.partner_heat[k] = -out.heat
                             p.pair_conductance[k] = out.conductance
@@ -617,8 +682,7 @@ class Engine:
                             owned_force += out.force
                             owned_torque += out.torque_i
                         if ti.static(scatter):
-                            s.scattered_force[j] = s.scattered_force[j] - out.force
-                            s.scattered_torque[j] = s.scattered_torque[j] + out.torque_j
+                            add_partner_share(copy, j, -out.force, out.torque_j)
                         else:
                             p.partner_force[k] = -out.force
                             p.partner_torque[k] = out.torque_j
@@ -651,7 +715,7 @@ class Engine:
             """pair_particle over the particles; ``serial_loops``: one thread (Engine.serial)."""
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                pair_particle(i, dt, full, ti.static(serial_loops and scatter_ok))
+                pair_particle(i, dt, full, ti.static(serial_loops and scatter_ok), 0)
 
         frame = self.mobility_frame
         loads = self.mesh if core_internal else None
@@ -675,7 +739,8 @@ class Engine:
         @ti.func
         def gather_particle(i, dt, record, then_drift, t_next, scatter: ti.template()):
             """The rest of particle i's step: its partners' shares through the mirror index
-            (``scatter``: from its ``scattered_*`` sums, which it clears), its plane walls and
+            (``scatter`` > 0: from its sums of copies 0 .. scatter - 1, added in that order,
+            which it clears - add_partner_share), its plane walls and
             mesh triangles, the particle effects, the integrate stage and the second half kick;
             ``then_drift``: the next step's drift to ``t_next`` too. A particle removed since
             the last rebuild is parked and inert."""
@@ -683,16 +748,26 @@ class Engine:
             scattered_torque = vec0
             scattered_heat = 0.0
             scattered_conductance = 0.0
-            if ti.static(scatter):
+            if ti.static(scatter > 0):
                 scattered_force = s.scattered_force[i]
                 scattered_torque = s.scattered_torque[i]
                 s.scattered_force[i] = vec0
                 s.scattered_torque[i] = vec0
+                for c in ti.static(range(scatter - 1)):
+                    scattered_force = scattered_force + copy_force[c, i]
+                    scattered_torque = scattered_torque + copy_torque[c, i]
+                    copy_force[c, i] = vec0
+                    copy_torque[c, i] = vec0
                 if ti.static(pair_heat):
                     scattered_heat = s.scattered_heat[i]
                     scattered_conductance = s.scattered_conductance[i]
                     s.scattered_heat[i] = 0.0
                     s.scattered_conductance[i] = 0.0
+                    for c in ti.static(range(scatter - 1)):
+                        scattered_heat = scattered_heat + copy_heat[c, i]
+                        scattered_conductance = scattered_conductance + copy_conductance[c, i]
+                        copy_heat[c, i] = 0.0
+                        copy_conductance[c, i] = 0.0
             if s.alive[i] != 0:
                 force = s.owned_force[i]
                 torque = s.owned_torque[i]
@@ -704,7 +779,7 @@ class Engine:
                 if ti.static(thermal):
                     heat = s.owned_heat[i]
                     conductance = s.conductance[i]
-                if ti.static(scatter):
+                if ti.static(scatter > 0):
                     # (no [mobility] here: every particle integrates)
                     force += scattered_force
                     torque += scattered_torque
@@ -804,8 +879,11 @@ class Engine:
                     alpha = torque * s.inverse_inertia[i]
                     s.acceleration[i] = a
                     s.angular_acceleration[i] = alpha
-                    s.velocity[i] += 0.5 * dt * a
-                    s.angular_velocity[i] += 0.5 * dt * alpha
+                    # (``a = a + b``: an augmented assignment to a field is an atomic add in a
+                    # parallel loop, which Taichi turns back into a plain one only where the
+                    # index is the loop's own - not on the workers' inner loops)
+                    s.velocity[i] = s.velocity[i] + 0.5 * dt * a
+                    s.angular_velocity[i] = s.angular_velocity[i] + 0.5 * dt * alpha
                 if then_drift != 0:
                     # the next step's first half, fused here to save a pass over the particles
                     drift_particle(i, dt, t_next)
@@ -816,7 +894,7 @@ class Engine:
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 gather_particle(i, dt, record, then_drift, t_next,
-                                ti.static(serial_loops and scatter_ok))
+                                ti.static(1 if (serial_loops and scatter_ok) else 0))
 
         self._pair_forces = self.serial_switch(pair_forces)
         self._gather = self.serial_switch(gather)
@@ -869,14 +947,15 @@ class Engine:
                 last = j == steps - 1
                 record, full = begin_step(j, t, last, record_last, full_first, True)
                 for i in range(n):
-                    pair_particle(i, dt, full, ti.static(scatter_ok))
+                    pair_particle(i, dt, full, ti.static(scatter_ok), 0)
                 for cell_stage in ti.static(cell_funcs):
                     cell_stage(n, dt)
                 then_drift = 1
                 if last:
                     then_drift = drift_last
                 for i in range(n):
-                    gather_particle(i, dt, record, then_drift, t + dt_time, ti.static(scatter_ok))
+                    gather_particle(i, dt, record, then_drift, t + dt_time,
+                                    ti.static(1 if scatter_ok else 0))
                 done += 1
             return done
 
@@ -899,6 +978,27 @@ class Engine:
             while ti.atomic_add(arrivals[0], arrivals[1]) < arrived * workers:
                 spins += 1
             return 1 if spins > STALL_SPINS else 0
+
+        copies = self.worker_copies
+
+        @ti.func
+        def first_particle(w, n):
+            """Where worker w's particles start in the pair stage when the workers add the
+            partner shares to their own copies (``copies``): the workers' ranges are fixed,
+            so that the sums' order, and so the results, do not depend on the threads'
+            timing - contiguous (cell-sorted: a worker's partners are mostly its own
+            particles) and cut at equal shares of the neighbour entries (the pair stage's
+            work). The first particle whose row starts at or after w/T of the entries."""
+            target = ti.cast(s.row_start[n], ti.i64) * w // workers
+            lo = 0
+            hi = n
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if ti.cast(s.row_start[mid], ti.i64) < target:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            return lo
 
         @ti.func
         def claim(stage):
@@ -924,6 +1024,13 @@ class Engine:
             for task in range(workers * WORKER_TASK):
                 if task % WORKER_TASK == 0:
                     w = task // WORKER_TASK
+                    mine_from = 0
+                    mine_to = 0
+                    if ti.static(copies > 0):
+                        mine_from = first_particle(w, n)
+                        mine_to = n      # (the last: with the particles that have no entries)
+                        if w + 1 < workers:
+                            mine_to = first_particle(w + 1, n)
                     arrived = 0
                     stalls = 0
                     done = 0
@@ -937,11 +1044,16 @@ class Engine:
                         record, full = begin_step(j, t, last, record_last, full_first, w == 0)
                         if w == 0:
                             claims[(arrived + 1) % 3] = 0
-                        c = claim(arrived)
-                        while c < chunks:
-                            for i in range(c * chunk, ti.min(n, (c + 1) * chunk)):
-                                pair_particle(i, dt, full, False)
+                        if ti.static(copies > 0):
+                            # the worker's own range, shares into its own copy
+                            for i in range(mine_from, mine_to):
+                                pair_particle(i, dt, full, True, w)
+                        else:
                             c = claim(arrived)
+                            while c < chunks:
+                                for i in range(c * chunk, ti.min(n, (c + 1) * chunk)):
+                                    pair_particle(i, dt, full, False, 0)
+                                c = claim(arrived)
                         arrived += 1
                         stalls += barrier(arrived)
                         if ti.static(has_cells):
@@ -956,10 +1068,13 @@ class Engine:
                             then_drift = drift_last
                         if w == 0:
                             claims[(arrived + 1) % 3] = 0
+                        # (claimed chunks: no race here, and fixed ranges measured no faster
+                        # - 1.00x, in-process A/B at 32k - with twice the stalled waits)
                         c = claim(arrived)
                         while c < chunks:
                             for i in range(c * chunk, ti.min(n, (c + 1) * chunk)):
-                                gather_particle(i, dt, record, then_drift, t + dt_time, False)
+                                gather_particle(i, dt, record, then_drift, t + dt_time,
+                                                ti.static(copies))
                             c = claim(arrived)
                         arrived += 1
                         stalls += barrier(arrived)
@@ -1045,25 +1160,34 @@ class Engine:
             # the state is left at a whole step (no pending drift) when advance returns
             self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
 
-    # the stalled share of barrier waits (over at least WORKER_STALLS_NOTED) at which the
-    # workers give way to the parallel kernels (None: never, for tests). Measured on this
-    # noisy 2-core VM: alone 0.5 - 1.3 % of the waits stall; two 8k chutes at once 3.7 % (the
-    # steps then ran 6 - 7.5 M/s against 9.4 - 12 with the launches) to 41 %
-    worker_stall_limit: "float | None" = 0.02
-    WORKER_STALLS_NOTED = 8
+    # the stalled share of barrier waits, judged over windows of WORKER_STALL_WINDOW waits, at
+    # which the workers give way to the parallel kernels (None: never, for tests). Measured on
+    # this noisy 2-core VM with the workers' fixed ranges (the pair stage's and the particle
+    # stage's): alone 0.9 - 1.8 % of the waits stall (the hypervisor takes a core now and
+    # then; 32k chute 62 - 76 of 4,120, 8k 27 then 1 of 3,000), the first few hundred waits
+    # after a start up to 3 %; with another busy process on the cores 11 - 13 % (8k chute, the
+    # steps at 6 M particle-steps/s against 20 - 26 alone)
+    worker_stall_limit: "float | None" = 0.05
+    WORKER_STALL_WINDOW = 2000
 
-    def _count_stalls(self, stalls: int):
-        """Barrier waits that stalled in the last run on workers: when more than
-        ``worker_stall_limit`` of them did, the threads are sharing the cores with other work
-        (two test processes, a sweep's workers) and each spin-wait costs a scheduler slice;
-        this engine then goes on with the parallel kernels (same results, bit for bit)."""
+    def _count_stalls(self, stalls: int, barriers: int):
+        """Book a run on the workers: ``barriers`` waits of which ``stalls`` stalled. When more
+        than ``worker_stall_limit`` of a window's waits stalled, the threads are sharing the
+        cores with other work (two test processes, a sweep's workers) and each spin-wait costs
+        a scheduler slice: this engine goes on with the parallel kernels (the same physics;
+        the partners' shares are then gathered, an order of sums that differs by round-off)."""
         self.worker_stalls += stalls
+        self.worker_barriers += barriers
+        self.window_stalls += stalls
+        self.window_barriers += barriers
+        if self.window_barriers < self.WORKER_STALL_WINDOW:
+            return
+        window_stalls, window_barriers = self.window_stalls, self.window_barriers
+        self.window_stalls = self.window_barriers = 0
         limit = self.worker_stall_limit
-        if (limit is not None and not self.workers_give_way
-                and self.worker_stalls >= self.WORKER_STALLS_NOTED
-                and self.worker_stalls > limit * self.worker_barriers):
+        if limit is not None and not self.workers_give_way and window_stalls > limit * window_barriers:
             import sys
-            print(f"taichi-dem: note: {self.worker_stalls} of {self.worker_barriers} barrier "
+            print(f"taichi-dem: note: {window_stalls} of {window_barriers} barrier "
                   f"waits of the {self.workers} worker threads stalled (the cores are shared "
                   f"with other work); going on with one parallel launch per stage, in this "
                   f"process's later simulations too",
@@ -1096,9 +1220,7 @@ class Engine:
             if on_workers:
                 done, stalls = (int(v) for v in self._run_worker_steps(*args))
                 self.worker_runs += 1
-                self.worker_barriers += done * (3 if self.cell_effects else 2)
-                if stalls:
-                    self._count_stalls(stalls)
+                self._count_stalls(stalls, done * (3 if self.cell_effects else 2))
             else:
                 done = int(self._run_steps(*args))
             if self.mesh is not None:

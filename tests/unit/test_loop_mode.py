@@ -62,7 +62,7 @@ def run(text, parallel_from, steps, fused=True, workers=False):
         e = sim.engine
         return dict(position=p["position"], velocity=p["velocity"],
                     temperature=p.get("temperature"), serial=e.serial, runs=e.runs,
-                    worker_runs=e.worker_runs,
+                    worker_runs=e.worker_runs, copies=e.worker_copies,
                     rebuilds=e.broadphase.rebuilds, fused=list(e.broadphase.fused_stages),
                     time=e.time, steps=sim.step_count,
                     series={k: np.asarray(v) for k, v in sim.series.items()})
@@ -105,16 +105,20 @@ def workers_allowed(monkeypatch):
 
 
 @needs_two_cores
-def test_worker_threads_equal_the_parallel_kernels_bit_for_bit():
-    """Above parallel_from a CPU with two cores runs whole steps on worker threads that claim
-    chunks of particles (Engine.workers, run_worker_steps) instead of two parallel launches
-    per step. Each particle's sums are added in the same order whichever worker takes it:
-    in the heap (many particles receive two or more partners' shares) the state is the
-    parallel kernels' bit for bit, through pouring, impacts and rebuilds."""
+def test_claiming_workers_equal_the_parallel_kernels_bit_for_bit(monkeypatch):
+    """Where the workers cannot keep partner shares in copies of their own ([mobility]: its
+    frozen pairs re-use their stored shares; here forced with WORKER_COPIES) they claim chunks
+    of particles in both stages and gather the shares through the mirror index, as the
+    parallel kernels do: each particle's sums are added in the same order whichever worker
+    takes it, so in the heap (many particles receive two or more partners' shares) the state
+    is the parallel kernels' bit for bit, through pouring, impacts and rebuilds."""
+    from taichi_dem.engine import stepper
+    monkeypatch.setattr(stepper, "WORKER_COPIES", False)
     text = heap_text()
     workers = run(text, 0, 3000, workers=True)
     launches = run(text, 0, 3000)
     assert not workers["serial"] and workers["worker_runs"] > 10
+    assert workers["copies"] == 0
     assert launches["worker_runs"] == 0
     assert workers["rebuilds"] > 10 and workers["rebuilds"] == launches["rebuilds"]
     for key in ("position", "velocity", "temperature"):
@@ -125,6 +129,20 @@ def test_worker_threads_equal_the_parallel_kernels_bit_for_bit():
         assert np.allclose(workers["series"][name], launches["series"][name],
                            rtol=1e-9, atol=1e-12), name
         assert np.max(np.abs(launches["series"][name])) > 0.0, name
+
+
+@needs_two_cores
+def test_workers_with_their_own_copies_repeat_bit_for_bit():
+    """The workers' pair stage over fixed ranges, each adding its partners' shares to a copy
+    of its own (Engine.worker_copies): the order of every sum is fixed, so two runs through
+    pouring, impacts and rebuilds give the same state bit for bit, whatever the threads'
+    timing."""
+    text = heap_text()
+    first = run(text, 0, 3000, workers=True)
+    again = run(text, 0, 3000, workers=True)
+    assert first["copies"] == 2 and first["worker_runs"] > 10 and first["rebuilds"] > 10
+    for key in ("position", "velocity", "temperature"):
+        assert np.array_equal(first[key], again[key]), key
 
 
 @needs_two_cores
@@ -156,11 +174,17 @@ def test_stalled_workers_give_way_to_the_parallel_kernels(capsys):
         sim.step(100)
         assert e.worker_runs > 0 and e.workers
         e.worker_stall_limit = Engine.worker_stall_limit
-        e.worker_barriers, e.worker_stalls = 10_000, 0
-        e._count_stalls(150)                    # 1.5 %: a noisy machine
-        sim.step(10)                            # (20 barriers: 1.7 % at most)
+        e.window_barriers = e.window_stalls = 0
+        window = Engine.WORKER_STALL_WINDOW
+        e._count_stalls(120, window - 10)       # 6 % of a window not yet full: not judged
+        assert e.window_barriers == window - 10 and not e.workers_give_way
+        sim.step(10)                            # (20 more barriers: judged, 5.97 % at least)
+        assert e.workers and e.workers_give_way and e.window_barriers == 0
+        e.workers_give_way = False              # (as if that had been 1.5 %, a noisy machine)
+        e._count_stalls(30, window - 20)
+        sim.step(10)
         assert e.workers and not e.workers_give_way
-        e._count_stalls(2000)                   # 21 %: the cores are shared
+        e._count_stalls(window // 5, window)    # 20 %: the cores are shared
         assert e.workers_give_way and "stalled" in capsys.readouterr().err
         runs = e.worker_runs
         sim.step(100)
@@ -246,20 +270,36 @@ def test_direct_partner_shares_equal_the_gather_to_round_off():
     owners = np.sum(touching & (p["id"][None, :] < p["id"][:, None]), axis=1)
     assert np.sum(owners >= 2) > 50, np.bincount(owners)      # measured: 99 of 260
     states = {}
-    for name, parallel_from in (("serial", None), ("parallel", 0)):
+    modes = [("serial", None), ("parallel", 0)]
+    if len(os.sched_getaffinity(0)) >= 2:
+        modes.append(("workers", 0))      # shares in the workers' own copies (2 threads)
+    for name, parallel_from in modes:
         with td.Simulation.from_text(text, parallel_from=parallel_from) as sim:
+            e = sim.engine
+            if name == "parallel":
+                e.workers = 0
+            else:
+                e.worker_stall_limit = None
             checkpoint.restore(sim, snap)
             sim.step(1)
-            assert sim.engine.serial == (name == "serial")
+            assert e.serial == (name == "serial")
+            assert (e.worker_runs == 1) == (name == "workers"), name
             states[name] = sim.particles()
-            if name == "serial":
-                e = sim.engine
-                for field in (e.state.scattered_force, e.state.scattered_torque,
-                              e.state.scattered_heat, e.state.scattered_conductance):
-                    assert not np.any(field.to_numpy()), field
-    serial, parallel = states["serial"], states["parallel"]
-    assert np.array_equal(serial["id"], parallel["id"])
-    for key, scale in (("velocity", 1.0), ("angular_velocity", 100.0), ("temperature", 400.0)):
-        # one step's kick: a force of ~1e-3 N on 7e-4 kg for dt; round-off ~1e-16 of each term
-        assert np.max(np.abs(serial[key] - parallel[key])) < 1e-12 * scale, key
-    assert np.array_equal(serial["position"], parallel["position"])    # drifted before the forces
+            sums = [e.state.scattered_force, e.state.scattered_torque,
+                    e.state.scattered_heat, e.state.scattered_conductance]
+            if name == "workers":
+                assert e.worker_copies == 2
+                sums += [e.copy_force, e.copy_torque, e.copy_heat, e.copy_conductance]
+                # both workers' ranges own pairs whose partners are in the other's
+                n, rs = e.count, e.state.row_start.to_numpy()
+                assert 0 < np.searchsorted(rs[:n + 1], rs[n] // 2) < n
+            for field in sums:
+                assert not np.any(field.to_numpy()), field
+    serial = states["serial"]
+    for other in list(states)[1:]:
+        assert np.array_equal(serial["id"], states[other]["id"])
+        for key, scale in (("velocity", 1.0), ("angular_velocity", 100.0), ("temperature", 400.0)):
+            # one step's kick: a force of ~1e-3 N on 7e-4 kg for dt; round-off ~1e-16 of each term
+            assert np.max(np.abs(serial[key] - states[other][key])) < 1e-12 * scale, (other, key)
+        # drifted before the forces
+        assert np.array_equal(serial["position"], states[other]["position"]), other
