@@ -28,7 +28,8 @@ def rotate_into_tangent_plane(history, normal):
 
 @ti.func
 def contact_force(normal, normal_overlap, r_eff, m_eff, v_rel, normal_acceleration,
-                  tangential_history, youngs_eff, shear_eff, damping, friction, dt):
+                  tangential_history, youngs_eff, shear_eff, damping, friction, dt,
+                  tangential_damping_ratio):
     """One Hertz-Mindlin contact. ``normal`` is the unit vector from the partner to this
     particle, ``v_rel`` the velocity of this particle relative to the partner at the contact
     point (m/s, at the half step), ``normal_acceleration`` the relative acceleration along
@@ -43,13 +44,15 @@ def contact_force(normal, normal_overlap, r_eff, m_eff, v_rel, normal_accelerati
     # per contact). Predicting v_n at the full step, v + a dt/2, makes it second order.
     predicted_normal_speed = normal_speed + 0.5 * dt * normal_acceleration
     elastic_normal = 4.0 / 3.0 * youngs_eff * contact_stiffness_root * normal_overlap
-    normal_force = elastic_normal - damping * ti.sqrt(normal_stiffness * m_eff) * predicted_normal_speed
+    normal_damping = damping * ti.sqrt(normal_stiffness * m_eff)       # zeta sqrt(S_n m*)
+    normal_force = elastic_normal - normal_damping * predicted_normal_speed
     normal_force = ti.max(normal_force, 0.0)
 
     tangential_velocity = v_rel - normal_speed * normal
     displacement = rotate_into_tangent_plane(tangential_history, normal) + tangential_velocity * dt
-    # sqrt(S_t m*) = sqrt(S_n m*) sqrt(4 G*/E*): one square root less per contact
-    tangential_damping = damping * ti.sqrt(normal_stiffness * m_eff * 4.0 * shear_eff / youngs_eff)
+    # zeta sqrt(S_t m*) = zeta sqrt(S_n m*) sqrt(4 G*/E*), the last factor a pair table:
+    # no square root or division more per contact
+    tangential_damping = normal_damping * tangential_damping_ratio
     tangential_force = -tangential_stiffness * displacement - tangential_damping * tangential_velocity
     limit = friction * normal_force
     magnitude_sq = tangential_force.dot(tangential_force)
@@ -71,10 +74,19 @@ class HertzMindlin(Effect):
     kinds = ("pair", "plane", "triangle")
     mechanical = True
     contact_fields = {"tangential_history": (True, "real")}
-    tables = ("youngs_eff", "shear_eff", "damping", "friction")
+    tables = ("youngs_eff", "shear_eff", "damping", "friction", "tangential_damping_ratio")
+
+    def table_values(self, scene, tables) -> dict:
+        """The pair tables, and sqrt(4 G*/E*): sqrt(S_t / S_n), which turns the normal
+        damping coefficient into the tangential one (dimensionless)."""
+        import numpy as np
+        values = {name: getattr(tables, name) for name in self.tables[:4]}
+        values["tangential_damping_ratio"] = np.sqrt(4.0 * tables.shear_eff / tables.youngs_eff)
+        return values
 
     def contact_func(self, engine):
-        youngs_eff, shear_eff, damping, friction = (engine.table[n] for n in self.tables)
+        youngs_eff, shear_eff, damping, friction, tangential_damping_ratio = (
+            engine.table[n] for n in self.tables)
 
         @ti.func
         def hertz_mindlin(c, out, history, dt):
@@ -82,7 +94,7 @@ class HertzMindlin(Effect):
             fn, ft, tangential, sn = contact_force(
                 c.normal, c.normal_overlap, c.r_eff, c.m_eff, c.v_rel, c.normal_acceleration,
                 history.tangential, youngs_eff[mi, mj], shear_eff[mi, mj], damping[mi, mj],
-                friction[mi, mj], dt)
+                friction[mi, mj], dt, tangential_damping_ratio[mi, mj])
             out.force = fn * c.normal + ft
             lever = c.normal.cross(ft)
             out.torque_i = -c.arm_i * lever

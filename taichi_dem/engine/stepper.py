@@ -221,6 +221,9 @@ class Engine:
             # checkpoint neither holds nor needs them
             self.worker_copies = self.workers if (self.scatter_ok and WORKER_COPIES) else 0
             extra = max(self.worker_copies - 1, 0)
+            if self.worker_copies:
+                # where each worker's range of the pair stage starts (cut_ranges), and n
+                self.worker_first = wt.add("worker_first", ti.i32, self.workers + 1)
             if extra:
                 self.copy_force = wt.add("copy_force", real, (extra, capacity), vector=True)
                 self.copy_torque = wt.add("copy_torque", real, (extra, capacity), vector=True)
@@ -980,25 +983,32 @@ class Engine:
             return 1 if spins > STALL_SPINS else 0
 
         copies = self.worker_copies
+        worker_first = self.worker_first if copies else None
 
         @ti.func
-        def first_particle(w, n):
-            """Where worker w's particles start in the pair stage when the workers add the
-            partner shares to their own copies (``copies``): the workers' ranges are fixed,
-            so that the sums' order, and so the results, do not depend on the threads'
-            timing - contiguous (cell-sorted: a worker's partners are mostly its own
-            particles) and cut at equal shares of the neighbour entries (the pair stage's
-            work). The first particle whose row starts at or after w/T of the entries."""
-            target = ti.cast(s.row_start[n], ti.i64) * w // workers
-            lo = 0
-            hi = n
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if ti.cast(s.row_start[mid], ti.i64) < target:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            return lo
+        def cut_ranges(n):
+            """The workers' fixed ranges of the pair stage when they add the partner shares to
+            copies of their own (``copies``): fixed, so that the sums' order, and so the
+            results, do not depend on the threads' timing; contiguous (cell-sorted: a worker's
+            partners are mostly its own particles); cut at equal shares of the pair stage's
+            work, one per owned entry and one per particle. Worker w's range starts at
+            worker_first[w]. One serial pass (~0.5 ns a particle), at the start of a run."""
+            work = 0
+            for i in range(n):
+                work += s.row_owned[i] + 1
+            total_work = work
+            worker_first[0] = 0
+            for w in range(1, workers):
+                worker_first[w] = n
+            worker_first[workers] = n
+            work = 0
+            w = 1
+            for i in range(n):
+                # the first particle whose work starts at or past w / T of the total
+                while w < workers and work * workers >= total_work * w:
+                    worker_first[w] = i
+                    w += 1
+                work += s.row_owned[i] + 1
 
         @ti.func
         def claim(stage):
@@ -1024,15 +1034,17 @@ class Engine:
             for task in range(workers * WORKER_TASK):
                 if task % WORKER_TASK == 0:
                     w = task // WORKER_TASK
+                    arrived = 0
+                    stalls = 0
                     mine_from = 0
                     mine_to = 0
                     if ti.static(copies > 0):
-                        mine_from = first_particle(w, n)
-                        mine_to = n      # (the last: with the particles that have no entries)
-                        if w + 1 < workers:
-                            mine_to = first_particle(w + 1, n)
-                    arrived = 0
-                    stalls = 0
+                        if w == 0:
+                            cut_ranges(n)
+                        arrived += 1
+                        stalls += barrier(arrived)
+                        mine_from = worker_first[w]
+                        mine_to = worker_first[w + 1]
                     done = 0
                     for j in range(steps):
                         # (read by all after the last barrier; only a drift sets it)
@@ -1220,7 +1232,8 @@ class Engine:
             if on_workers:
                 done, stalls = (int(v) for v in self._run_worker_steps(*args))
                 self.worker_runs += 1
-                self._count_stalls(stalls, done * (3 if self.cell_effects else 2))
+                self._count_stalls(stalls, done * (3 if self.cell_effects else 2)
+                                   + (1 if self.worker_copies else 0))
             else:
                 done = int(self._run_steps(*args))
             if self.mesh is not None:

@@ -20,19 +20,31 @@ particles' order and the chaotic trajectories, by as little (2e-9); seed 1 moved
 The shell's heat flow (mean over [T0, UNTIL]) with the ash coarse-grained for 100 um particles
 (issue 10: [materials.ash] coarse_grained, thermal/coarse_grained.py), seeds 1-4, 2026-12-02:
     13462, 13584, 13548, 13542 W: mean 13534, std 51.6
-pinned as mean +- 3 std (+- 155 W, 1.1 %): a change of the wall heat law, the contact ages, the
-bed's mixing at the shell or the shell's conductance that moves it beyond the seeds' scatter
+pinned first as mean +- 3 std (+- 155 W, 1.1 %; now wider, below): a change of the wall heat
+law, the contact ages, the bed's mixing at the shell or the shell's conductance that moves it beyond the seeds' scatter
 fails. (The same runs' torque and residence, -8.953 +- 0.424 N m and 2.987 +- 0.113 s, agree
 with the pins above; seed 1 read -8.563 N m and 2.923 s.)
+
+The scatter of seeds understates the torque's and the shell heat flow's (2026-12-03): seed 1
+run 11 times with round-off perturbations (the normal damping scaled by 1 +- k 1e-7, k = 1 - 4,
+a scratch edit of effects/hertz_mindlin.py, on the code before and after the tangential
+damping became sqrt(S_n m*) times a pair table - the same product, rounded differently) gave
+torques -8.37 to -11.31 N m (mean -9.11, std 0.85), shell heat flows 13212 - 14016 W (mean
+13565, std 206) and residences 2.77 - 3.00 s (mean 2.87, std 0.069): a granular flow is
+chaotic, and a change in the last bit of the contacts' damping moves the 6 s mean torque by
+up to 25 % (why its tail is that long was not looked into). The tolerances are therefore 3 times
+the larger of the two spreads (torque +- 2.54 N m, shell heat flow +- 618 W, 4.6 %; residence
+keeps +- 0.31 s); the means stay the seeds', which the perturbed runs' agree with (-8.98
+against -9.11 N m, 13534 against 13565 W).
 """
 import numpy as np
 import pytest
 
 from cooler_reference import T0, UNTIL, run
 
-TORQUE_MEAN, TORQUE_STD = -8.982, 0.292
+TORQUE_MEAN, TORQUE_STD = -8.982, 0.848         # (std: the round-off runs', above)
 RESIDENCE_MEAN, RESIDENCE_STD = 2.960, 0.104
-SHELL_HEAT_MEAN, SHELL_HEAT_STD = 13534.0, 51.6
+SHELL_HEAT_MEAN, SHELL_HEAT_STD = 13534.0, 206.0  # (std: the round-off runs', above)
 
 
 HEAT: dict = {}
@@ -65,4 +77,5 @@ def test_energy_balance_in_f32(cooler):
 
 def test_shell_heat_flow(cooler):
     # the coarse-grained wall law at work: 26x the 510 W of 30 mm spheres (BENCHMARKS.md)
+    # (a law that lost it would read 510 W; one that doubled it, 27,000 W: both far outside)
     assert abs(HEAT["shell_heat_flow"] - SHELL_HEAT_MEAN) < 3 * SHELL_HEAT_STD, HEAT["shell_heat_flow"]
