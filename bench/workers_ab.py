@@ -1,11 +1,19 @@
 #!/usr/bin/env python3
-"""Runs of steps on worker threads against two parallel launches per step, in one process on
-one state (the same results bit for bit, so the windows alternate on one trajectory): the
-chute at ``--size`` in the parallel mode, ``--rounds`` rounds of a ``--steps``-step window in
-each, medians of particle-steps per second. Alternating in one process is what makes the
-ratio trustworthy on this noisy machine (runs minutes apart differ by 20 % and more).
+"""Runs of steps on worker threads against another way of stepping, in one process,
+alternating windows of ``--steps`` steps for ``--rounds`` rounds (medians of particle-steps
+per second, and the median of the rounds' paired ratios): the chute at ``--size`` from
+``parallel_from`` = 0. Alternating in one process is what makes a ratio trustworthy on this
+noisy machine (runs minutes apart differ by 20 % and more).
 
-    .venv/bin/python bench/workers_ab.py --size 32k --steps 600 --rounds 5
+``--against``:
+  launches  two parallel launches per step (one simulation, the workers switched off and on;
+            the modes differ by round-off, so the windows go on along nearly one trajectory)
+  claims    workers that claim chunks in the pair stage too and store the partners' shares
+            at the entries (stepper.WORKER_COPIES = False, as under [mobility]): a second
+            simulation of the same scene, windows alternating between the two
+  serial    the serial mode on one thread, runs of steps (one simulation, modes switched)
+
+    .venv/bin/python bench/workers_ab.py --size 32k --steps 100 --rounds 20 --against claims
 """
 import argparse
 import statistics
@@ -29,37 +37,70 @@ def main(argv=None) -> int:
     p.add_argument("--size", default="32k", choices=list(SIZES))
     p.add_argument("--steps", type=int, default=600)
     p.add_argument("--rounds", type=int, default=5)
+    p.add_argument("--against", default="launches", choices=["launches", "claims", "serial"])
     a = p.parse_args(argv)
     import taichi as ti
     import taichi_dem as td
+    from taichi_dem.engine import stepper
     scene = write_chute_scene(Path(tempfile.mkdtemp()) / a.size, **SIZES[a.size])
-    sim = td.Simulation.from_toml(str(scene), precision="f32", h5="", parallel_from=0)
+
+    def make(copies: bool):
+        stepper.WORKER_COPIES = copies
+        try:
+            sim = td.Simulation.from_toml(str(scene), precision="f32", h5="", parallel_from=0)
+        finally:
+            stepper.WORKER_COPIES = True
+        sim.engine.worker_stall_limit = None      # measure them, whatever the machine does
+        return sim
+
+    sim = make(True)
     e = sim.engine
     workers = e.workers
     if not workers:
         print("no worker threads on this machine (one core, or a GPU)")
+        sim.close()
         return 1
-    e.worker_stall_limit = None              # measure them, whatever the machine does
+    other_sim = make(False) if a.against == "claims" else sim
+
+    def mode(name):
+        """Set up ``name`` ("workers" or a.against) and return the simulation to step."""
+        if name == "workers" or a.against == "claims":
+            return sim if name == "workers" else other_sim
+        if a.against == "launches":
+            e.workers = 0
+        else:                                    # serial: below parallel_from
+            e.parallel_from, e.serial = 10 ** 9, True
+        return sim
+
+    def back_to_workers():
+        e.parallel_from, e.serial, e.workers = 0, False, workers
+
+    names = ("workers", a.against)
     try:
-        for w in (workers, 0):               # JIT of both
-            e.workers = w
-            sim.step(60)
-        rates = {"workers": [], "launches": []}
+        for name in names:                       # JIT of both
+            mode(name).step(60)
+            back_to_workers()
+        rates = {name: [] for name in names}
         for _ in range(a.rounds):
-            for name, w in (("workers", workers), ("launches", 0)):
-                e.workers = w
+            for name in names:
+                s = mode(name)
                 t0 = time.perf_counter()
-                sim.step(a.steps)
+                s.step(a.steps)
                 ti.sync()
-                rates[name].append(sim.particle_count * a.steps / (time.perf_counter() - t0))
+                rates[name].append(s.particle_count * a.steps / (time.perf_counter() - t0))
+                back_to_workers()
         med = {k: statistics.median(v) for k, v in rates.items()}
         for k, v in rates.items():
             print(f"chute {a.size} ({sim.particle_count} particles), {k:8s}: median "
                   f"{med[k] / 1e6:.2f} M particle-steps/s  "
                   f"({', '.join(f'{x / 1e6:.2f}' for x in v)})")
-        print(f"workers / launches: {med['workers'] / med['launches']:.2f}; barrier waits "
-              f"that stalled: {e.worker_stalls} of {e.worker_barriers}")
+        paired = [w / o for w, o in zip(rates["workers"], rates[a.against])]
+        print(f"workers / {a.against}: median of the rounds' ratios {statistics.median(paired):.3f} "
+              f"({', '.join(f'{r:.2f}' for r in paired)}); barrier waits that stalled: "
+              f"{e.worker_stalls} of {e.worker_barriers}")
     finally:
+        if other_sim is not sim:
+            other_sim.close()
         sim.close()
     return 0
 
