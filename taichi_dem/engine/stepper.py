@@ -79,7 +79,11 @@ WORKER_TASK = 512       # loop iterations per worker: its one active iteration i
 WORKER_CHUNK = 128      # particles per claim: a claim costs one atomic, a chunk ~5 - 50 us
 WORKER_COPIES = True    # False: the pair stage claims chunks and stores shares at the entries
                         # in every scene, as under [mobility] (tests, bench A/B)
-STALL_SPINS = 20_000    # a barrier wait this long (~0.5 - 1 ms): a worker had lost its core
+STALL_SPINS = 20_000    # a barrier wait this long (~0.5 - 1 ms), plus half a spin per particle
+# (STALL_SPINS_PER_PARTICLE: ~a quarter of a stage, whose particles take ~25 - 50 ns each on
+# a worker, so that an uneven split of a large scene's stage is not taken for a stall): a
+# worker had lost its core. (At 128k a fixed 20,000 counted 16 % of the waits of a run alone.)
+STALL_SPINS_PER_PARTICLE = 0.5
 PROBE_SPINS = 300_000_000   # the start-up check that the workers run at once (seconds at most)
 _probe_result: dict = {}     # per worker count; "gave way": see _count_stalls
 
@@ -205,6 +209,7 @@ class Engine:
         self.worker_stalls = 0
         self.window_barriers = 0          # (_count_stalls)
         self.window_stalls = 0
+        self.stalled_windows = 0
         self.worker_tree = None
         self.worker_copies = 0
         if self.workers:
@@ -972,15 +977,15 @@ class Engine:
         chunk = WORKER_CHUNK
 
         @ti.func
-        def barrier(arrived):
+        def barrier(arrived, stall_spins):
             """Arrive (the ``arrived``-th barrier of this launch) and wait for every worker;
-            returns 1 if the wait stalled (STALL_SPINS: a worker had lost its core)."""
+            returns 1 if the wait stalled (past ``stall_spins``: a worker had lost its core)."""
             ti.atomic_add(arrivals[0], 1)
             spins = 0
             # (an atomic read: a plain load could stay in a register across the loop)
             while ti.atomic_add(arrivals[0], arrivals[1]) < arrived * workers:
                 spins += 1
-            return 1 if spins > STALL_SPINS else 0
+            return 1 if spins > stall_spins else 0
 
         copies = self.worker_copies
         worker_first = self.worker_first if copies else None
@@ -1031,6 +1036,7 @@ class Engine:
             outcome[0] = 0
             outcome[1] = 0
             chunks = (n + chunk - 1) // chunk
+            stall_spins = STALL_SPINS + ti.cast(STALL_SPINS_PER_PARTICLE * n, ti.i32)
             for task in range(workers * WORKER_TASK):
                 if task % WORKER_TASK == 0:
                     w = task // WORKER_TASK
@@ -1042,7 +1048,7 @@ class Engine:
                         if w == 0:
                             cut_ranges(n)
                         arrived += 1
-                        stalls += barrier(arrived)
+                        stalls += barrier(arrived, stall_spins)
                         mine_from = worker_first[w]
                         mine_to = worker_first[w + 1]
                     done = 0
@@ -1067,14 +1073,14 @@ class Engine:
                                     pair_particle(i, dt, full, False, 0)
                                 c = claim(arrived)
                         arrived += 1
-                        stalls += barrier(arrived)
+                        stalls += barrier(arrived, stall_spins)
                         if ti.static(has_cells):
                             if w == 0:
                                 claims[(arrived + 1) % 3] = 0
                                 for cell_stage in ti.static(cell_funcs):
                                     cell_stage(n, dt)
                             arrived += 1
-                            stalls += barrier(arrived)
+                            stalls += barrier(arrived, stall_spins)
                         then_drift = 1
                         if last:
                             then_drift = drift_last
@@ -1089,7 +1095,7 @@ class Engine:
                                                 ti.static(copies))
                             c = claim(arrived)
                         arrived += 1
-                        stalls += barrier(arrived)
+                        stalls += barrier(arrived, stall_spins)
                         done += 1
                     if w == 0:
                         outcome[0] = done
@@ -1177,14 +1183,17 @@ class Engine:
     # this noisy 2-core VM with the workers' fixed ranges in the pair stage (2026-12-03): alone
     # 0.9 - 3 % of the waits stall (the hypervisor takes a core now and then; 32k chute 62 -
     # 125 of 4,120 - 4,200), 5.4 % in a slow phase of the host, the first few hundred waits
-    # after a start up to 3 %; with a busy process beside them 13 - 16 % (8k chute, 4.4 - 5.4 M
-    # particle-steps/s against 20 - 26 alone) and 36 - 57 % (32k, 1.3 - 1.8 M/s)
+    # after a start up to 3 %, and 10 - 16 % at 128k in a noisy phase that passed (1.2 % an
+    # hour later); with a busy process beside them 5 - 16 % (8k chute, 4.4 - 9.2 M
+    # particle-steps/s against 20 - 26 alone) and 36 - 57 % (32k, 1.3 - 6.4 M/s)
     worker_stall_limit: "float | None" = 0.08
     WORKER_STALL_WINDOW = 2000
+    WORKER_STALLED_WINDOWS = 2
 
     def _count_stalls(self, stalls: int, barriers: int):
         """Book a run on the workers: ``barriers`` waits of which ``stalls`` stalled. When more
-        than ``worker_stall_limit`` of a window's waits stalled, the threads are sharing the
+        than ``worker_stall_limit`` of the waits stalled in WORKER_STALLED_WINDOWS windows in
+        a row, the threads are sharing the
         cores with other work (two test processes, a sweep's workers) and each spin-wait costs
         a scheduler slice: this engine goes on with the parallel kernels (the same physics;
         the partners' shares are then gathered, an order of sums that differs by round-off)."""
@@ -1197,7 +1206,12 @@ class Engine:
         window_stalls, window_barriers = self.window_stalls, self.window_barriers
         self.window_stalls = self.window_barriers = 0
         limit = self.worker_stall_limit
-        if limit is not None and not self.workers_give_way and window_stalls > limit * window_barriers:
+        if limit is None or window_stalls <= limit * window_barriers:
+            self.stalled_windows = 0
+            return
+        # (two windows in a row: a slow phase of a shared host passes, other work stays)
+        self.stalled_windows += 1
+        if not self.workers_give_way and self.stalled_windows >= self.WORKER_STALLED_WINDOWS:
             import sys
             print(f"taichi-dem: note: {window_stalls} of {window_barriers} barrier "
                   f"waits of the {self.workers} worker threads stalled (the cores are shared "

@@ -177,14 +177,16 @@ def test_stalled_workers_give_way_to_the_parallel_kernels(capsys):
         e.window_barriers = e.window_stalls = 0
         window = Engine.WORKER_STALL_WINDOW
         e._count_stalls(170, window - 10)       # 8.5 % of a window not yet full: not judged
-        assert e.window_barriers == window - 10 and not e.workers_give_way
+        assert e.window_barriers == window - 10 and e.stalled_windows == 0
         sim.step(10)                            # (20 more barriers: judged, 8.4 % at least)
-        assert e.workers and e.workers_give_way and e.window_barriers == 0
-        e.workers_give_way = False              # (as if that had been 1.5 %, a noisy machine)
-        e._count_stalls(30, window - 20)
+        assert e.window_barriers == 0 and e.stalled_windows == 1
+        assert e.workers and not e.workers_give_way      # one window: a slow phase, perhaps
+        e._count_stalls(30, window - 20)        # 1.5 - 2.5 %: a noisy machine
         sim.step(10)
-        assert e.workers and not e.workers_give_way
+        assert e.stalled_windows == 0 and not e.workers_give_way
         e._count_stalls(window // 5, window)    # 20 %: the cores are shared
+        assert e.stalled_windows == 1 and not e.workers_give_way
+        e._count_stalls(window // 5, window)    # and still
         assert e.workers_give_way and "stalled" in capsys.readouterr().err
         runs = e.worker_runs
         sim.step(100)
