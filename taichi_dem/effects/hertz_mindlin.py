@@ -81,7 +81,10 @@ class HertzMindlin(Effect):
         damping coefficient into the tangential one (dimensionless)."""
         import numpy as np
         values = {name: getattr(tables, name) for name in self.tables[:4]}
-        values["tangential_damping_ratio"] = np.sqrt(4.0 * tables.shear_eff / tables.youngs_eff)
+        # (0, not 0/0, for a pair of materials that never meet: no interaction, zero tables)
+        ratio = np.divide(4.0 * tables.shear_eff, tables.youngs_eff,
+                          out=np.zeros_like(tables.youngs_eff), where=tables.youngs_eff > 0.0)
+        values["tangential_damping_ratio"] = np.sqrt(ratio)
         return values
 
     def contact_func(self, engine):
