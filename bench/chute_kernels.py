@@ -9,6 +9,11 @@ gather and of the neighbour rebuild timed on its own (synchronised before and af
 ``--rebuild-parts``: each kernel of the rebuild timed instead of the whole; ``--fused-rebuild``:
 the serial mode's one-launch rebuild (on one thread) instead of the parallel kernels.
 
+``--serial``: the serial mode's kernels instead (one thread, the partners' shares added
+directly, the one-launch rebuild), one launch per stage rather than its runs of steps: what a
+core costs per stage without the mirror pass.
+
+The worker threads (Engine.workers) are switched off: their runs of steps are one launch.
 ``--threads 1`` runs the parallel kernels (not the serial mode's runs of steps) on a one-thread
 Taichi pool, so that the two runs compare the same code: their ratio is what the second thread
 gives each kernel. Particle-steps per second here include the synchronisations (a few per cent
@@ -40,13 +45,18 @@ def main(argv=None) -> int:
     p.add_argument("--warmup", type=int, default=60)
     p.add_argument("--rebuild-parts", action="store_true")
     p.add_argument("--fused-rebuild", action="store_true")
+    p.add_argument("--serial", action="store_true")
     a = p.parse_args(argv)
     import taichi as ti
     import taichi_dem as td
     scene = write_chute_scene(Path(tempfile.mkdtemp()) / a.size, **SIZES[a.size])
-    sim = td.Simulation.from_toml(str(scene), threads=a.threads, precision="f32", h5="")
+    sim = td.Simulation.from_toml(str(scene), threads=a.threads, precision="f32", h5="",
+                                  parallel_from=10 ** 9 if a.serial else None)
     e = sim.engine
-    if a.threads == 1:
+    e.workers = 0                  # (one launch per stage: the kernels timed one by one)
+    if a.serial:
+        e.runs = False             # (the serial kernels launched per step, not in runs)
+    elif a.threads == 1:
         # one thread would choose the serial mode: keep the parallel kernels instead
         e.threads = 2
         e.choose_loop_mode(e.count)
@@ -89,7 +99,8 @@ def main(argv=None) -> int:
         ti.sync()
         wall = time.perf_counter() - t0
         n = sim.particle_count
-        print(f"chute {a.size} ({n} particles), {a.threads} thread(s), parallel kernels: "
+        kind = "serial kernels" if a.serial else "parallel kernels"
+        print(f"chute {a.size} ({n} particles), {a.threads} thread(s), {kind}: "
               f"{n * a.steps / wall / 1e6:.2f} M particle-steps/s, {1e3 * wall / a.steps:.3f} ms "
               f"per step")
         for name, v in times.items():
