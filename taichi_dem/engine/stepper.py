@@ -589,35 +589,30 @@ class Engine:
         copy_heat = self.copy_heat if (extra_copies and self.thermal) else None
         copy_conductance = self.copy_conductance if (extra_copies and self.thermal) else None
 
-        @ti.func
-        def add_partner_share(copy, j, force, torque):
-            """Add a pair's partner share - force (N) and torque (N m) - to partner j's sums
-            of copy ``copy``: 0 the serial mode's ``scattered_*``, w > 0 worker w's (only that
-            worker writes it). (``a = a + b``: an augmented assignment would be an atomic.)"""
-            if ti.static(extra_copies > 0):
-                if copy == 0:
-                    s.scattered_force[j] = s.scattered_force[j] + force
-                    s.scattered_torque[j] = s.scattered_torque[j] + torque
+        def share_adder(first, second, copies_of_first, copies_of_second):
+            """A ti.func (copy, j, a, b) adding a pair's partner share - a to ``first``, b to
+            ``second`` at partner j - in copy ``copy`` of the sums: 0 the serial mode's
+            ``scattered_*``, w > 0 worker w's (only that worker writes it). (``x = x + a``: an
+            augmented assignment would be an atomic add.)"""
+            @ti.func
+            def add(copy, j, a, b):
+                if ti.static(extra_copies > 0):
+                    if copy == 0:
+                        first[j] = first[j] + a
+                        second[j] = second[j] + b
+                    else:
+                        copies_of_first[copy - 1, j] = copies_of_first[copy - 1, j] + a
+                        copies_of_second[copy - 1, j] = copies_of_second[copy - 1, j] + b
                 else:
-                    copy_force[copy - 1, j] = copy_force[copy - 1, j] + force
-                    copy_torque[copy - 1, j] = copy_torque[copy - 1, j] + torque
-            else:
-                s.scattered_force[j] = s.scattered_force[j] + force
-                s.scattered_torque[j] = s.scattered_torque[j] + torque
+                    first[j] = first[j] + a
+                    second[j] = second[j] + b
+            return add
 
-        @ti.func
-        def add_partner_heat(copy, j, heat, conductance):
-            """add_partner_share for the heat flow (W) and conductance (W/K)."""
-            if ti.static(extra_copies > 0):
-                if copy == 0:
-                    s.scattered_heat[j] = s.scattered_heat[j] + heat
-                    s.scattered_conductance[j] = s.scattered_conductance[j] + conductance
-                else:
-                    copy_heat[copy - 1, j] = copy_heat[copy - 1, j] + heat
-                    copy_conductance[copy - 1, j] = copy_conductance[copy - 1, j] + conductance
-            else:
-                s.scattered_heat[j] = s.scattered_heat[j] + heat
-                s.scattered_conductance[j] = s.scattered_conductance[j] + conductance
+        # force (N) and torque (N m); heat flow (W) and conductance (W/K)
+        add_partner_share = share_adder(s.scattered_force, s.scattered_torque, copy_force,
+                                        copy_torque)
+        add_partner_heat = (share_adder(s.scattered_heat, s.scattered_conductance, copy_heat,
+                                        copy_conductance) if self.thermal else None)
 
         @ti.func
         def pair_particle(i, dt, full, scatter: ti.template(), copy):
