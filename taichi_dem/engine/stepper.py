@@ -62,10 +62,10 @@ PARALLEL_FROM = 5000
 # drift - on T workers that meet at a spin barrier after each stage (~0.1 - 0.2 us here),
 # instead of two parallel launches per step (each ~100 us to dispatch to Taichi's thread pool
 # on these machines). In the pair stage worker w computes the owned pairs of a fixed range of
-# cell-sorted particles (cut at equal shares of the neighbour entries) and adds each
+# cell-sorted particles (cut at equal shares of owned entries + particles) and adds each
 # partner's share to copy w of the partners' sums, as the serial mode does to its one copy:
 # no race, no store of the share at the entry and no second pass through the mirror index
-# (1.27x the chunk-claiming pair stage at 32k, BENCHMARKS.md stop 18); fixed ranges keep
+# (1.24 - 1.27x the chunk-claiming pair stage at 32k, BENCHMARKS.md stop 18); fixed ranges keep
 # every sum's order, and so the results, independent of the threads' timing. In the particle
 # stage the workers claim chunks of WORKER_CHUNK particles from an atomic counter; each
 # particle adds its copies in order. Where shares must stay at the entries ([mobility]:
@@ -993,7 +993,7 @@ class Engine:
             partners are mostly its own particles); cut at equal shares of the pair stage's
             work, one per owned entry and one per particle. Worker w's range starts at
             worker_first[w]. One serial pass (~0.5 ns a particle), at the start of a run."""
-            work = 0
+            work = ti.i64(0)
             for i in range(n):
                 work += s.row_owned[i] + 1
             total_work = work
@@ -1001,7 +1001,7 @@ class Engine:
             for w in range(1, workers):
                 worker_first[w] = n
             worker_first[workers] = n
-            work = 0
+            work = ti.i64(0)
             w = 1
             for i in range(n):
                 # the first particle whose work starts at or past w / T of the total
@@ -1021,9 +1021,10 @@ class Engine:
                              full_first: ti.i32, record_last: ti.i32,
                              drift_last: ti.i32) -> ti.types.vector(2, ti.i32):
             """run_steps on ``workers`` threads at once (WORKER_TASK): per step the pair
-            stage, the cell stage (worker 0) and the particle stage with the next drift, each
-            over chunks the workers claim, with a barrier after each. Returns (steps done,
-            barrier waits that stalled)."""
+            stage (each worker its fixed range, cut_ranges, with copies of the sums of its
+            own; else over chunks the workers claim), the cell stage (worker 0) and the
+            particle stage with the next drift (over claimed chunks), with a barrier after
+            each. Returns (steps done, barrier waits that stalled)."""
             arrivals[0] = 0
             arrivals[1] = 0
             for k in ti.static(range(3)):
