@@ -67,7 +67,7 @@ PARALLEL_FROM = 5000
 # no race, no store of the share at the entry and no second pass through the mirror index
 # (1.24 - 1.27x the chunk-claiming pair stage at 32k, BENCHMARKS.md stop 18); fixed ranges keep
 # every sum's order, and so the results, independent of the threads' timing. In the particle
-# stage the workers claim chunks of WORKER_CHUNK particles from an atomic counter; each
+# stage the workers claim chunks of particles from an atomic counter (WORKER_CHUNK); each
 # particle adds its copies in order. Where shares must stay at the entries ([mobility]:
 # Engine.scatter_ok) the pair stage claims chunks too and the particle stage gathers through
 # the mirror: the parallel kernels' results bit for bit.
@@ -76,7 +76,10 @@ WORKER_TASK = 512       # loop iterations per worker: its one active iteration i
 # which ti.loop_config(block_dim=...) does not change - or of 32 without it: iteration
 # w * 512 starts a task of its own either way, so no thread is handed two workers and waits
 # for itself; a loop of 512 iterations or fewer runs on one thread)
-WORKER_CHUNK = 128      # particles per claim: a claim costs one atomic, a chunk ~5 - 50 us
+WORKER_CHUNK = 128      # particles per claim at least, and WORKER_CHUNKS claims per worker and
+WORKER_CHUNKS = 16      # stage at most: a claim costs an atomic on a line both workers hit,
+# a particle of the particle stage ~14 ns (32k chute: 1,000-particle chunks 1.03x the 128 of
+# stop 17, median of 20 paired 100-step windows; the last chunk ~1/16 of a worker's stage)
 WORKER_COPIES = True    # False: the pair stage claims chunks and stores shares at the entries
                         # in every scene, as under [mobility] (tests, bench A/B)
 STALL_SPINS = 20_000    # a barrier wait this long (~0.5 - 1 ms), plus half a spin per particle
@@ -969,7 +972,6 @@ class Engine:
             return
         arrivals, claims, outcome = self.worker_arrivals, self.worker_claims, self.worker_outcome
         has_cells = len(cell_funcs) > 0
-        chunk = WORKER_CHUNK
 
         @ti.func
         def barrier(arrived, stall_spins):
@@ -1031,6 +1033,7 @@ class Engine:
                 claims[k] = 0
             outcome[0] = 0
             outcome[1] = 0
+            chunk = ti.max(WORKER_CHUNK, n // (WORKER_CHUNKS * workers))
             chunks = (n + chunk - 1) // chunk
             stall_spins = STALL_SPINS + ti.cast(STALL_SPINS_PER_PARTICLE * n, ti.i32)
             for task in range(workers * WORKER_TASK):
