@@ -12,6 +12,8 @@ noisy machine (runs minutes apart differ by 20 % and more).
             at the entries (stepper.WORKER_COPIES = False, as under [mobility]): a second
             simulation of the same scene, windows alternating between the two
   serial    the serial mode on one thread, runs of steps (one simulation, modes switched)
+  chunks128 workers claiming 128 particles at a time in the particle stage (the chunks of
+            stop 17; stepper.WORKER_CHUNKS huge): a second simulation, windows alternating
 
     .venv/bin/python bench/workers_ab.py --size 32k --steps 100 --rounds 20 --against claims
 """
@@ -37,19 +39,20 @@ def main(argv=None) -> int:
     p.add_argument("--size", default="32k", choices=list(SIZES))
     p.add_argument("--steps", type=int, default=600)
     p.add_argument("--rounds", type=int, default=5)
-    p.add_argument("--against", default="launches", choices=["launches", "claims", "serial"])
+    p.add_argument("--against", default="launches", choices=["launches", "claims", "serial", "chunks128"])
     a = p.parse_args(argv)
     import taichi as ti
     import taichi_dem as td
     from taichi_dem.engine import stepper
     scene = write_chute_scene(Path(tempfile.mkdtemp()) / a.size, **SIZES[a.size])
 
-    def make(copies: bool):
-        stepper.WORKER_COPIES = copies
+    def make(copies: bool, chunks=stepper.WORKER_CHUNKS):
+        chunks_before = stepper.WORKER_CHUNKS
+        stepper.WORKER_COPIES, stepper.WORKER_CHUNKS = copies, chunks
         try:
             sim = td.Simulation.from_toml(str(scene), precision="f32", h5="", parallel_from=0)
         finally:
-            stepper.WORKER_COPIES = True
+            stepper.WORKER_COPIES, stepper.WORKER_CHUNKS = True, chunks_before
         sim.engine.worker_stall_limit = None      # measure them, whatever the machine does
         return sim
 
@@ -60,11 +63,12 @@ def main(argv=None) -> int:
         print("no worker threads on this machine (one core, or a GPU)")
         sim.close()
         return 1
-    other_sim = make(False) if a.against == "claims" else sim
+    other_sim = (make(False) if a.against == "claims" else
+                 make(True, chunks=10 ** 9) if a.against == "chunks128" else sim)
 
     def mode(name):
         """Set up ``name`` ("workers" or a.against) and return the simulation to step."""
-        if name == "workers" or a.against == "claims":
+        if name == "workers" or a.against in ("claims", "chunks128"):
             return sim if name == "workers" else other_sim
         if a.against == "launches":
             e.workers = 0

@@ -78,8 +78,10 @@ WORKER_TASK = 512       # loop iterations per worker: its one active iteration i
 # for itself; a loop of 512 iterations or fewer runs on one thread)
 WORKER_CHUNK = 128      # particles per claim at least, and WORKER_CHUNKS claims per worker and
 WORKER_CHUNKS = 16      # stage at most: a claim costs an atomic on a line both workers hit,
-# a particle of the particle stage ~14 ns (32k chute: 1,000-particle chunks 1.03x the 128 of
-# stop 17, median of 20 paired 100-step windows; the last chunk ~1/16 of a worker's stage)
+# a particle of the particle stage ~14 ns; the last chunk is ~1/16 of a worker's stage. (Against
+# stop 17's 128-particle chunks, in-process A/B: 1.06x at 32k and 8k with one order of the
+# windows, 0.97x and 0.98x with the other: no gain this host's noise can show; kept as fewer
+# contended atomics for more threads, the results being the same.)
 WORKER_COPIES = True    # False: the pair stage claims chunks and stores shares at the entries
                         # in every scene, as under [mobility] (tests, bench A/B)
 STALL_SPINS = 20_000    # a barrier wait this long (~0.5 - 1 ms), plus half a spin per particle
