@@ -72,6 +72,24 @@ class GridSpec:
         self.span = tuple(float(s) for s in span)
         self.n_cells = int(np.prod(self.dims))
 
+    def make_cell_of(self):
+        """ti.funcs position (m) -> the cell's integer coordinates (a vector), and position ->
+        the cell's number (z fastest). Positions outside the grid go to its border cells."""
+        lo = ti.Vector(list(self.lo))
+        inv_cell = ti.Vector([1.0 / c for c in self.cell_size])
+        dims = ti.Vector(list(self.dims))
+
+        @ti.func
+        def cell_coordinates(p):
+            c = ti.cast(ti.floor((p - lo) * inv_cell), ti.i32)
+            return ti.max(ti.min(c, dims - 1), 0)
+
+        @ti.func
+        def cell_of(p):
+            c = cell_coordinates(p)
+            return (c[0] * dims[1] + c[1]) * dims[2] + c[2]
+        return cell_coordinates, cell_of
+
     def make_minimum_image(self):
         """ti.func d -> the shortest periodic image of the separation vector d (m)."""
         periodic, span = self.periodic, self.span
@@ -95,6 +113,10 @@ class GridSpec:
 
 
 class Broadphase:
+    # candidate slots per particle to begin with; a longer row widens the scratch (to 1.5x
+    # the longest) and the search runs again
+    FIRST_SCRATCH_WIDTH = 32
+
     def __init__(self, engine):  # noqa: D107  (no postponed annotations here: Taichi reads them)
         self.e = engine
         self.grid = engine.grid
@@ -116,19 +138,11 @@ class Broadphase:
     def _compile_particle_kernels(self):
         s = self.e.state
         g = self.grid
-        lo = ti.Vector(list(g.lo))
-        inv_cell = ti.Vector([1.0 / c for c in g.cell_size])
-        dims = ti.Vector(list(g.dims))
         n_cells = g.n_cells
         cell_count, cell_start, cell_fill, total = self.cell_count, self.cell_start, self.cell_fill, self.total
         vec_fields, real_fields, int_fields, wall_fields, f64_fields = s.reorder_groups()
         n_walls = s.n_walls
-
-        @ti.func
-        def cell_of(p):
-            c = ti.cast(ti.floor((p - lo) * inv_cell), ti.i32)
-            c = ti.max(ti.min(c, dims - 1), 0)
-            return (c[0] * dims[1] + c[1]) * dims[2] + c[2]
+        cell_of = g.make_cell_of()[1]
 
         @ti.func
         def save_rows_body(n, serial_loops: ti.template()):
@@ -224,7 +238,7 @@ class Broadphase:
         self.bodies.update(save_rows=save_rows_body, sort_by_cell=sort_by_cell_body,
                            permute=permute_body)
         self.fused = None
-        self._compile_search(32)
+        self._compile_search(self.FIRST_SCRATCH_WIDTH)
 
     def _compile_search(self, width: int):
         """(Re)allocate the candidate scratch (``width`` per particle) and compile the search:
@@ -236,7 +250,9 @@ class Broadphase:
             self.scratch_tree.destroy()
         self.scratch_width = width
         t = self.scratch_tree = self.e.new_tree()
-        scratch = self.scratch = t.add("candidate", ti.i32, (self.e.state.capacity, width))
+        # one column more than the width: the slot past a full row, where the search writes
+        # the particles it tests after the row is full (see candidate)
+        scratch = self.scratch = t.add("candidate", ti.i32, (self.e.state.capacity, width + 1))
         t.finalize()
         s = self.e.state
         g = self.grid
@@ -249,6 +265,7 @@ class Broadphase:
         margin = self.e.pair_margin
 
         minimum_image = g.make_minimum_image()
+        cell_coordinates = g.make_cell_of()[0]
 
         # cells are numbered z fastest, so the three cells of a stencil column along z (not
         # periodic, or the wrap would break the run) are one run of cell-sorted particles:
@@ -261,15 +278,21 @@ class Broadphase:
             the cutoff. Returns the row's new count."""
             # two fixed particles exert no forces (LAMMPS: neigh_modify exclude); they are
             # listed only when they conduct heat
-            if j != i and (movable_i or s.inverse_mass[j] > 0.0 or ti.static(fixed_pairs)):
-                d = minimum_image(xi - s.position[j])
-                cutoff = ri + s.radius[j] + skin
-                if ti.static(margin > 0.0):
-                    cutoff += ti.static(margin) * ti.max(ri, s.radius[j])
-                if d.dot(d) < cutoff * cutoff:
-                    if count < width:
-                        scratch[i, count] = j
-                    count += 1
+            d = minimum_image(xi - s.position[j])
+            rj = s.radius[j]
+            cutoff = ri + rj + skin
+            if ti.static(margin > 0.0):
+                cutoff += ti.static(margin) * ti.max(ri, rj)
+            listed = (d.dot(d) < cutoff * cutoff) & (j != i)
+            if ti.static(not fixed_pairs):
+                listed = listed & (movable_i | (s.inverse_mass[j] > 0.0))
+            # without branches: j is written at the row's next slot whether listed or not (an
+            # unlisted j is overwritten by the next one, or lies past the row's end; past a
+            # full row, in the spare column), and the count grows by the test's outcome. About
+            # one test in six lists its particle, at random: a branch on it mispredicted a few
+            # times per particle, ~15 cycles each, and the search ran 2x slower
+            scratch[i, ti.min(count, width)] = j
+            count += ti.cast(listed, ti.i32)
             return count
 
         @ti.func
@@ -287,7 +310,12 @@ class Broadphase:
                 elif ti.static(g.dims[k] == 1):
                     if step != 0:
                         inside = False
-                nb = (nb + dims[k]) % dims[k]
+                # the wrap by a compare, not a modulo: an integer division costs tens of
+                # cycles, and the search did ~20 of them per particle
+                if nb < 0:
+                    nb += dims[k]
+                elif nb >= dims[k]:
+                    nb -= dims[k]
             elif nb < 0 or nb >= dims[k]:
                 inside = False
             return nb, inside
@@ -296,31 +324,37 @@ class Broadphase:
         def find_candidates_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                c = s.cell[i]
-                cz = c % dims[2]
-                cy = (c // dims[2]) % dims[1]
-                cx = c // (dims[1] * dims[2])
                 xi, ri, movable_i = s.position[i], s.radius[i], s.inverse_mass[i] > 0.0
+                # the cell's coordinates from the position, as the sort found them (the same
+                # arithmetic on the same position), rather than by dividing its number
+                cell = cell_coordinates(xi)
+                cx, cy, cz = cell[0], cell[1], cell[2]
                 count = 0
+                # the stencil unrolled, x outer and y inner (the order of the rows): each
+                # neighbour coordinate is found once per particle
                 if ti.static(z_runs):
                     z_first = ti.max(cz - 1, 0)
                     z_last = ti.min(cz + 1, dims[2] - 1)
-                    for offset in range(9):
-                        nx, inside_x = neighbour_cell(0, cx, offset // 3 - 1)
-                        ny, inside_y = neighbour_cell(1, cy, offset % 3 - 1)
-                        if inside_x and inside_y:
-                            column = (nx * dims[1] + ny) * dims[2]
-                            for j in range(cell_start[column + z_first], cell_start[column + z_last + 1]):
-                                count = candidate(i, j, xi, ri, movable_i, count)
+                    for step_x in ti.static((-1, 0, 1)):
+                        nx, inside_x = neighbour_cell(0, cx, step_x)
+                        for step_y in ti.static((-1, 0, 1)):
+                            ny, inside_y = neighbour_cell(1, cy, step_y)
+                            if inside_x and inside_y:
+                                column = (nx * dims[1] + ny) * dims[2]
+                                for j in range(cell_start[column + z_first],
+                                               cell_start[column + z_last + 1]):
+                                    count = candidate(i, j, xi, ri, movable_i, count)
                 else:
-                    for offset in range(27):
-                        nx, inside_x = neighbour_cell(0, cx, offset // 9 - 1)
-                        ny, inside_y = neighbour_cell(1, cy, (offset // 3) % 3 - 1)
-                        nz, inside_z = neighbour_cell(2, cz, offset % 3 - 1)
-                        if inside_x and inside_y and inside_z:
-                            nc = (nx * dims[1] + ny) * dims[2] + nz
-                            for j in range(cell_start[nc], cell_start[nc + 1]):
-                                count = candidate(i, j, xi, ri, movable_i, count)
+                    for step_x in ti.static((-1, 0, 1)):
+                        nx, inside_x = neighbour_cell(0, cx, step_x)
+                        for step_y in ti.static((-1, 0, 1)):
+                            ny, inside_y = neighbour_cell(1, cy, step_y)
+                            for step_z in ti.static((-1, 0, 1)):
+                                nz, inside_z = neighbour_cell(2, cz, step_z)
+                                if inside_x and inside_y and inside_z:
+                                    nc = (nx * dims[1] + ny) * dims[2] + nz
+                                    for j in range(cell_start[nc], cell_start[nc + 1]):
+                                        count = candidate(i, j, xi, ri, movable_i, count)
                 s.row_count[i] = count
             longest = 0
             ti.loop_config(serialize=serial_loops)
@@ -355,12 +389,12 @@ class Broadphase:
                 pid = s.particle_id[i]
                 for c in range(s.row_count[i]):
                     j = scratch[i, c]
-                    if pid < s.particle_id[j]:
-                        p.neighbour[front] = j
-                        front += 1
-                    else:
-                        p.neighbour[back] = j
-                        back -= 1
+                    # without a branch (owned or not is a coin toss: a branch on it would
+                    # mispredict half the time)
+                    owned = ti.cast(pid < s.particle_id[j], ti.i32)
+                    p.neighbour[ti.select(owned, front, back)] = j
+                    front += owned
+                    back -= 1 - owned
                 s.row_owned[i] = front - s.row_start[i]
 
         @ti.kernel

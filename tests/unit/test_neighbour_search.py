@@ -49,3 +49,20 @@ def test_search_lists_every_pair_within_the_cutoff_once(periodic):
     assert len(own) == len(set(own)), "a pair is listed twice"
     assert set(own) == brute
     assert sorted(partner) == sorted(own)                 # each pair in both rows
+
+
+def test_search_rows_that_fill_or_overflow_the_candidate_scratch(monkeypatch):
+    """Rows exactly as long as the scratch (the search writes each tested particle at the
+    row's next slot, listed or not: past a full row it must not overwrite the last listed one)
+    and rows longer than it (the scratch widens and the search repeats) list the same pairs."""
+    with td.Simulation.from_text(_box_scene([]), arch="cpu", precision="f64") as sim:
+        brute = pairs_within(sim, sim.skin)
+        longest = int(sim.engine.state.row_count.to_numpy()[:sim.particle_count].max())
+    assert longest >= 4
+    for width in (longest, longest - 2):
+        monkeypatch.setattr(td.engine.broadphase.Broadphase, "FIRST_SCRATCH_WIDTH", width)
+        with td.Simulation.from_text(_box_scene([]), arch="cpu", precision="f64") as sim:
+            own, _ = listed_pairs(sim)
+            widened = sim.engine.broadphase.scratch_width
+        assert set(own) == brute, f"first width {width}"
+        assert (widened > width) == (width < longest)
