@@ -6,7 +6,9 @@ rough base, gravity tilted 26 degrees, periodic in x and y) run by taichi_dem wi
 Hertz-Mindlin and tangential history (bench/chute_scene.py writes the scene) and by LAMMPS
 gran/hertz/history on 1 and 2 ranks (bench/lammps_chute.py). Reports particle-steps per
 second (atoms x steps / loop seconds; the first ``--warmup`` steps of taichi_dem, which
-include JIT compilation, are not timed), medians over ``--repeats`` runs, and the ratios.
+include JIT compilation, are not timed), medians over ``--repeats`` rounds, and the ratios:
+of the medians, and the median of the ratios paired within a round (a round runs every size
+and every rank count once, so that the runs of a ratio are seconds apart, not minutes).
 
     python bench/chute.py --steps 1000 --repeats 3                 # 32k, with LAMMPS
     python bench/chute.py --sizes 8k 32k 128k --repeats 3          # scaling
@@ -69,44 +71,57 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     if a.copies:
         a.sizes = ["32k" if a.copies == 1 else ("128k" if a.copies == 4 else "8k")]
-    results = {"taichi_dem": {}, "lammps": {}}
+    results = {"taichi_dem": {size: [] for size in a.sizes}, "lammps": {}}
+    lammps_ranks = [] if a.no_lammps else list(a.ranks)
+    # Rounds, each with every taichi_dem size and every LAMMPS rank count, taichi_dem first in
+    # even rounds and LAMMPS first in odd ones: this host's speed drifts by 10 - 40 % over
+    # minutes, and a ratio of two runs seconds apart (paired within a round) is less exposed
+    # to it than a ratio of medians taken minutes apart.
     with tempfile.TemporaryDirectory() as tmp:
-        for size in a.sizes:
-            scene = write_chute_scene(Path(tmp) / size, **SIZES[size])
-            runs = []
-            for r in range(a.repeats):
-                res = run_taichi_dem(str(scene), a.steps, a.warmup, a.threads, a.precision,
-                                     a.arch)
-                runs.append(res)
+        scenes = {size: write_chute_scene(Path(tmp) / size, **SIZES[size]) for size in a.sizes}
+
+        def taichi_round(r):
+            for size in a.sizes:
+                res = run_taichi_dem(str(scenes[size]), a.steps, a.warmup, a.threads,
+                                     a.precision, a.arch)
+                results["taichi_dem"][size].append(res)
                 print(f"taichi_dem {size:>4s} run {r + 1}: {res['particle_steps_per_s'] / 1e6:6.2f} "
                       f"M particle-steps/s ({res['particles']} particles, {res['rebuilds']} "
                       f"rebuilds, {res['neighbours_per_particle']:.2f} neighbours/particle)",
                       flush=True)
-            results["taichi_dem"][size] = runs
-    if not a.no_lammps:
-        for ranks in a.ranks:
-            runs = []
-            for r in range(a.repeats):
+
+        def lammps_round(r):
+            for ranks in list(lammps_ranks):
                 try:
                     res = run_lammps(a.steps, ranks)
                 except LammpsMissing as err:
                     print(f"LAMMPS skipped: {err}")
-                    runs = []
-                    break
-                runs.append(res)
+                    lammps_ranks.clear()
+                    results["lammps"].clear()
+                    return
+                results["lammps"].setdefault(ranks, []).append(res)
                 print(f"LAMMPS {ranks} rank(s) run {r + 1}: {res['particle_steps_per_s'] / 1e6:6.2f} "
                       f"M particle-steps/s", flush=True)
-            if runs:
-                results["lammps"][ranks] = runs
+
+        for r in range(a.repeats):
+            for stage in ((taichi_round, lammps_round) if r % 2 == 0
+                          else (lammps_round, taichi_round)):
+                stage(r)
 
     def med(runs):
         return statistics.median(x["particle_steps_per_s"] for x in runs)
 
-    print("\nmedians (million particle-steps per second):")
+    def paired(runs, lruns):
+        return statistics.median(x["particle_steps_per_s"] / y["particle_steps_per_s"]
+                                 for x, y in zip(runs, lruns))
+
+    print("\nmedians (million particle-steps per second), ratios of the medians and [the "
+          "median of the ratios paired within a round]:")
     for size, runs in results["taichi_dem"].items():
         line = f"  taichi_dem {size:>5s} ({runs[0]['particles']} particles): {med(runs) / 1e6:6.2f}"
         for ranks, lruns in results["lammps"].items():
-            line += f"   x{med(runs) / med(lruns):.2f} of LAMMPS {ranks} rank(s)"
+            line += (f"   x{med(runs) / med(lruns):.2f} [x{paired(runs, lruns):.2f}] of LAMMPS "
+                     f"{ranks} rank(s)")
         print(line)
     for ranks, lruns in results["lammps"].items():
         print(f"  LAMMPS gran/hertz/history {ranks} rank(s), 32000 particles: {med(lruns) / 1e6:6.2f}")
