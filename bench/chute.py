@@ -122,6 +122,9 @@ def main(argv=None) -> int:
         for ranks, lruns in results["lammps"].items():
             line += (f"   x{med(runs) / med(lruns):.2f} [x{paired(runs, lruns):.2f}] of LAMMPS "
                      f"{ranks} rank(s)")
+        if size != "32k" and results["lammps"]:
+            # (LAMMPS runs data.chute, 32k, here: bench/cost_curve.py runs it at each size)
+            line += "   (LAMMPS's figures at 32k)"
         print(line)
     for ranks, lruns in results["lammps"].items():
         print(f"  LAMMPS gran/hertz/history {ranks} rank(s), 32000 particles: {med(lruns) / 1e6:6.2f}")
