@@ -144,7 +144,7 @@ def _fmt(v: float) -> str:
 
 def write_chute_scene(out_dir, data_path=None, copies: int = 1, max_particles=None,
                       end_time: float = 0.1, precision: str = "f32", seed: int = 1,
-                      name: str = "chute") -> Path:
+                      name: str = "chute", skin: float = 0.1) -> Path:
     """Write ``<name>.toml`` plus ``<name>_flowing.csv`` and ``<name>_base.csv`` into
     ``out_dir`` and return the TOML's path.
 
@@ -154,10 +154,12 @@ def write_chute_scene(out_dir, data_path=None, copies: int = 1, max_particles=No
     cut moved out to make up for them (the count ends at or a few above ``max_particles``);
     below a tenth of the particles the box is first halved in y the same way (so that x stays
     longer than two pair cut-offs at 1,000 particles).
-    ``end_time`` defaults to 0.1 s = 1000 steps of dt = 1e-4.
+    ``end_time`` defaults to 0.1 s = 1000 steps of dt = 1e-4. ``skin``: the Verlet skin
+    (LAMMPS's benchmark: 0.1).
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    skin = float(skin)
     data = read_chute_data(data_path)
     nx, ny = _tile_shape(copies)
     lx0, ly0 = data.box_hi[0] - data.box_lo[0], data.box_hi[1] - data.box_lo[1]
@@ -247,7 +249,7 @@ dt = {_fmt(DT)}                  # LAMMPS: timestep 0.0001
 gravity = [{_fmt(gravity[0])}, {_fmt(gravity[1])}, {_fmt(gravity[2])}]   # fix gravity 1.0 chute 26.0
 precision = "{precision}"
 seed = {int(seed)}
-skin = 0.1                 # m, Verlet skin (LAMMPS: neighbor 0.1 bin)
+skin = {skin!r}                 # m, Verlet skin (LAMMPS's benchmark: neighbor 0.1 bin)
 
 [domain]
 min = [{_fmt(x0)}, {_fmt(y0)}, {_fmt(zmin)}]

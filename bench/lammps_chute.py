@@ -48,7 +48,7 @@ read_data       {data}
 pair_style      gran/hertz/history 200000.0 NULL 50.0 NULL 0.5 0
 pair_coeff      * *
 
-neighbor        0.1 bin
+neighbor        {skin} bin
 neigh_modify    every 1 delay 0
 
 timestep        0.0001
@@ -91,10 +91,11 @@ def default_data_path() -> Path:
     return REPO_ROOT.parent / "shared" / "peers" / "data.chute"
 
 
-def write_input(work_dir: Path, data_path: Path, steps: int) -> Path:
-    """Write ``in.chute`` into ``work_dir`` and return its path."""
+def write_input(work_dir: Path, data_path: Path, steps: int, skin: float = 0.1) -> Path:
+    """Write ``in.chute`` into ``work_dir`` and return its path (``skin``: the neighbor
+    skin, 0.1 in the benchmark)."""
     text = INPUT_TEMPLATE.format(data=Path(data_path).resolve(), steps=int(steps),
-                                 thermo=max(int(steps), 1))
+                                 thermo=max(int(steps), 1), skin=repr(float(skin)))
     path = Path(work_dir) / "in.chute"
     path.write_text(text)
     return path
@@ -114,9 +115,12 @@ def _command(ranks: int, input_name: str) -> list[str]:
     return [mpirun, "-np", str(ranks)] + base
 
 
-def run_lammps(steps: int = 1000, ranks: int = 1, data_path=None, timeout: float = 3600.0) -> dict:
+def run_lammps(steps: int = 1000, ranks: int = 1, data_path=None, timeout: float = 3600.0,
+               skin: float = 0.1) -> dict:
     """Run the chute benchmark once and return
-    ``dict(ranks, steps, atoms, loop_seconds, particle_steps_per_s)``.
+    ``dict(ranks, steps, atoms, loop_seconds, particle_steps_per_s, rebuilds)``
+    (``rebuilds``: LAMMPS's "Neighbor list builds", None where it does not print them).
+    ``skin``: the neighbor skin (the benchmark's 0.1 unless told).
 
     ``data_path`` defaults to :func:`default_data_path`. Raises :class:`LammpsMissing` if
     LAMMPS is not installed, ``FileNotFoundError`` if the data file is missing and
@@ -131,7 +135,7 @@ def run_lammps(steps: int = 1000, ranks: int = 1, data_path=None, timeout: float
         env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
         env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
     with tempfile.TemporaryDirectory(prefix="lammps_chute_") as tmp:
-        inp = write_input(Path(tmp), data_path, steps)
+        inp = write_input(Path(tmp), data_path, steps, skin)
         cmd = _command(int(ranks), inp.name)
         proc = subprocess.run(cmd, cwd=tmp, env=env, capture_output=True, text=True,
                               timeout=timeout)
@@ -142,8 +146,10 @@ def run_lammps(steps: int = 1000, ranks: int = 1, data_path=None, timeout: float
                                + "\n".join(out.splitlines()[-30:]))
     loop_s, procs, nsteps, atoms = (float(match.group(1)), int(match.group(2)),
                                     int(match.group(3)), int(match.group(4)))
+    builds = re.search(r"Neighbor list builds\s*=\s*(\d+)", out)
     return dict(ranks=procs, steps=nsteps, atoms=atoms, loop_seconds=loop_s,
-                particle_steps_per_s=atoms * nsteps / loop_s)
+                particle_steps_per_s=atoms * nsteps / loop_s,
+                rebuilds=int(builds.group(1)) if builds else None)
 
 
 def main(argv=None) -> int:
