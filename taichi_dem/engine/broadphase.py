@@ -9,6 +9,11 @@ memory order decides the speed; (3) count, prefix-sum and fill the neighbour row
 each entry's mirror (the owner's entry of the same pair); (5) carry the tangential history of
 pairs that persist from the old rows into the new ones. The owner of a pair is the particle
 with the smaller id, which no reorder changes, so the history stays with its pair.
+
+Each stage's body is a ti.func per particle (or cell), so that one rebuild runs three ways
+with the same lists bit for bit: as separate parallel kernels, in one serial launch (the
+serial mode, fused_rebuild) and in one launch on the persistent workers (the parallel mode
+on the CPU, rebuild_on_workers).
 """
 
 import math
@@ -17,6 +22,7 @@ import numpy as np
 import taichi as ti
 
 from .state import PairState, grown_capacity
+from .workers import WORKER_TASK, make_barrier, worker_range
 
 MAX_CELLS_PER_PARTICLE = 8      # a sparse domain gets coarser cells instead of millions of empty ones
 MIN_CELLS = 4096
@@ -46,6 +52,28 @@ def previous_entry(old_key: ti.template(), start, count, key):
             found = m
             break
     return found
+
+
+def _slot_moves(order, f, shadow, wall):
+    """ti.funcs k -> (slot k of ``shadow`` takes slot order[k] of ``f``; slot k of ``f``
+    takes it back): a permutation's two halves for one field (``wall``: its column)."""
+    if wall is None:
+        @ti.func
+        def into_shadow(k):
+            shadow[k] = f[order[k]]
+
+        @ti.func
+        def back(k):
+            f[k] = shadow[k]
+    else:
+        @ti.func
+        def into_shadow(k):
+            shadow[k] = f[order[k], wall]
+
+        @ti.func
+        def back(k):
+            f[k, wall] = shadow[k]
+    return into_shadow, back
 
 
 class GridSpec:
@@ -124,13 +152,19 @@ class Broadphase:
         self.cell_count = t.add("cell_count", ti.i32, self.grid.n_cells)
         self.cell_start = t.add("cell_start", ti.i32, self.grid.n_cells + 1)
         self.cell_fill = t.add("cell_fill", ti.i32, self.grid.n_cells)
-        self.total = t.add("total", ti.i32, 2)    # [pair entries, alive particles]
+        # [pair entries, alive particles, the longest row (rebuild_on_workers)]
+        self.total = t.add("total", ti.i32, 3)
         t.finalize()
         self.rebuilds = 0
         # the ti.func bodies of the rebuild's kernels, for the one-launch rebuild of the serial
         # mode (fused_rebuild: compiled on use, dropped whenever one of them is recompiled)
         self.bodies = {}
+        # their bodies per particle (or cell), for the rebuild on the workers
+        # (rebuild_on_workers: compiled on use, dropped with fused_rebuild)
+        self.row_funcs = {}
         self.fused = None
+        self.on_workers = None
+        self.worker_stages = [0, 0]     # rebuilds on the workers that stopped SEARCHED, LISTED
         self.fused_stages = [0, 0, 0]     # fused rebuilds that stopped SEARCHED, LISTED, DONE
         self._compile_particle_kernels()
 
@@ -145,31 +179,41 @@ class Broadphase:
         cell_of = g.make_cell_of()[1]
 
         @ti.func
+        def save_row(i):
+            pid = s.particle_id[i]
+            s.old_row_start_by_id[pid] = s.row_start[i]
+            s.old_row_count_by_id[pid] = s.row_owned[i]
+
+        @ti.func
         def save_rows_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                pid = s.particle_id[i]
-                s.old_row_start_by_id[pid] = s.row_start[i]
-                s.old_row_count_by_id[pid] = s.row_owned[i]
+                save_row(i)
 
         @ti.kernel
         def save_rows(n: ti.i32, serial_loops: ti.template()):
             save_rows_body(n, serial_loops)
 
         @ti.func
-        def sort_by_cell_body(n, serial_loops: ti.template()):
-            ti.loop_config(serialize=serial_loops)
-            for c in range(n_cells):
-                cell_count[c] = 0
-                cell_fill[c] = 0
-            ti.loop_config(serialize=serial_loops)
-            for i in range(n):
-                # dead particles (left the domain) sort to the end and are dropped
-                c = n_cells
-                if s.alive[i] != 0:
-                    c = cell_of(s.position[i])
-                    cell_count[c] += 1
-                s.cell[i] = c
+        def clear_cell(c):
+            cell_count[c] = 0
+            cell_fill[c] = 0
+
+        @ti.func
+        def bin_particle(i):
+            """Particle i's cell, counted (an atomic add: particles of a cell bin at once)."""
+            # dead particles (left the domain) sort to the end and are dropped
+            c = n_cells
+            if s.alive[i] != 0:
+                c = cell_of(s.position[i])
+                cell_count[c] += 1
+            s.cell[i] = c
+
+        @ti.func
+        def put_in_cell_order(n):
+            """The cells' starts, the alive count and each particle's new slot ``order``;
+            serial, so that the order within a cell - and so every result - is the same on
+            any number of threads. Call it at a kernel's top level or on one worker."""
             exclusive_scan(cell_count, cell_start, n_cells)
             total[1] = cell_start[n_cells]
             ti.loop_config(serialize=True)
@@ -180,53 +224,51 @@ class Broadphase:
                     cell_fill[c] += 1
                     s.order[slot] = i
 
+        @ti.func
+        def sort_by_cell_body(n, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
+            for c in range(n_cells):
+                clear_cell(c)
+            ti.loop_config(serialize=serial_loops)
+            for i in range(n):
+                bin_particle(i)
+            put_in_cell_order(n)
+
         @ti.kernel
         def sort_by_cell(n: ti.i32, serial_loops: ti.template()):
             sort_by_cell_body(n, serial_loops)
 
         @ti.func
+        def settle(k):
+            """Slot k after the moves: its cell, and the position its travel is measured from."""
+            s.cell[k] = cell_of(s.position[k])
+            s.reference_position[k] = s.position[k]
+
+        # new slot k takes old particle order[k]; every per-particle array moves together,
+        # each through its shadow: per field (and wall column) the two halves per slot k
+        # (not reference_position, which settle sets)
+        moves = []
+        vec_fields = [f for f in vec_fields if f is not s.reference_position]
+        groups = ([(f, s.shadow_vec) for f in vec_fields] + [(f, s.shadow_real) for f in real_fields]
+                  + [(f, s.shadow_int) for f in int_fields] + [(f, s.shadow_f64) for f in f64_fields])
+        for f, shadow in groups:
+            moves.append(_slot_moves(s.order, f, shadow, None))
+        for f in wall_fields:
+            for w in range(n_walls):
+                moves.append(_slot_moves(s.order, f, s.shadow_vec, w))
+
+        @ti.func
         def permute_body(n, serial_loops: ti.template()):
-            # new slot k takes old particle order[k]; every per-particle array moves together
-            for f in ti.static(vec_fields):
+            for move in ti.static(moves):
                 ti.loop_config(serialize=serial_loops)
                 for k in range(n):
-                    s.shadow_vec[k] = f[s.order[k]]
+                    move[0](k)
                 ti.loop_config(serialize=serial_loops)
                 for k in range(n):
-                    f[k] = s.shadow_vec[k]
-            for f in ti.static(real_fields):
-                ti.loop_config(serialize=serial_loops)
-                for k in range(n):
-                    s.shadow_real[k] = f[s.order[k]]
-                ti.loop_config(serialize=serial_loops)
-                for k in range(n):
-                    f[k] = s.shadow_real[k]
-            for f in ti.static(int_fields):
-                ti.loop_config(serialize=serial_loops)
-                for k in range(n):
-                    s.shadow_int[k] = f[s.order[k]]
-                ti.loop_config(serialize=serial_loops)
-                for k in range(n):
-                    f[k] = s.shadow_int[k]
-            for f in ti.static(f64_fields):
-                ti.loop_config(serialize=serial_loops)
-                for k in range(n):
-                    s.shadow_f64[k] = f[s.order[k]]
-                ti.loop_config(serialize=serial_loops)
-                for k in range(n):
-                    f[k] = s.shadow_f64[k]
-            for f in ti.static(wall_fields):
-                for w in ti.static(range(n_walls)):
-                    ti.loop_config(serialize=serial_loops)
-                    for k in range(n):
-                        s.shadow_vec[k] = f[s.order[k], w]
-                    ti.loop_config(serialize=serial_loops)
-                    for k in range(n):
-                        f[k, w] = s.shadow_vec[k]
+                    move[1](k)
             ti.loop_config(serialize=serial_loops)
             for k in range(n):
-                s.cell[k] = cell_of(s.position[k])
-                s.reference_position[k] = s.position[k]
+                settle(k)
 
         @ti.kernel
         def permute(n: ti.i32, serial_loops: ti.template()):
@@ -237,7 +279,9 @@ class Broadphase:
             serial(save_rows), serial(sort_by_cell), serial(permute))
         self.bodies.update(save_rows=save_rows_body, sort_by_cell=sort_by_cell_body,
                            permute=permute_body)
-        self.fused = None
+        self.row_funcs.update(save_row=save_row, clear_cell=clear_cell, bin_particle=bin_particle,
+                              put_in_cell_order=put_in_cell_order, moves=moves, settle=settle)
+        self.drop_one_launch_rebuilds()
         self._compile_search(self.FIRST_SCRATCH_WIDTH)
 
     def _compile_search(self, width: int):
@@ -321,47 +365,60 @@ class Broadphase:
             return nb, inside
 
         @ti.func
+        def search_row(i):
+            """Particle i's candidate partners into its scratch row; returns (and stores in
+            row_count) their number, which may exceed the scratch's width."""
+            xi, ri, movable_i = s.position[i], s.radius[i], s.inverse_mass[i] > 0.0
+            # the cell's coordinates from the position, as the sort found them (the same
+            # arithmetic on the same position), rather than by dividing its number
+            cell = cell_coordinates(xi)
+            cx, cy, cz = cell[0], cell[1], cell[2]
+            count = 0
+            # the stencil unrolled, x outer and y inner (the order of the rows): each
+            # neighbour coordinate is found once per particle
+            if ti.static(z_runs):
+                z_first = ti.max(cz - 1, 0)
+                z_last = ti.min(cz + 1, dims[2] - 1)
+                for step_x in ti.static((-1, 0, 1)):
+                    nx, inside_x = neighbour_cell(0, cx, step_x)
+                    for step_y in ti.static((-1, 0, 1)):
+                        ny, inside_y = neighbour_cell(1, cy, step_y)
+                        if inside_x and inside_y:
+                            column = (nx * dims[1] + ny) * dims[2]
+                            for j in range(cell_start[column + z_first],
+                                           cell_start[column + z_last + 1]):
+                                count = candidate(i, j, xi, ri, movable_i, count)
+            else:
+                for step_x in ti.static((-1, 0, 1)):
+                    nx, inside_x = neighbour_cell(0, cx, step_x)
+                    for step_y in ti.static((-1, 0, 1)):
+                        ny, inside_y = neighbour_cell(1, cy, step_y)
+                        for step_z in ti.static((-1, 0, 1)):
+                            nz, inside_z = neighbour_cell(2, cz, step_z)
+                            if inside_x and inside_y and inside_z:
+                                nc = (nx * dims[1] + ny) * dims[2] + nz
+                                for j in range(cell_start[nc], cell_start[nc + 1]):
+                                    count = candidate(i, j, xi, ri, movable_i, count)
+            s.row_count[i] = count
+            return count
+
+        @ti.func
+        def start_rows(n):
+            """The rows' starts and the entries they hold (serial: at a kernel's top level or
+            on one worker)."""
+            exclusive_scan(s.row_count, s.row_start, n)
+            total[0] = s.row_start[n]
+
+        @ti.func
         def find_candidates_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                xi, ri, movable_i = s.position[i], s.radius[i], s.inverse_mass[i] > 0.0
-                # the cell's coordinates from the position, as the sort found them (the same
-                # arithmetic on the same position), rather than by dividing its number
-                cell = cell_coordinates(xi)
-                cx, cy, cz = cell[0], cell[1], cell[2]
-                count = 0
-                # the stencil unrolled, x outer and y inner (the order of the rows): each
-                # neighbour coordinate is found once per particle
-                if ti.static(z_runs):
-                    z_first = ti.max(cz - 1, 0)
-                    z_last = ti.min(cz + 1, dims[2] - 1)
-                    for step_x in ti.static((-1, 0, 1)):
-                        nx, inside_x = neighbour_cell(0, cx, step_x)
-                        for step_y in ti.static((-1, 0, 1)):
-                            ny, inside_y = neighbour_cell(1, cy, step_y)
-                            if inside_x and inside_y:
-                                column = (nx * dims[1] + ny) * dims[2]
-                                for j in range(cell_start[column + z_first],
-                                               cell_start[column + z_last + 1]):
-                                    count = candidate(i, j, xi, ri, movable_i, count)
-                else:
-                    for step_x in ti.static((-1, 0, 1)):
-                        nx, inside_x = neighbour_cell(0, cx, step_x)
-                        for step_y in ti.static((-1, 0, 1)):
-                            ny, inside_y = neighbour_cell(1, cy, step_y)
-                            for step_z in ti.static((-1, 0, 1)):
-                                nz, inside_z = neighbour_cell(2, cz, step_z)
-                                if inside_x and inside_y and inside_z:
-                                    nc = (nx * dims[1] + ny) * dims[2] + nz
-                                    for j in range(cell_start[nc], cell_start[nc + 1]):
-                                        count = candidate(i, j, xi, ri, movable_i, count)
-                s.row_count[i] = count
+                search_row(i)
             longest = 0
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 ti.atomic_max(longest, s.row_count[i])
-            exclusive_scan(s.row_count, s.row_start, n)
-            total[0] = s.row_start[n]
+            start_rows(n)
             return longest
 
         @ti.kernel
@@ -370,7 +427,8 @@ class Broadphase:
 
         self._find_candidates = self.e.serial_switch(find_candidates)
         self.bodies["find_candidates"] = find_candidates_body
-        self.fused = None
+        self.row_funcs.update(search_row=search_row, start_rows=start_rows)
+        self.drop_one_launch_rebuilds()
 
     def _make_compact(self, pairs: "PairState"):
         """Kernel copying the scratch rows into the CSR list, owned pairs (partner id larger)
@@ -381,27 +439,32 @@ class Broadphase:
         scratch = scratch_field()
 
         @ti.func
+        def compact_row(i):
+            front = s.row_start[i]
+            back = s.row_start[i] + s.row_count[i] - 1
+            pid = s.particle_id[i]
+            for c in range(s.row_count[i]):
+                j = scratch[i, c]
+                # without a branch (owned or not is a coin toss: a branch on it would
+                # mispredict half the time)
+                owned = ti.cast(pid < s.particle_id[j], ti.i32)
+                p.neighbour[ti.select(owned, front, back)] = j
+                front += owned
+                back -= 1 - owned
+            s.row_owned[i] = front - s.row_start[i]
+
+        @ti.func
         def compact_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                front = s.row_start[i]
-                back = s.row_start[i] + s.row_count[i] - 1
-                pid = s.particle_id[i]
-                for c in range(s.row_count[i]):
-                    j = scratch[i, c]
-                    # without a branch (owned or not is a coin toss: a branch on it would
-                    # mispredict half the time)
-                    owned = ti.cast(pid < s.particle_id[j], ti.i32)
-                    p.neighbour[ti.select(owned, front, back)] = j
-                    front += owned
-                    back -= 1 - owned
-                s.row_owned[i] = front - s.row_start[i]
+                compact_row(i)
 
         @ti.kernel
         def compact(n: ti.i32, serial_loops: ti.template()):
             compact_body(n, serial_loops)
         self.bodies["compact"] = compact_body
-        self.fused = None
+        self.row_funcs["compact_row"] = compact_row
+        self.drop_one_launch_rebuilds()
         return self.e.serial_switch(compact)
 
     def compile_pair_kernels(self, pairs: PairState):
@@ -413,48 +476,58 @@ class Broadphase:
         self._compact = self._make_compact(p)
 
         @ti.func
+        def save_pair_row(i):
+            for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
+                p.old_partner_id[k] = s.particle_id[p.neighbour[k]]
+                p.old_contact[k] = p.contact[k]
+                for f in ti.static(carried):
+                    f[1][k] = f[0][k]
+
+        @ti.func
         def save_pairs_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
-                    p.old_partner_id[k] = s.particle_id[p.neighbour[k]]
-                    p.old_contact[k] = p.contact[k]
-                    for f in ti.static(carried):
-                        f[1][k] = f[0][k]
+                save_pair_row(i)
 
         @ti.kernel
         def save_pairs(n: ti.i32, serial_loops: ti.template()):
             save_pairs_body(n, serial_loops)
 
         @ti.func
+        def link_row(i):
+            """Row i's entries: the owned ones carry their pair's state from the old row,
+            the others find their mirror in the partner's owned part."""
+            pid = s.particle_id[i]
+            old_start = s.old_row_start_by_id[pid]
+            old_count = s.old_row_count_by_id[pid]
+            owned_end = s.row_start[i] + s.row_owned[i]
+            for k in range(s.row_start[i], owned_end):
+                # owned: carry the state of this pair if it existed before the rebuild
+                p.mirror[k] = -1
+                old = previous_entry(p.old_partner_id, old_start, old_count,
+                                     s.particle_id[p.neighbour[k]])
+                if old >= 0:
+                    p.contact[k] = p.old_contact[old]
+                    for f in ti.static(carried):
+                        f[0][k] = f[1][old]
+                else:
+                    p.contact[k] = ti.u8(0)
+                    for f in ti.static(carried):
+                        f[0][k] = ti.Vector([0.0, 0.0, 0.0])
+            for k in range(owned_end, s.row_start[i] + s.row_count[i]):
+                # not owned: the owner's entry of the same pair lies in j's owned part
+                j = p.neighbour[k]
+                p.mirror[k] = -1
+                for m in range(s.row_start[j], s.row_start[j] + s.row_owned[j]):
+                    if p.neighbour[m] == i:
+                        p.mirror[k] = m
+                        break
+
+        @ti.func
         def link_and_carry_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                pid = s.particle_id[i]
-                old_start = s.old_row_start_by_id[pid]
-                old_count = s.old_row_count_by_id[pid]
-                owned_end = s.row_start[i] + s.row_owned[i]
-                for k in range(s.row_start[i], owned_end):
-                    # owned: carry the state of this pair if it existed before the rebuild
-                    p.mirror[k] = -1
-                    old = previous_entry(p.old_partner_id, old_start, old_count,
-                                         s.particle_id[p.neighbour[k]])
-                    if old >= 0:
-                        p.contact[k] = p.old_contact[old]
-                        for f in ti.static(carried):
-                            f[0][k] = f[1][old]
-                    else:
-                        p.contact[k] = ti.u8(0)
-                        for f in ti.static(carried):
-                            f[0][k] = ti.Vector([0.0, 0.0, 0.0])
-                for k in range(owned_end, s.row_start[i] + s.row_count[i]):
-                    # not owned: the owner's entry of the same pair lies in j's owned part
-                    j = p.neighbour[k]
-                    p.mirror[k] = -1
-                    for m in range(s.row_start[j], s.row_start[j] + s.row_owned[j]):
-                        if p.neighbour[m] == i:
-                            p.mirror[k] = m
-                            break
+                link_row(i)
 
         @ti.kernel
         def link_and_carry(n: ti.i32, serial_loops: ti.template()):
@@ -463,7 +536,8 @@ class Broadphase:
         self._save_pairs = self.e.serial_switch(save_pairs)
         self._link_and_carry = self.e.serial_switch(link_and_carry)
         self.bodies.update(save_pairs=save_pairs_body, link_and_carry=link_and_carry_body)
-        self.fused = None
+        self.row_funcs.update(save_pair_row=save_pair_row, link_row=link_row)
+        self.drop_one_launch_rebuilds()
 
     # ------------------------------------------------------------------ driver
     @property
@@ -539,6 +613,111 @@ class Broadphase:
 
         self.fused = fused_rebuild
 
+    def drop_one_launch_rebuilds(self):
+        """Forget the one-launch rebuilds (fused_rebuild, rebuild_on_workers): a body they
+        inline was recompiled (a field reallocated); they compile again on their next use."""
+        self.fused = None
+        self.on_workers = None
+
+    # a barrier wait on the workers' rebuild counted as stalled past this many spins (only
+    # reported: a rebuild is one launch, and the runs of steps judge the stalls)
+    REBUILD_STALL_SPINS = 1 << 30
+
+    def _compile_on_workers(self):
+        """The parallel mode's rebuild in one launch on the engine's persistent workers
+        (engine/workers.py): the parallel kernels' stages in their order, each worker a
+        contiguous share of the particles (or cells), a barrier between stages where the
+        parallel kernels have a launch or a loop - ~30 of them, each ~40 - 100 us on
+        Taichi's thread pool here, against ~0.2 us for a barrier - and one worker on the
+        serial parts (the scans and the placing in cell order). Every row is found as the
+        kernels find it, so the lists are theirs bit for bit. Where an array is too small
+        it stops after the search (SEARCHED), as fused_rebuild does."""
+        e = self.e
+        f = self.row_funcs
+        save_row, save_pair_row, clear_cell, bin_particle, put_in_cell_order, moves, settle = (
+            f[k] for k in ("save_row", "save_pair_row", "clear_cell", "bin_particle",
+                           "put_in_cell_order", "moves", "settle"))
+        search_row, start_rows, compact_row, link_row = (
+            f[k] for k in ("search_row", "start_rows", "compact_row", "link_row"))
+        workers = e.workers
+        arrivals = e.worker_arrivals
+        barrier = make_barrier(arrivals, workers)
+        n_cells = self.grid.n_cells
+        total = self.total
+        width, pair_capacity = self.scratch_width, e.pairs.capacity
+        stall_spins = self.REBUILD_STALL_SPINS
+        SEARCHED, LISTED = self.SEARCHED, self.LISTED
+
+        @ti.kernel
+        def rebuild_on_workers(n: ti.i32) -> ti.types.vector(2, ti.i32):
+            """rebuild(n) on the workers; returns (alive particles, the stage reached)."""
+            arrivals[0] = 0
+            arrivals[1] = 0
+            total[2] = 0
+            for task in range(workers * WORKER_TASK):
+                if task % WORKER_TASK == 0:
+                    w = task // WORKER_TASK
+                    arrived = 0
+                    first, last = worker_range(n, w, workers)
+                    # (1) the old rows by particle id, with their pairs' state
+                    for i in range(first, last):
+                        save_row(i)
+                        save_pair_row(i)
+                    cells_first, cells_last = worker_range(n_cells, w, workers)
+                    for c in range(cells_first, cells_last):
+                        clear_cell(c)
+                    arrived += 1
+                    barrier(arrived, stall_spins)
+                    # (2) the particles sorted by cell, every array moved into that order
+                    for i in range(first, last):
+                        bin_particle(i)
+                    arrived += 1
+                    barrier(arrived, stall_spins)
+                    if w == 0:
+                        put_in_cell_order(n)
+                    arrived += 1
+                    barrier(arrived, stall_spins)
+                    for move in ti.static(moves):
+                        for k in range(first, last):
+                            move[0](k)          # into the shadow
+                        arrived += 1
+                        barrier(arrived, stall_spins)
+                        for k in range(first, last):
+                            move[1](k)          # back
+                        arrived += 1
+                        barrier(arrived, stall_spins)
+                    for k in range(first, last):
+                        settle(k)
+                    arrived += 1
+                    barrier(arrived, stall_spins)
+                    # (3) the rows: search, their starts, the lists with their history
+                    alive = total[1]
+                    first, last = worker_range(alive, w, workers)
+                    longest = 0
+                    for i in range(first, last):
+                        longest = ti.max(longest, search_row(i))
+                    ti.atomic_max(total[2], longest)
+                    arrived += 1
+                    barrier(arrived, stall_spins)
+                    if w == 0:
+                        start_rows(alive)
+                    arrived += 1
+                    barrier(arrived, stall_spins)
+                    if total[2] <= width and total[0] <= pair_capacity:
+                        for i in range(first, last):
+                            compact_row(i)
+                        arrived += 1
+                        # (link_row reads the partners' owned entries)
+                        barrier(arrived, stall_spins)
+                        for i in range(first, last):
+                            link_row(i)
+            stage = SEARCHED
+            if total[2] <= width and total[0] <= pair_capacity:
+                stage = LISTED
+            return ti.Vector([total[1], stage])
+
+        self.on_workers = rebuild_on_workers
+
     def rebuild(self, n: int) -> int:
         """Re-sort particles and rebuild the neighbour list; returns the alive count. In the
         serial mode one launch (fused_rebuild) unless an array must grow."""
@@ -557,6 +736,8 @@ class Broadphase:
                 e.mesh.binned_time = e.time
             self.rebuilds += 1
             return alive
+        if e.pairs is not None and e.workers and not e.serial and e.rebuilds_on_workers:
+            return self._rebuild_on_workers(n)
         if e.pairs is not None:
             self._save_rows(n)
             self._save_pairs(n)
@@ -570,6 +751,24 @@ class Broadphase:
         alive = int(self.total[1])
         self._permute(n)
         self._list(alive)
+        self.rebuilds += 1
+        return alive
+
+    def _rebuild_on_workers(self, n: int) -> int:
+        """rebuild(n) in the parallel mode on the engine's workers: one launch
+        (rebuild_on_workers) for the particles' lists, the kernels for the mesh rows and
+        wherever an array must grow."""
+        e = self.e
+        if e.mesh is not None:
+            e.mesh.save_rows(n)
+        if self.on_workers is None:
+            self._compile_on_workers()
+        alive, stage = (int(v) for v in self.on_workers(n))
+        self.worker_stages[stage - 1] += 1
+        if stage == self.SEARCHED:
+            self._list(alive)          # grows what is too small, searches again, lists
+        elif e.mesh is not None and e.mesh.rebuild_rows(alive, e.time):
+            e.recompile_pair_kernels()
         self.rebuilds += 1
         return alive
 

@@ -46,6 +46,7 @@ from ..contacts.law import make_contact_law, margin_fraction
 from ..effects import enabled_effects
 from ..setup.pair_tables import PairTables
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
+from .workers import WORKER_TASK, make_barrier
 
 
 # Below this many particles a CPU runs every loop of the step on one thread (Engine.serial).
@@ -70,12 +71,8 @@ PARALLEL_FROM = 5000
 # stage the workers claim chunks of particles from an atomic counter (WORKER_CHUNK); each
 # particle adds its copies in order. Where shares must stay at the entries ([mobility]:
 # Engine.scatter_ok) the pair stage claims chunks too and the particle stage gathers through
-# the mirror: the parallel kernels' results bit for bit.
-WORKER_TASK = 512       # loop iterations per worker: its one active iteration is alone in its task
-# (Taichi cuts a CPU range-for into tasks of 512 - 1024 iterations - its adaptive block size,
-# which ti.loop_config(block_dim=...) does not change - or of 32 without it: iteration
-# w * 512 starts a task of its own either way, so no thread is handed two workers and waits
-# for itself; a loop of 512 iterations or fewer runs on one thread)
+# the mirror: the parallel kernels' results bit for bit. (WORKER_TASK and the barrier:
+# engine/workers.py; the rebuild runs on the same workers, Broadphase.rebuild_on_workers.)
 WORKER_CHUNK = 128      # particles per claim at least, and WORKER_CHUNKS claims per worker and
 WORKER_CHUNKS = 16      # stage at most: a claim costs an atomic on a line both workers hit,
 # a particle of the particle stage ~14 ns; the last chunk is ~1/16 of a worker's stage. (Against
@@ -296,6 +293,9 @@ class Engine:
         # the serial mode rebuilds in one launch (Broadphase.fused_rebuild); False: the
         # separate kernels (tests compare the two)
         self.fused_rebuilds = True
+        # the parallel mode on the workers rebuilds on them in one launch
+        # (Broadphase.rebuild_on_workers); False: the separate kernels (tests compare the two)
+        self.rebuilds_on_workers = True
         npf = np.float64 if real == ti.f64 else np.float32
         self.max_radius = max_radius          # (the uploads below may read it)
         for name, values in table_values.items():
@@ -975,16 +975,7 @@ class Engine:
         arrivals, claims, outcome = self.worker_arrivals, self.worker_claims, self.worker_outcome
         has_cells = len(cell_funcs) > 0
 
-        @ti.func
-        def barrier(arrived, stall_spins):
-            """Arrive (the ``arrived``-th barrier of this launch) and wait for every worker;
-            returns 1 if the wait stalled (past ``stall_spins``: a worker had lost its core)."""
-            ti.atomic_add(arrivals[0], 1)
-            spins = 0
-            # (an atomic read: a plain load could stay in a register across the loop)
-            while ti.atomic_add(arrivals[0], arrivals[1]) < arrived * workers:
-                spins += 1
-            return 1 if spins > stall_spins else 0
+        barrier = make_barrier(arrivals, workers)
 
         copies = self.worker_copies
         worker_first = self.worker_first if copies else None

@@ -47,11 +47,16 @@ def heap_text():
     return text.replace("[materials.glass]", side + "[materials.glass]")
 
 
-def run(text, parallel_from, steps, fused=True, workers=False):
+def run(text, parallel_from, steps, fused=True, workers=False, rebuilds_on_workers=True,
+        setup=None):
     """``workers``: above parallel_from, runs of steps on the worker threads (the default
-    where there are two cores); else two parallel launches per step."""
+    where there are two cores), rebuilding on them unless not ``rebuilds_on_workers``; else
+    two parallel launches per step. ``setup(sim)`` before the steps."""
     sim = td.Simulation.from_text(text, parallel_from=parallel_from)
     sim.engine.fused_rebuilds = fused
+    sim.engine.rebuilds_on_workers = rebuilds_on_workers
+    if setup is not None:
+        setup(sim)
     if workers:
         sim.engine.worker_stall_limit = None     # (two test processes may share the cores)
     else:
@@ -64,6 +69,7 @@ def run(text, parallel_from, steps, fused=True, workers=False):
                     temperature=p.get("temperature"), serial=e.serial, runs=e.runs,
                     worker_runs=e.worker_runs, copies=e.worker_copies,
                     rebuilds=e.broadphase.rebuilds, fused=list(e.broadphase.fused_stages),
+                    on_workers=list(e.broadphase.worker_stages),
                     time=e.time, steps=sim.step_count,
                     series={k: np.asarray(v) for k, v in sim.series.items()})
     finally:
@@ -143,6 +149,38 @@ def test_workers_with_their_own_copies_repeat_bit_for_bit():
     assert first["copies"] == 2 and first["worker_runs"] > 10 and first["rebuilds"] > 10
     for key in ("position", "velocity", "temperature"):
         assert np.array_equal(first[key], again[key]), key
+
+
+@needs_two_cores
+@pytest.mark.parametrize("scene", ["heap", "paddle"])
+def test_rebuild_on_the_workers_equals_the_separate_kernels(scene):
+    """The parallel mode's rebuild in one launch on the workers (Broadphase.rebuild_on_workers)
+    runs the kernels' bodies row by row, in their order, with a barrier where the kernels
+    have a launch: the same state bit for bit through pouring and impacts (rows that grow and
+    shrink) and with a turning paddle (its mesh rows listed by the kernels after the
+    launch). A rebuild where an array is too small (here the candidate scratch, narrowed
+    to 2 per particle at the start) stops after the search, and the host finishes it with
+    the kernels."""
+    text, steps = (heap_text(), 3000) if scene == "heap" else (scene_text("f64", count=300), 1500)
+
+    def narrow_scratch(sim):
+        bp = sim.engine.broadphase
+        bp._compile_search(2)
+        bp._compact = bp._make_compact(sim.engine.pairs)
+    on_workers = run(text, 0, steps, workers=True, setup=narrow_scratch)
+    kernels = run(text, 0, steps, workers=True, rebuilds_on_workers=False, setup=narrow_scratch)
+    assert on_workers["worker_runs"] > 10 and on_workers["rebuilds"] > 10
+    assert on_workers["rebuilds"] == kernels["rebuilds"]
+    searched, listed = on_workers["on_workers"]
+    # (the first rebuild, with no list yet, is the kernels'; the second meets the narrow
+    # scratch, which the host widens)
+    assert searched == 1 and searched + listed == on_workers["rebuilds"] - 1
+    assert kernels["on_workers"] == [0, 0]
+    for key in ("position", "velocity", "temperature"):
+        assert np.array_equal(on_workers[key], kernels[key]), key
+    if scene == "paddle":
+        torque = "bodies/paddle/torque"
+        assert np.array_equal(on_workers["series"][torque], kernels["series"][torque])
 
 
 @needs_two_cores
