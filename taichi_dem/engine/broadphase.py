@@ -629,7 +629,8 @@ class Broadphase:
         contiguous share of the particles (or cells), a barrier between stages where the
         parallel kernels have a launch or a loop - ~30 of them, each ~40 - 100 us on
         Taichi's thread pool here, against ~0.2 us for a barrier - and one worker on the
-        serial parts (the scans and the placing in cell order). Every row is found as the
+        serial parts (the scans and the placing in cell order, beside which the others save
+        the old rows). Every row is found as the
         kernels find it, so the lists are theirs bit for bit. Where an array is too small
         it stops after the search (SEARCHED), as fused_rebuild does."""
         e = self.e
@@ -659,24 +660,28 @@ class Broadphase:
                     w = task // WORKER_TASK
                     arrived = 0
                     first, last = worker_range(n, w, workers)
-                    # (1) the old rows by particle id, with their pairs' state
-                    for i in range(first, last):
-                        save_row(i)
-                        save_pair_row(i)
+                    # (1) the particles sorted by cell (while worker 0 places them in cell
+                    # order, the others save the old rows by particle id, with their pairs'
+                    # state: both read the arrays before they move)
                     cells_first, cells_last = worker_range(n_cells, w, workers)
                     for c in range(cells_first, cells_last):
                         clear_cell(c)
                     arrived += 1
                     barrier(arrived, stall_spins)
-                    # (2) the particles sorted by cell, every array moved into that order
                     for i in range(first, last):
                         bin_particle(i)
                     arrived += 1
                     barrier(arrived, stall_spins)
                     if w == 0:
                         put_in_cell_order(n)
+                    else:
+                        saved_first, saved_last = worker_range(n, w - 1, workers - 1)
+                        for i in range(saved_first, saved_last):
+                            save_row(i)
+                            save_pair_row(i)
                     arrived += 1
                     barrier(arrived, stall_spins)
+                    # (2) every array moved into that order
                     for move in ti.static(moves):
                         for k in range(first, last):
                             move[0](k)          # into the shadow
