@@ -10,7 +10,9 @@ Sizes up to 32k cut the benchmark's 32,000 particles (``max_particles``: a short
 x), larger ones tile it (``copies``); LAMMPS reads a data file written from the same particles.
 At 1k the box is halved in y as well (an x cut alone would be shorter than two pair
 cut-offs). Steps per run are ``--work`` particle-steps divided by N (clamped to 50..2000),
-after 50 warm-up steps (JIT).
+after 50 warm-up steps (JIT). ``--repeats`` rounds per size, each running every code once,
+taichi_dem first in even rounds and LAMMPS first in odd ones; the table gives the ratio of
+the medians and [the median of the ratios paired within a round].
 
 The engine has two loop modes (engine/stepper.py): serial loops with several steps per launch
 below ``parallel_from`` particles, parallel loops with two launches per step from it on. Up
@@ -99,31 +101,52 @@ def main(argv=None) -> int:
             size = SIZES[label]
             scene = scene_for(size, Path(tmp) / label)
             steps = int(min(max(a.work / size, 50), 2000))
-            runs = [run_taichi_dem(str(scene), steps, 50) for _ in range(a.repeats)]
-            ours = [r["particle_steps_per_s"] for r in runs]
-            row = {"size": label, "steps": steps, "taichi_dem": statistics.median(ours),
-                   "taichi_dem_runs": ours, "mode": "serial" if runs[0]["serial"] else "parallel"}
-            if size <= a.both_modes_up_to:
-                for mode, threshold in (("serial", 10 ** 9), ("parallel", 0)):
-                    forced = [run_taichi_dem(str(scene), steps, 50, parallel_from=threshold)
-                              ["particle_steps_per_s"] for _ in range(a.repeats)]
-                    row[f"taichi_dem_{mode}"] = statistics.median(forced)
-            if not a.no_lammps:
-                data = lammps_data_for(scene)
-                for ranks in a.ranks:
+            data = None if a.no_lammps else lammps_data_for(scene)
+            ours, serial = [], None
+            forced = {"serial": [], "parallel": []}
+            lammps = {k: [] for k in ([] if a.no_lammps else a.ranks)}
+
+            def run_ours():
+                nonlocal serial
+                r = run_taichi_dem(str(scene), steps, 50)
+                ours.append(r["particle_steps_per_s"])
+                serial = r["serial"]
+                if size <= a.both_modes_up_to:
+                    for mode, threshold in (("serial", 10 ** 9), ("parallel", 0)):
+                        forced[mode].append(run_taichi_dem(str(scene), steps, 50, parallel_from=threshold)
+                                            ["particle_steps_per_s"])
+
+            def run_peer():
+                for ranks in list(lammps):
                     try:
-                        runs = [run_lammps(steps, ranks, data)["particle_steps_per_s"]
-                                for _ in range(a.repeats)]
+                        lammps[ranks].append(run_lammps(steps, ranks, data)["particle_steps_per_s"])
                     except LammpsMissing as e:
                         print(f"LAMMPS skipped: {e}")
                         a.no_lammps = True
-                        break
-                    row[f"lammps_{ranks}"] = statistics.median(runs)
+                        lammps.clear()
+                        return
+            # rounds: taichi_dem first in even rounds, LAMMPS first in odd ones (this host's
+            # speed drifts 10 - 40 % over minutes; runs seconds apart share their phase)
+            for round_ in range(a.repeats):
+                for run in ((run_ours, run_peer) if round_ % 2 == 0 else (run_peer, run_ours)):
+                    run()
+            row = {"size": label, "steps": steps, "taichi_dem": statistics.median(ours),
+                   "taichi_dem_runs": ours, "mode": "serial" if serial else "parallel"}
+            for mode, v in forced.items():
+                if v:
+                    row[f"taichi_dem_{mode}"] = statistics.median(v)
+            for ranks, v in lammps.items():
+                if len(v) == len(ours):
+                    row[f"lammps_{ranks}"] = statistics.median(v)
+                    row[f"lammps_{ranks}_runs"] = v
+                    # the median of the ratios within a round
+                    row[f"paired_{ranks}"] = statistics.median(o / l for o, l in zip(ours, v))
             row["particles"] = int(sum(1 for _ in open(scene.parent / "chute_flowing.csv")) - 1
                                    + sum(1 for _ in open(scene.parent / "chute_base.csv")) - 1)
             rows.append(row)
-            print(json.dumps({k: (round(v / 1e6, 3) if isinstance(v, float) else v)
-                              for k, v in row.items() if k != "taichi_dem_runs"}), flush=True)
+            print(json.dumps({k: (round(v / 1e6, 3) if isinstance(v, float) and "paired" not in k
+                                  else round(v, 3) if isinstance(v, float) else v)
+                              for k, v in row.items() if not k.endswith("_runs")}), flush=True)
     return report(rows, a)
 
 
@@ -159,14 +182,17 @@ def report(rows, a):
     b, a0 = ((fits[first]["per_particle_s"], fits[first]["fixed_s"]) if first else (0.0, 0.0))
     ranks = [k for k in a.ranks if any(f"lammps_{k}" in r for r in rows)]
     print("| particles | steps | mode | taichi_dem M/s | serial | parallel | " + " | ".join(
-        f"LAMMPS {k} rank(s) M/s | ratio" for k in ranks) + " |")
+        f"LAMMPS {k} rank(s) M/s | ratio of medians [paired]" for k in ranks) + " |")
     for r in rows:
         cells = [f"{r['particles']:,}", str(r["steps"]), r["mode"], f"{r['taichi_dem'] / 1e6:.2f}",
                  *(f"{r[k] / 1e6:.2f}" if k in r else "-"
                    for k in ("taichi_dem_serial", "taichi_dem_parallel"))]
         for k in ranks:
             if f"lammps_{k}" in r:
-                cells += [f"{r[f'lammps_{k}'] / 1e6:.2f}", f"{r['taichi_dem'] / r[f'lammps_{k}']:.2f}"]
+                ratio = f"{r['taichi_dem'] / r[f'lammps_{k}']:.2f}"
+                if f"paired_{k}" in r:
+                    ratio += f" [{r[f'paired_{k}']:.2f}]"
+                cells += [f"{r[f'lammps_{k}'] / 1e6:.2f}", ratio]
         print("| " + " | ".join(cells) + " |")
     (a.out / "cost_curve.json").write_text(json.dumps({"rows": rows, "fixed_s": float(a0),
                                                        "per_particle_s": float(b), "fits": fits},
