@@ -14,6 +14,9 @@ noisy machine (runs minutes apart differ by 20 % and more).
   serial    the serial mode on one thread, runs of steps (one simulation, modes switched)
   chunks128 workers claiming 128 particles at a time in the particle stage (the chunks of
             stop 17; stepper.WORKER_CHUNKS huge): a second simulation, windows alternating
+  kernel-rebuilds  the workers with the rebuild as separate parallel kernels instead of on
+            the workers (Engine.rebuilds_on_workers off and on in one simulation: the lists
+            are the same, so the windows go on along one trajectory); each rebuild is timed
 
     .venv/bin/python bench/workers_ab.py --size 32k --steps 100 --rounds 20 --against claims
 """
@@ -39,7 +42,8 @@ def main(argv=None) -> int:
     p.add_argument("--size", default="32k", choices=list(SIZES))
     p.add_argument("--steps", type=int, default=600)
     p.add_argument("--rounds", type=int, default=5)
-    p.add_argument("--against", default="launches", choices=["launches", "claims", "serial", "chunks128"])
+    p.add_argument("--against", default="launches", choices=["launches", "claims", "serial", "chunks128",
+                                                     "kernel-rebuilds"])
     a = p.parse_args(argv)
     import taichi as ti
     import taichi_dem as td
@@ -72,12 +76,27 @@ def main(argv=None) -> int:
             return sim if name == "workers" else other_sim
         if a.against == "launches":
             e.workers = 0
+        elif a.against == "kernel-rebuilds":
+            e.rebuilds_on_workers = False
         else:                                    # serial: below parallel_from
             e.parallel_from, e.serial = 10 ** 9, True
         return sim
 
     def back_to_workers():
         e.parallel_from, e.serial, e.workers = 0, False, workers
+        e.rebuilds_on_workers = True
+
+    # each rebuild timed, booked to the way it was done
+    rebuild_times = {True: [], False: []}
+    rebuild = e.broadphase.rebuild
+
+    def timed_rebuild(n):
+        t0 = time.perf_counter()
+        out = rebuild(n)
+        ti.sync()
+        rebuild_times[e.rebuilds_on_workers].append(time.perf_counter() - t0)
+        return out
+    e.broadphase.rebuild = timed_rebuild
 
     names = ("workers", a.against)
     try:
@@ -85,6 +104,8 @@ def main(argv=None) -> int:
             mode(name).step(60)
             back_to_workers()
         rates = {name: [] for name in names}
+        rebuild_times[True].clear()
+        rebuild_times[False].clear()
         for _ in range(a.rounds):
             for name in names:
                 s = mode(name)
@@ -102,6 +123,11 @@ def main(argv=None) -> int:
         print(f"workers / {a.against}: median of the rounds' ratios {statistics.median(paired):.3f} "
               f"({', '.join(f'{r:.2f}' for r in paired)}); barrier waits that stalled: "
               f"{e.worker_stalls} of {e.worker_barriers}")
+        if a.against == "kernel-rebuilds":
+            for on_workers, v in rebuild_times.items():
+                if v:
+                    print(f"rebuilds {'on the workers' if on_workers else 'as kernels'}: {len(v)}, "
+                          f"median {1e3 * statistics.median(v):.2f} ms")
     finally:
         if other_sim is not sim:
             other_sim.close()
