@@ -649,6 +649,13 @@ class Broadphase:
         stall_spins = self.REBUILD_STALL_SPINS
         SEARCHED, LISTED = self.SEARCHED, self.LISTED
 
+        @ti.func
+        def meet(arrived):
+            """Arrive at the barrier after the ``arrived``-th and wait for every worker;
+            returns its number."""
+            barrier(arrived + 1, stall_spins)
+            return arrived + 1
+
         @ti.kernel
         def rebuild_on_workers(n: ti.i32) -> ti.types.vector(2, ti.i32):
             """rebuild(n) on the workers; returns (alive particles, the stage reached)."""
@@ -666,12 +673,10 @@ class Broadphase:
                     cells_first, cells_last = worker_range(n_cells, w, workers)
                     for c in range(cells_first, cells_last):
                         clear_cell(c)
-                    arrived += 1
-                    barrier(arrived, stall_spins)
+                    arrived = meet(arrived)
                     for i in range(first, last):
                         bin_particle(i)
-                    arrived += 1
-                    barrier(arrived, stall_spins)
+                    arrived = meet(arrived)
                     if w == 0:
                         put_in_cell_order(n)
                     else:
@@ -679,22 +684,18 @@ class Broadphase:
                         for i in range(saved_first, saved_last):
                             save_row(i)
                             save_pair_row(i)
-                    arrived += 1
-                    barrier(arrived, stall_spins)
+                    arrived = meet(arrived)
                     # (2) every array moved into that order
                     for move in ti.static(moves):
                         for k in range(first, last):
                             move[0](k)          # into the shadow
-                        arrived += 1
-                        barrier(arrived, stall_spins)
+                        arrived = meet(arrived)
                         for k in range(first, last):
                             move[1](k)          # back
-                        arrived += 1
-                        barrier(arrived, stall_spins)
+                        arrived = meet(arrived)
                     for k in range(first, last):
                         settle(k)
-                    arrived += 1
-                    barrier(arrived, stall_spins)
+                    arrived = meet(arrived)
                     # (3) the rows: search, their starts, the lists with their history
                     alive = total[1]
                     first, last = worker_range(alive, w, workers)
@@ -702,18 +703,15 @@ class Broadphase:
                     for i in range(first, last):
                         longest = ti.max(longest, search_row(i))
                     ti.atomic_max(total[2], longest)
-                    arrived += 1
-                    barrier(arrived, stall_spins)
+                    arrived = meet(arrived)
                     if w == 0:
                         start_rows(alive)
-                    arrived += 1
-                    barrier(arrived, stall_spins)
+                    arrived = meet(arrived)
                     if total[2] <= width and total[0] <= pair_capacity:
                         for i in range(first, last):
                             compact_row(i)
-                        arrived += 1
                         # (link_row reads the partners' owned entries)
-                        barrier(arrived, stall_spins)
+                        arrived = meet(arrived)
                         for i in range(first, last):
                             link_row(i)
             stage = SEARCHED
