@@ -619,8 +619,8 @@ class Broadphase:
         self.fused = None
         self.on_workers = None
 
-    # a barrier wait on the workers' rebuild counted as stalled past this many spins (only
-    # reported: a rebuild is one launch, and the runs of steps judge the stalls)
+    # the barrier's stall threshold for the rebuild's waits, whose stall flags are not used
+    # (a rebuild is one launch between runs of steps; those runs judge the stalls)
     REBUILD_STALL_SPINS = 1 << 30
 
     def _compile_on_workers(self):
@@ -630,9 +630,9 @@ class Broadphase:
         parallel kernels have a launch or a loop - ~30 of them, each ~40 - 100 us on
         Taichi's thread pool here, against ~0.2 us for a barrier - and one worker on the
         serial parts (the scans and the placing in cell order, beside which the others save
-        the old rows). Every row is found as the
-        kernels find it, so the lists are theirs bit for bit. Where an array is too small
-        it stops after the search (SEARCHED), as fused_rebuild does."""
+        the old rows). Every row is found as the kernels find it, so the lists are theirs
+        bit for bit. Where an array is too small it stops after the search (SEARCHED), as
+        fused_rebuild does."""
         e = self.e
         f = self.row_funcs
         save_row, save_pair_row, clear_cell, bin_particle, put_in_cell_order, moves, settle = (
