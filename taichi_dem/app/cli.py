@@ -72,6 +72,12 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_arguments(sw)
     tr = sub.add_parser("tradeoffs", help="what accuracy costs in time: one knob at a time")
     tradeoffs.add_arguments(tr)
+    sc = sub.add_parser("schema", help="print the JSON Schema of every scene key (type, unit, "
+                                       "default, range, description), generated from the "
+                                       "declarations")
+    sc.add_argument("--keys", action="store_true",
+                    help="a plain table instead: one line per key (path, unit, default, "
+                         "description)")
     from . import plots
     pl = sub.add_parser("plot", help="PNG plots of a results file (torque, residence time, "
                                      "mass flows, temperatures, heat flows)")
@@ -108,6 +114,8 @@ def _main(argv=None) -> int:
         if args.command == "tradeoffs":
             from .tradeoffs import cmd_tradeoffs
             return cmd_tradeoffs(args)
+        if args.command == "schema":
+            return cmd_schema(args)
         if args.command == "plot":
             from .plots import cmd_plot
             return cmd_plot(args)
@@ -115,6 +123,26 @@ def _main(argv=None) -> int:
         return _fail(str(err), 2)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)
+    return 0
+
+
+# ---------------------------------------------------------------------------------- schema
+def cmd_schema(args) -> int:
+    """Print the scene schema (JSON) or, with --keys, one line per key."""
+    from ..scene import schema
+    if not args.keys:
+        text = schema.dumps()
+    else:
+        lines = []
+        for path, node in schema.every_key():
+            default = "required" if node.get("x-required") else node.get("default", "")
+            lines.append(f"{path:52s} {node.get('x-unit', ''):10s} {str(default):20s} "
+                         f"{node.get('description', '')}")
+        text = "\n".join(lines)
+    try:
+        print(text)
+    except BrokenPipeError:       # `taichi-dem schema | head`
+        sys.stderr.close()
     return 0
 
 

@@ -1,81 +1,28 @@
-"""Effects: each physical effect is one module with one job; the stepper composes the ones a
-scene enables.
+"""Effects: each physical effect is one module (or package) with one job; the stepper composes
+the ones a scene enables.
 
-``enabled_effects(scene)`` builds the effect objects (effects/base.py: stage, fields, pair
-tables, kernels) in step order; the engine allocates what they declare and unrolls them at
-compile time (``ti.static``): an effect not in the tuple is neither allocated, compiled nor
-run. Thermal effects come from ``thermal/effects.py``, only for a scene with [thermal].
+``enabled_effects(scene)`` (registry.py) builds the effect objects (base.py: stage, fields,
+pair tables, kernels) in step order; the engine allocates what they declare and unrolls them
+at compile time (``ti.static``): an effect not in the tuple is neither allocated, compiled
+nor run. Thermal effects come from ``thermal/effects.py``, only for a scene with [thermal].
 ``taichi-dem check`` prints the tuple.
+
+An effect with scene keys of its own is a package: ``settings.py`` declares its section
+(scene/keys.py: each key's type, unit, default, range and description), its settings
+dataclass and the cross-key checks, in plain Python; ``effect.py`` holds the Effect (fields,
+kernels). The loader and the schema import the settings only, so reading a scene never
+imports Taichi; that is why this package's names are loaded on first use.
 """
 from __future__ import annotations
 
-from ..scene.model import Scene
-from .base import Effect
-from .drag import Drag
-from .gravity import Gravity
-from .hertz_mindlin import HertzMindlin
-from .mobility import Mobility
-from .rolling import RollingConstantTorque, RollingEPSD
+__all__ = ["enabled_effects", "effect_names", "Effect"]
 
 
-def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
-    """The effects this scene calls for, in step order."""
-    effects: list[Effect] = [Effect("velocity Verlet for translation and rotation",
-                                    "velocity_verlet", "integrate")]
-    if any(abs(g) > 0 for g in scene.simulation.gravity):
-        effects.append(Gravity("uniform gravity", scene.simulation.gravity))
-    if scene.drag is not None:
-        d = scene.drag
-        speed = sum(c * c for c in d.velocity) ** 0.5
-        effects.append(Drag(f"gas drag ({d.model.replace('_', '-')}"
-                            + (", local voidage from the cell grid" if d.model == "di_felice" else "")
-                            + f"), superficial gas velocity {speed:.3g} m/s, one-way", d))
-    effects.append(HertzMindlin("Hertz-Mindlin no-slip, tangential history, Coulomb limit"))
-    models = {i.rolling_model for i in scene.interactions.values() if i.rolling_friction > 0}
-    if "constant_torque" in models:
-        effects.append(RollingConstantTorque("rolling friction, constant directional torque"))
-    if "epsd" in models:
-        effects.append(RollingEPSD("rolling friction, EPSD spring"))
-    if scene.walls:
-        effects.append(Effect(f"{len(scene.walls)} analytic plane wall(s): the contact law on "
-                              "each particle-plane contact", "plane_walls", "detect"))
-    if scene.bodies:
-        n_tri = sum(len(b.faces) for b in scene.bodies)
-        effects.append(Effect(f"{len(scene.bodies)} triangle-mesh bodies ({n_tri} triangles): "
-                              "the contact law on each particle-triangle contact, loads on "
-                              "each body", "mesh_contact", "detect"))
-    if scene.thermal is not None:
-        # the thermal package registers its effects here, and only here
-        from thermal.effects import thermal_effects
-        effects.extend(thermal_effects(scene))
-    for f in scene.factories:
-        effects.append(Effect(f"factory '{f.name}': {f.material} at "
-                              + " then ".join(f"{r * 3.6:g} t/h from {t:g} s"
-                                              for t, r in f.mass_rate.points),
-                              "factory", "process"))
-    if scene.outlets:
-        effects.append(Effect("outlets " + ", ".join(o.name for o in scene.outlets)
-                              + ": particles removed and accounted", "outlets", "process"))
-    for x in scene.sensors:
-        effects.append(Effect(f"sensor '{x.name}' ({x.kind})", f"sensor_{x.kind}", "observe"))
-    if scene.domain.periodic:
-        effects.append(Effect("periodic faces: " + ", ".join(scene.domain.periodic),
-                              "periodic", "integrate"))
-    if scene.mobility is not None:
-        m = scene.mobility
-        frame = f"relative to body '{m.body}'" if m.mode == "body_frame" else "at rest"
-        effects.append(Mobility(
-            f"mobility: contacts between inactive particles frozen, their integration skipped "
-            f"(granular temperature > {m.granular_temperature_threshold:.3g} (m/s)^2"
-            f"{' (auto: 1e-5 g d_max)' if m.threshold_is_auto else ''}, solid fraction < "
-            f"{m.solid_fraction_threshold:g}"
-            + (f", rms acceleration > {m.acceleration_threshold:.3g} m/s^2"
-               if m.acceleration_threshold < float("inf") else "")
-            + f", cells of {m.cell_size * 1e3:.3g} mm, {frame})", m))
-    if any(f.fixed for f in scene.fills):
-        effects.append(Effect("fixed (frozen) particles", "fixed_particles", "integrate"))
-    return tuple(effects)
-
-
-def effect_names(scene: Scene) -> set[str]:
-    return {e.name for e in enabled_effects(scene)}
+def __getattr__(name):
+    if name in ("enabled_effects", "effect_names"):
+        from . import registry
+        return getattr(registry, name)
+    if name == "Effect":
+        from .base import Effect
+        return Effect
+    raise AttributeError(f"module 'taichi_dem.effects' has no attribute {name!r}")

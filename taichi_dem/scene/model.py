@@ -12,6 +12,11 @@ from typing import Optional
 
 import numpy as np
 
+# the effects' own settings, declared with their keys where the effect lives
+from thermal.settings import GasSettings, ThermalSettings  # noqa: F401
+from ..effects.drag.settings import DragSettings  # noqa: F401
+from ..effects.mobility.settings import MobilitySettings  # noqa: F401
+
 Vec3 = tuple[float, float, float]
 
 
@@ -149,118 +154,6 @@ class PlaneWall:
     normal: Vec3                         # unit
     material: str
     temperature: Optional[float] = None  # K; None = adiabatic
-
-
-@dataclass(frozen=True)
-class DragSettings:
-    """Drag from a gas on the particles (effects/drag.py), one-way coupled: ``model``
-    "di_felice" (local voidage from the cell grid) or "schiller_naumann" (dilute); the gas's
-    superficial ``velocity`` m/s (uniform), ``density`` kg/m^3 and ``viscosity`` Pa s. From
-    the mechanics-only [gas] section or from [thermal.gas] with ``drag``."""
-    model: str
-    velocity: Vec3
-    density: float
-    viscosity: float
-
-
-@dataclass(frozen=True)
-class GasSettings:
-    """The gas particles exchange heat with by convection (air at 300 K by default).
-
-    ``"fixed"``: uniform ``temperature`` and ``velocity``. ``"axial_plug_flow"``: a 1-D stream
-    along the axis from ``axis_point`` along unit ``axis_direction`` for ``length``, in
-    ``cells`` equal cells, entering at the axis_point end (``flow = "along_axis"``) or at the
-    far end (``"against_axis"``) with ``mass_flow`` kg/s at ``temperature`` (the inlet
-    temperature, K); ``velocity`` is then the stream's, mass_flow / (density flow_area) along
-    the flow (the loader derives it)."""
-    model: str = "fixed"                 # "fixed" | "axial_plug_flow"
-    temperature: float = 300.0           # K (plug flow: the inlet temperature)
-    velocity: Vec3 = (0.0, 0.0, 0.0)     # m/s
-    correlation: str = "ranz_marshall"   # Nusselt correlation: "ranz_marshall" | "gunn"
-    porosity: float = 0.4                # bed voidage for "gunn"
-    density: float = 1.177               # kg/m^3
-    viscosity: float = 1.846e-5          # Pa s
-    conductivity: float = 0.02624        # W/(m K)
-    heat_capacity: float = 1007.0        # J/(kg K)
-    # axial_plug_flow only
-    axis_point: Vec3 = (0.0, 0.0, 0.0)   # m
-    axis_direction: Vec3 = (1.0, 0.0, 0.0)   # unit
-    length: float = 0.0                  # m
-    cells: int = 0
-    flow_area: float = 0.0               # m^2, the gas's free cross-section
-    mass_flow: float = 0.0               # kg/s
-    flow: str = "along_axis"             # "along_axis" | "against_axis"
-    drag: str = "none"                   # "none" | "di_felice" | "schiller_naumann"
-
-    @property
-    def plug_flow(self) -> bool:
-        return self.model == "axial_plug_flow"
-
-
-@dataclass(frozen=True)
-class ThermalSettings:
-    """[thermal]: present = heat transfer compiled and run; each part switchable."""
-    conduction: bool = True              # particle-particle, through the contact area
-    wall_conduction: bool = True         # to walls and bodies that have a temperature
-    radiation: bool = False              # grey-body exchange with ``radiation_to``
-    gas: Optional[GasSettings] = None    # None = no convection
-    # correction of the contact radius for softened stiffness: "static" a ~ E*^(-1/3)
-    # (enduring contacts, the default), "collision" a ~ E*^(-1/5) (Morris et al. 2016), "none"
-    contact_radius_correction: str = "static"
-    # radiation: what the particles see - "gas" (the local gas temperature), "surface" (the
-    # wall/body radiation_surface) or "enclosure" (at radiation_temperature); only inside
-    # radiation_region if given
-    radiation_to: str = ""
-    radiation_surface: Optional[str] = None          # wall/body name when "surface"
-    radiation_temperature: Optional[float] = None    # K, for "surface" and "enclosure"
-    radiation_region: Optional[Region] = None
-    # moisture: on when any fill (or factory) gives ``moisture``
-    moisture: bool = False
-    evaporation_temperature: float = 373.15          # K
-    latent_heat: float = 2.26e6                      # J/kg
-    water_heat_capacity: float = 4186.0              # J/(kg K), liquid water
-    # conduction through the gas gap near particle-particle (with conduction on; unless
-    # gas_gap_pairs is false) and particle-wall/body contacts (thermal/gas_gap.py): the fluid
-    # lens gas_gap_lens radii thick, gaps narrower than gas_gap_min_gap m count as it (MFiX's
-    # defaults: lens 0.2 R; a minimum gap of about 1 um, the roughness scale)
-    gas_gap: bool = False
-    gas_gap_pairs: bool = True
-    # "solid_resistance": the particle's own resistance in series with the gas along each
-    # line (Cheng, Yu & Zulli 1999); "isothermal": isothermal surfaces (Rong & Horio 1999,
-    # Musser 2011, Morris et al. 2015), an upper bound where k_g/k_s is not small
-    # "voronoi": the solid's resistance from the Voronoi cones, not the centre planes (Cheng,
-    # Yu & Zulli 1999), with the packing's porosity gas_gap_porosity setting the cones
-    gas_gap_model: str = "solid_resistance"
-    gas_gap_porosity: float = 0.4
-    # thermal time scaling: every heat capacity divided by time_scale S, so temperatures move
-    # S times faster than the mechanics; thermal time = S x simulated time (series
-    # thermal_time); heat flows (W) stay physical
-    time_scale: float = 1.0
-    gap_gas_conductivity: float = 0.02624            # W/(m K); air at 300 K
-    gas_gap_lens: float = 0.2                        # of the particle radius
-    gas_gap_min_gap: float = 1.0e-6                  # m
-
-
-@dataclass(frozen=True)
-class MobilitySettings:
-    """[mobility]: skip the contacts and the integration of particles that do not move
-    (effects/mobility.py). Cells of the mobility grid (blocks of contact cells about
-    ``cell_size`` across) are judged at every neighbour rebuild: *mobile* when the granular
-    temperature of their particles (velocity fluctuation about the cell mean, (m/s)^2) or the
-    squared mean velocity exceeds ``granular_temperature_threshold``, when their solid
-    fraction is below ``solid_fraction_threshold``, when the rms acceleration of their
-    particles exceeds ``acceleration_threshold`` (a bed still ringing after an impact is not
-    in equilibrium: freezing it would freeze its forces) or when they touch an empty cell; *active*
-    within one cell of a mobile one; *inactive* otherwise. Velocities are taken relative to
-    the rigid motion of ``body`` in mode "body_frame" (drums, coolers), to rest in mode
-    "at_rest"."""
-    granular_temperature_threshold: float    # (m/s)^2 (resolved: "auto" = 1e-5 g d_max)
-    solid_fraction_threshold: float = 0.4
-    cell_size: float = 0.0                   # m (resolved: "auto" = 3 d_max)
-    mode: str = "at_rest"                    # "at_rest" | "body_frame"
-    acceleration_threshold: float = math.inf  # m/s^2, rms acceleration; inf = not checked
-    body: Optional[str] = None               # the body whose frame "body_frame" uses
-    threshold_is_auto: bool = False
 
 
 @dataclass(frozen=True)

@@ -41,6 +41,9 @@ if str(ROOT) not in sys.path:
 
 from geometry.builders import BUILDERS, COMMON, REQUIRED  # noqa: E402
 from taichi_dem.scene import loader as _loader  # noqa: E402
+from taichi_dem.scene.keys import registered as _registered  # noqa: E402
+from taichi_dem.scene.sections.regions import CYLINDER as _CYLINDER  # noqa: E402
+from thermal.settings import PLUG_FLOW_REQUIRED as _PLUG_FLOW_REQUIRED  # noqa: E402
 
 CATEGORIES = ("wrong_type", "missing_key", "bad_number", "wrong_unit", "unknown_key",
               "bad_choice", "bad_name", "empty_region", "absurd_size", "overfull", "broken_mesh",
@@ -499,21 +502,20 @@ BUILDER_KINDS = {
     "factor": ("factor", None, "pos"), "path": ("enum", None, None),
 }
 
+# every key some section declares (scene/keys.py): an unknown-key mutation must not land on one
 ALL_KEYS = set(_loader.SECTIONS) | set(_loader.PLANNED_SECTIONS)
-for _name in dir(_loader):
-    _v = getattr(_loader, _name)
-    if _name.endswith("_KEYS") and isinstance(_v, (tuple, dict)):
-        for _x in (_v if isinstance(_v, tuple) else [k for t in _v.values() for k in t]):
-            ALL_KEYS.add(_x)
-ALL_KEYS |= set(_loader.REGION_KINDS) | {"builder", "file", "box", "cylinder", "sizes"}
+for _section in _registered().values():
+    ALL_KEYS |= set(_section.names)
+ALL_KEYS |= {"builder", "file", "box", "cylinder", "sizes"}
 for _b in BUILDERS.values():
     ALL_KEYS |= {p.name for p in _b.params + COMMON} | {a for a, _ in _b.aliases}
 
 
 # every word some enum key accepts: a near miss must not land on one
-VALID_WORDS = {"f32", "f64", "auto", "gas", "x", "y", "z"} | set(_loader.ROLLING_MODELS) | \
-    set(_loader.SENSOR_KINDS) | {"fixed", "axial_plug_flow", "ranz_marshall", "gunn",
-                                 "along_axis", "against_axis", "static", "collision", "none"} | \
+VALID_WORDS = {"f32", "f64", "auto", "gas", "x", "y", "z"} | \
+    {c for _section in _registered().values() for _k in _section.keys for c in _k.choices} | \
+    {"fixed", "axial_plug_flow", "ranz_marshall", "gunn",
+     "along_axis", "against_axis", "static", "collision", "none"} | \
     set(BUILDERS) | {c for _b in BUILDERS.values() for p in _b.params for c in p.choices}
 
 
@@ -1442,7 +1444,7 @@ def required_deletions(doc):
             continue
         if path[-1] in ("region", "radiation_region"):
             for kind, sub in v.items():
-                keys = ("min", "max") if kind == "box" else _loader.CYLINDER_KEYS
+                keys = ("min", "max") if kind == "box" else _CYLINDER.names
                 for k in keys:
                     if isinstance(sub, dict) and k in sub:
                         yield path + (kind, k), (path + (kind, k),)
@@ -1517,7 +1519,7 @@ def required_deletions(doc):
                 yield ("thermal", "gas"), (("thermal", "radiation_to"),)
         gas = th.get("gas")
         if isinstance(gas, dict) and gas.get("model") == "axial_plug_flow":
-            for k in _loader.PLUG_FLOW_REQUIRED:
+            for k in _PLUG_FLOW_REQUIRED:
                 if k in gas:
                     yield ("thermal", "gas", k), (("thermal", "gas", k),)
             for k in ("flow_area", "radius"):

@@ -82,7 +82,7 @@ import sys
 import numpy as np
 import taichi as ti
 
-from .base import Effect
+from ..base import Effect
 
 INACTIVE, ACTIVE, MOBILE, EMPTY = 0, 1, 2, 3
 

@@ -29,7 +29,7 @@ import math
 
 import taichi as ti
 
-from .base import Effect
+from ..base import Effect
 
 
 class Drag(Effect):

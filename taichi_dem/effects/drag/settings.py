@@ -1,0 +1,59 @@
+"""Gas drag: the mechanics-only [gas] keys, ``DragSettings`` and where a drag comes from
+(the effect is effect.py). Plain Python (no Taichi)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+from ...errors import SceneError
+from ...scene import air
+from ...scene.keys import Key, Section, register, type_name
+
+MODELS = ("di_felice", "schiller_naumann")
+
+SECTION = register(Section("gas", "A gas that drags the particles (one-way coupled), without "
+                           "heat transfer; with [thermal], give the gas in [thermal.gas]", (
+    Key("velocity", "vector", "the gas's superficial velocity (uniform)", unit="speed",
+        default=None),
+    Key("density", "quantity", "the gas's density", unit="density", default=air.DENSITY,
+        minimum=0.0, exclusive_minimum=True),
+    Key("viscosity", "quantity", "the gas's dynamic viscosity", unit="viscosity",
+        default=air.VISCOSITY, minimum=0.0, exclusive_minimum=True),
+    Key("drag", "choice", "the drag law: Di Felice (local voidage from the cell grid) or "
+        "Schiller-Naumann (a dilute particle)", default="di_felice", choices=MODELS),
+), owner=__name__))
+
+
+@dataclass(frozen=True)
+class DragSettings:
+    """Drag from a gas on the particles (effects/drag/effect.py), one-way coupled: ``model``
+    "di_felice" (local voidage from the cell grid) or "schiller_naumann" (dilute); the gas's
+    superficial ``velocity`` m/s (uniform), ``density`` kg/m^3 and ``viscosity`` Pa s. From
+    the mechanics-only [gas] section or from [thermal.gas] with ``drag``."""
+    model: str
+    velocity: tuple
+    density: float
+    viscosity: float
+
+
+def parse(doc: dict, file: str, heat_gas) -> Optional[DragSettings]:
+    """Drag from the mechanics-only [gas] section or from [thermal.gas] (``heat_gas``, the
+    parsed GasSettings or None) with drag = "di_felice" | "schiller_naumann"; not both."""
+    if "gas" in doc:
+        if heat_gas is not None:
+            raise SceneError(file, "gas", "the scene has a [thermal.gas] already: give its drag "
+                                          "there (drag = \"di_felice\"), not a second gas")
+        g = doc["gas"]
+        if not isinstance(g, dict):
+            raise SceneError(file, "gas", f"expected a table, got {type_name(g)}")
+        SECTION.check(g, file, "gas")
+        if "velocity" not in g:
+            SECTION.read(g, file, "gas", only=("drag",))
+            raise SceneError(file, "gas.velocity", "required: the gas's superficial velocity, m/s")
+        v = SECTION.read(g, file, "gas", defaults=True)
+        return DragSettings(model=v["drag"], velocity=v["velocity"], density=v["density"],
+                            viscosity=v["viscosity"])
+    if heat_gas is not None and heat_gas.drag != "none":
+        return DragSettings(model=heat_gas.drag, velocity=heat_gas.velocity,
+                            density=heat_gas.density, viscosity=heat_gas.viscosity)
+    return None

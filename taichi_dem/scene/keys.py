@@ -1,0 +1,302 @@
+"""Scene keys declared as data: each section's keys with their type, unit, default, allowed
+range and a one-line description, in one place, next to what they configure.
+
+A ``Section`` is declared by whatever owns it: the effect modules own theirs
+(``taichi_dem/effects/mobility_settings.py`` the [mobility] table, ``effects/drag_settings.py``
+the mechanics-only [gas] table, ``thermal/settings.py`` [thermal] and [thermal.gas]); the scene
+structure's own sections (simulation, domain, materials, ...) live in ``scene/sections/``.
+From the declarations:
+
+- the loader checks unknown keys (with a did-you-mean suggestion) and required keys, and reads
+  every plain key (quantity, vector, direction, boolean, integer, string, choice) with its
+  unit and range (``Section.read``): errors are ``file: key: reason`` as everywhere;
+- ``scene/schema.py`` generates the JSON Schema of every scene key (``taichi-dem schema``),
+  with ``x-unit``, ``default`` and ``description``, for the documentation and the fuzzer.
+
+Keys whose value is a structure the section's own code parses (a region, a mesh, a schedule)
+are declared with ``kind = "table"`` (or ``"tables"``, ``"any"``) and a JSON Schema fragment.
+Cross-key checks (one key needs another) stay with the code of the section they concern.
+This module is plain Python: no Taichi.
+"""
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional
+
+from ..errors import SceneError
+from .units import DIMENSIONS, parse_quantity, parse_vec3
+
+
+class _Required:
+    def __repr__(self):
+        return "REQUIRED"
+
+
+REQUIRED = _Required()      # a key without which the section is refused
+AUTO = "auto"               # the value of a key that also accepts "auto" (resolved by its owner)
+
+KINDS = ("quantity", "vector", "direction", "boolean", "integer", "string", "choice",
+         "table", "tables", "any")
+
+
+def type_name(value: Any) -> str:
+    """How a TOML value is named in messages ("the string 'x'", "a table", ...)."""
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, dict):
+        return "a table"
+    if isinstance(value, list):
+        return "an array"
+    if isinstance(value, str):
+        return f"the string {value!r}"
+    if isinstance(value, (int, float)):
+        return f"the number {value!r}"
+    return type(value).__name__
+
+
+def suggest(word: str, choices) -> str:
+    """ "did you mean 'x'? " for the closest of ``choices``, or ""."""
+    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f"did you mean '{close[0]}'? " if close else ""
+
+
+def join(key: str, sub: str) -> str:
+    return f"{key}.{sub}" if key else sub
+
+
+def _fmt(x: float) -> str:
+    return "inf" if x == math.inf else f"{x:g}"
+
+
+@dataclass(frozen=True)
+class Key:
+    """One scene key.
+
+    ``kind``: quantity (a number in SI or a string with a unit of ``unit``), vector (three of
+    them), direction (a nonzero 3-vector, normalised on load), boolean, integer, string,
+    choice (one of ``choices``), or table / tables / any (parsed by the section's own code,
+    described by ``schema``). ``unit`` is a dimension of ``scene/units.py`` (``"length"``,
+    ``"temperature"``, ...). ``default`` is REQUIRED, None (absent means off or derived, as
+    ``description`` says) or the SI value used when the key is absent. ``minimum`` /
+    ``maximum`` bound the SI value (``exclusive_*`` for open ends); ``why`` says what the
+    bound means, in the error. ``auto``: "auto" is also accepted (the owner resolves it).
+    ``effect``: the effect the key configures, where a section serves several.
+    """
+    name: str
+    kind: str
+    description: str
+    unit: Optional[str] = None
+    default: Any = None
+    minimum: Optional[float] = None
+    maximum: Optional[float] = None
+    exclusive_minimum: bool = False
+    exclusive_maximum: bool = False
+    why: str = ""
+    choices: tuple = ()
+    auto: bool = False
+    effect: str = ""
+    schema: Optional[dict] = None
+
+    def __post_init__(self):
+        assert self.kind in KINDS, self.kind
+        assert self.unit is None or self.unit in DIMENSIONS, self.unit
+        assert self.kind not in ("quantity", "vector") or self.unit is not None, self.name
+        assert self.kind != "choice" or self.choices, self.name
+
+    @property
+    def required(self) -> bool:
+        return self.default is REQUIRED
+
+    @property
+    def si_unit(self) -> str:
+        """The SI unit of the key's value ("1" when dimensionless, "" when not a quantity)."""
+        if self.kind == "direction":
+            return "1"
+        return DIMENSIONS[self.unit][0] if self.unit else ""
+
+    def range_text(self) -> str:
+        """The allowed range in words: "> 0", "in (0, 1]", ... ("" when unbounded)."""
+        lo, hi = self.minimum, self.maximum
+        if lo is not None and hi is not None:
+            if self.exclusive_minimum and self.exclusive_maximum:
+                return f"strictly between {_fmt(lo)} and {_fmt(hi)}"
+            return (f"in {'(' if self.exclusive_minimum else '['}{_fmt(lo)}, {_fmt(hi)}"
+                    f"{')' if self.exclusive_maximum else ']'}")
+        if lo is not None:
+            return f"{'>' if self.exclusive_minimum else '>='} {_fmt(lo)}"
+        if hi is not None:
+            return f"{'<' if self.exclusive_maximum else '<='} {_fmt(hi)}"
+        return ""
+
+    def in_range(self, x: float) -> bool:
+        if self.minimum is not None:
+            if x < self.minimum or (self.exclusive_minimum and x == self.minimum):
+                return False
+        if self.maximum is not None:
+            if x > self.maximum or (self.exclusive_maximum and x == self.maximum):
+                return False
+        return not (isinstance(x, float) and math.isnan(x))
+
+    def read(self, value: Any, file: str, key: str) -> Any:
+        """The value of this key in SI (a tuple for vectors), or AUTO; a SceneError naming
+        ``file`` and ``key`` when it is the wrong type, unit or out of range."""
+        if self.auto and isinstance(value, str) and value.strip().lower() == AUTO:
+            return AUTO
+        k = self.kind
+        if k == "quantity":
+            try:
+                x = parse_quantity(value, self.unit, file=file, key=key)
+            except SceneError as e:
+                if self.auto:
+                    raise SceneError(file, key, f"{e.reason}; \"auto\" or {self.unit_hint()}") from None
+                raise
+            self._check_range(x, file, key, f"{x:g}")
+            return x
+        if k == "vector":
+            return parse_vec3(value, self.unit, file=file, key=key)
+        if k == "direction":
+            v = parse_vec3(value, "dimensionless", file=file, key=key)
+            n = math.sqrt(sum(c * c for c in v))
+            if not n > 0.0:
+                raise SceneError(file, key, "must be a nonzero vector (it is normalised on load)")
+            return tuple(c / n for c in v)
+        if k == "boolean":
+            if not isinstance(value, bool):
+                raise SceneError(file, key, f"expected true or false, got {type_name(value)}")
+            return value
+        if k == "integer":
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise SceneError(file, key, f"expected an integer, got {type_name(value)}")
+            self._check_range(value, file, key, f"{value}")
+            return value
+        if k == "string":
+            if not isinstance(value, str):
+                raise SceneError(file, key, f"expected a string, got {type_name(value)}")
+            return value
+        if k == "choice":
+            if not isinstance(value, str) or value not in self.choices:
+                words = [f'"{c}"' for c in self.choices]
+                allowed = (", ".join(words[:-1]) + " or " + words[-1]) if len(words) > 1 else words[0]
+                hint = suggest(value, self.choices) if isinstance(value, str) else ""
+                raise SceneError(file, key, f"must be {allowed}, got {type_name(value)}"
+                                            + (f"; {hint.strip()}" if hint else ""))
+            return value
+        return value        # table / tables / any: the section's own code reads it
+
+    def unit_hint(self) -> str:
+        return f"{DIMENSIONS[self.unit][1]} in {self.si_unit}" if self.unit else "a value"
+
+    def _check_range(self, x, file: str, key: str, shown: str) -> None:
+        if self.in_range(x):
+            return
+        text = self.range_text()
+        why = f" ({self.why})" if self.why else ""
+        verb = "lie" if text.startswith("strictly") else "be"
+        raise SceneError(file, key, f"must {verb} {text}, got {shown}{why}")
+
+    def default_text(self) -> str:
+        """The default in words, for references ("required", "off/derived", a value)."""
+        d = self.default
+        if d is REQUIRED:
+            return "required"
+        if d is None:
+            return "none"
+        if isinstance(d, bool):
+            return "true" if d else "false"
+        if isinstance(d, str):
+            return f'"{d}"'
+        if isinstance(d, tuple):
+            return "[" + ", ".join(_fmt(c) for c in d) + "]"
+        if isinstance(d, float):
+            return _fmt(d)
+        return str(d)
+
+
+@dataclass(frozen=True)
+class Section:
+    """The keys of one scene table. ``path`` is its dotted place in the scene ("thermal.gas";
+    "particles[]" for an array of tables, "materials.*" for a table of named tables);
+    ``owner`` the module that declares it (an effect's, or scene/sections)."""
+    path: str
+    description: str
+    keys: tuple[Key, ...]
+    owner: str = ""
+    # key -> nested Section for keys whose value is a table the section's code reads with it
+    nested: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        names = [k.name for k in self.keys]
+        assert len(names) == len(set(names)), f"{self.path}: duplicate key"
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(k.name for k in self.keys)
+
+    def __getitem__(self, name: str) -> Key:
+        for k in self.keys:
+            if k.name == name:
+                return k
+        raise KeyError(f"{self.path} has no key {name!r}")
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.names
+
+    def default(self, name: str) -> Any:
+        """The declared default of ``name`` (for dataclass fields: one definition)."""
+        return self[name].default
+
+    def check(self, table: dict, file: str, key: str, required: tuple[str, ...] | None = None) -> None:
+        """Unknown keys (with the closest known one suggested) and missing required keys;
+        ``required`` overrides the declared ones (a section whose required keys depend on
+        a mode)."""
+        allowed = self.names
+        for k in table:
+            if k not in allowed:
+                raise SceneError(file, join(key, k),
+                                 f"unknown key '{k}'; {suggest(k, allowed)}"
+                                 f"allowed keys here: {', '.join(allowed)}")
+        needed = required if required is not None else tuple(k.name for k in self.keys if k.required)
+        for k in needed:
+            if k not in table:
+                raise SceneError(file, join(key, k), "required key is missing")
+
+    def read(self, table: dict, file: str, key: str, only: tuple[str, ...] | None = None,
+             defaults: bool = False, required: tuple[str, ...] | None = None) -> dict:
+        """Check ``table`` and read its plain keys: {name: SI value} for the keys present
+        (``only`` limits it to those); ``defaults`` adds the declared default of each absent
+        plain key that has one. Structured keys (table, tables, any) are left to the caller."""
+        self.check(table, file, key, required)
+        out: dict[str, Any] = {}
+        for k in self.keys:
+            if only is not None and k.name not in only:
+                continue
+            if k.kind in ("table", "tables", "any"):
+                continue
+            if k.name in table:
+                out[k.name] = k.read(table[k.name], file, join(key, k.name))
+            elif defaults and k.default is not None and k.default is not REQUIRED:
+                out[k.name] = k.default
+        return out
+
+
+# every declared section, by path, filled by ``register`` when the declaring module loads
+_REGISTRY: dict[str, Section] = {}
+
+
+def register(section: Section) -> Section:
+    """Record ``section`` for the schema (scene/schema.py); returns it."""
+    _REGISTRY[section.path] = section
+    return section
+
+
+def registered() -> dict[str, Section]:
+    return dict(_REGISTRY)
+
+
+def reader_for(file: str) -> Callable[[Key, Any, str], Any]:
+    """``read(key_declaration, value, dotted_key)`` bound to a file name."""
+    def read(decl: Key, value: Any, key: str) -> Any:
+        return decl.read(value, file, key)
+    return read

@@ -1,0 +1,112 @@
+"""The loader's reading helpers, shared by every section: a value of a given type or unit,
+or a SceneError naming the file, the dotted key and the reason."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...errors import SceneError
+from ..keys import Key, Section
+from ..keys import suggest as _suggest
+from ..keys import type_name as _type_name
+from ..units import parse_quantity, parse_vec3
+
+
+class Reader:
+    """The reading helpers: ``source`` (the file named in errors), ``base_dir`` (for
+    relative paths), ``materials`` once [materials] is read."""
+
+    def __init__(self, source: str, base_dir: Path):
+        self.source = source
+        self.base_dir = base_dir
+
+    # -- generic helpers ----------------------------------------------------------------------
+    def err(self, key: str, reason: str) -> SceneError:
+        return SceneError(self.source, key, reason)
+
+    def table(self, value: Any, key: str, what: str = "a table") -> dict:
+        if not isinstance(value, dict):
+            raise self.err(key, f"expected {what}, got {_type_name(value)}")
+        return value
+
+    def check_keys(self, tbl: dict, key: str, allowed, required=None) -> None:
+        """Unknown keys of ``tbl`` (``allowed``: a declared Section, or names) with the
+        closest suggested, then missing ``required`` keys (default: the Section's)."""
+        if isinstance(allowed, Section):
+            allowed.check(tbl, self.source, key, required)
+            return
+        Section(key, "", tuple(Key(k, "any", "") for k in allowed)).check(
+            tbl, self.source, key, tuple(required or ()))
+
+    def q(self, value: Any, dimension: str, key: str) -> float:
+        return parse_quantity(value, dimension, file=self.source, key=key)
+
+    def positive(self, value: Any, dimension: str, key: str) -> float:
+        x = self.q(value, dimension, key)
+        if not x > 0.0:
+            raise self.err(key, f"must be > 0, got {x:g}")
+        return x
+
+    def nonnegative(self, value: Any, dimension: str, key: str) -> float:
+        x = self.q(value, dimension, key)
+        if not x >= 0.0:
+            raise self.err(key, f"must be >= 0, got {x:g}")
+        return x
+
+    def vec3(self, value: Any, dimension: str, key: str) -> tuple[float, float, float]:
+        return parse_vec3(value, dimension, file=self.source, key=key)
+
+    def direction(self, value: Any, key: str) -> tuple[float, float, float]:
+        v = np.array(self.vec3(value, "dimensionless", key), dtype=float)
+        n = float(np.linalg.norm(v))
+        if not n > 0.0:
+            raise self.err(key, "must be a nonzero vector (it is normalised on load)")
+        return tuple(float(c) for c in v / n)
+
+    def boolean(self, value: Any, key: str) -> bool:
+        if not isinstance(value, bool):
+            raise self.err(key, f"expected true or false, got {_type_name(value)}")
+        return value
+
+    def integer(self, value: Any, key: str) -> int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.err(key, f"expected an integer, got {_type_name(value)}")
+        return value
+
+    def string(self, value: Any, key: str) -> str:
+        if not isinstance(value, str):
+            raise self.err(key, f"expected a string, got {_type_name(value)}")
+        return value
+
+    def material_name(self, value: Any, key: str) -> str:
+        name = self.string(value, key)
+        if name not in self.materials:
+            known = ", ".join(sorted(self.materials)) or "none (add a [materials.NAME] table)"
+            raise self.err(key, f"unknown material '{name}'; {_suggest(name, self.materials)}"
+                                f"defined materials: {known}")
+        return name
+
+    def array_of_tables(self, doc: dict, name: str) -> list[dict]:
+        value = doc.get(name, [])
+        if not isinstance(value, list):
+            raise self.err(name, f"expected an array of tables ([[{name}]]), got "
+                                 f"{_type_name(value)}")
+        for i, item in enumerate(value):
+            self.table(item, f"{name}[{i}]", f"a table ([[{name}]])")
+        return value
+
+
+def decode_utf8(data: bytes, file: str, key: str) -> str:
+    """``data`` as text (a UTF-8 byte-order mark dropped, newlines as ``\n``); bytes that are
+    not UTF-8 are a SceneError saying where."""
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        column = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+        raise SceneError(file, key, f"not a UTF-8 text file ({e.reason}: byte "
+                                    f"0x{data[e.start]:02x} at line {line}, column {column}); "
+                                    "save it as UTF-8") from None
+    return text.replace("\r\n", "\n").replace("\r", "\n")

@@ -1,0 +1,283 @@
+"""[[particles]] (the initial fills: a region or a CSV file), radius distributions and
+regions (box, cylinder): their keys and checks."""
+from __future__ import annotations
+
+import csv
+import io
+import math
+from pathlib import Path
+from typing import Any, Optional
+
+import numpy as np
+
+from ...errors import SceneError
+from ..keys import REQUIRED, Key, Section, register
+from ..keys import suggest as _suggest
+from ..model import ParticleFill, RadiusDistribution, Region
+from ..units import MAX_MAGNITUDE, MIN_MAGNITUDE
+from .common import decode_utf8
+from .regions import BOX, BOX_KEYS, CYLINDER, CYLINDER_KEYS, REGION, REGION_KINDS  # noqa: F401
+from .simulation import AXES
+
+CSV_COLUMNS = ("x", "y", "z", "radius", "vx", "vy", "vz", "wx", "wy", "wz")
+_P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
+
+
+RADIUS = register(Section("radius", "A radius distribution (normal, optionally truncated): a "
+                          "number for one size, or this table", (
+    Key("mean", "quantity", "the mean radius", unit="length", default=REQUIRED, **_P),
+    Key("std", "quantity", "the standard deviation", unit="length", default=REQUIRED,
+        minimum=0.0),
+    Key("min", "quantity", "truncated below", unit="length", default=None, **_P),
+    Key("max", "quantity", "truncated above", unit="length", default=None, **_P),
+), owner=__name__))
+
+PARTICLE = register(Section("particles[]", "An initial fill, [[particles]]: `count` spheres "
+                            "placed at random without overlap in `region`, or the rows of a CSV "
+                            "`file`", (
+    Key("material", "string", "a material name", default=REQUIRED),
+    Key("radius", "any", "a radius, or a distribution { mean, std, min, max }", unit="length",
+        default=None, schema={"anyOf": [{"type": ["number", "string"]}, {"type": "object"}]}),
+    Key("count", "integer", "how many spheres (with region)", default=0, minimum=0),
+    Key("region", "table", "where they are placed: { box = ... } or { cylinder = ... }",
+        default=None),
+    Key("velocity", "vector", "initial velocity", unit="speed", default=(0.0, 0.0, 0.0)),
+    Key("angular_velocity", "vector", "initial angular velocity", unit="angular_speed",
+        default=(0.0, 0.0, 0.0)),
+    Key("temperature", "quantity", "initial temperature (required with [thermal])",
+        unit="temperature", default=None, **_P),
+    Key("moisture", "quantity", "kg water per kg dry solid (drying; needs [thermal])",
+        unit="dimensionless", default=None, minimum=0.0),
+    Key("fixed", "boolean", "frozen in place (a rough wall of spheres)", default=False),
+    Key("file", "string", "a CSV of x,y,z,radius[,vx,vy,vz[,wx,wy,wz]] (SI), instead of "
+        "count and region", default=None),
+), owner=__name__, nested={"region": REGION, "radius": RADIUS}))
+
+
+class ParticleSections:
+    """Read by the loader's parser (scene/loader.py), which mixes this in with the reading
+    helpers of common.Reader."""
+
+    def parse_radius(self, value: Any, key: str) -> RadiusDistribution:
+        if isinstance(value, dict):
+            self.check_keys(value, key, RADIUS)
+            mean = self.positive(value["mean"], "length", f"{key}.mean")
+            std = self.nonnegative(value["std"], "length", f"{key}.std")
+            if std > 0.0:
+                for k in ("min", "max"):
+                    if k not in value:
+                        raise self.err(f"{key}.{k}", "required when std > 0 (the normal "
+                                                     "distribution is truncated to [min, max])")
+            lo = self.positive(value["min"], "length", f"{key}.min") if "min" in value else None
+            hi = self.positive(value["max"], "length", f"{key}.max") if "max" in value else None
+            if lo is not None and not lo <= mean:
+                raise self.err(f"{key}.min", f"need 0 < min <= mean <= max; min = {lo:g} > "
+                                             f"mean = {mean:g}")
+            if hi is not None and not mean <= hi:
+                raise self.err(f"{key}.max", f"need 0 < min <= mean <= max; max = {hi:g} < "
+                                             f"mean = {mean:g}")
+            return RadiusDistribution(mean=mean, std=std, min=lo, max=hi)
+        try:
+            return RadiusDistribution(mean=self.positive(value, "length", key))
+        except SceneError as e:
+            raise self.err(key, f"{e.reason}; radius is a positive length or a table "
+                                f"{{ mean, std, min, max }}") from None
+
+    def parse_region(self, value: Any, key: str) -> Region:
+        t = self.table(value, key, "a table { box = {...} } or { cylinder = {...} }")
+        self.check_keys(t, key, REGION)
+        if len(t) != 1:
+            raise self.err(key, "give exactly one of box = { min, max } or cylinder = "
+                                "{ axis_point, axis_direction, radius, length }")
+        kind = next(iter(t))
+        k = f"{key}.{kind}"
+        sub = self.table(t[kind], k)
+        if kind == "box":
+            self.check_keys(sub, k, BOX)
+            lo = self.vec3(sub["min"], "length", f"{k}.min")
+            hi = self.vec3(sub["max"], "length", f"{k}.max")
+            for i, ax in enumerate(AXES):
+                if not lo[i] < hi[i]:
+                    raise self.err(f"{k}.max", f"max must exceed min on every axis; on {ax}: "
+                                               f"min = {lo[i]:g}, max = {hi[i]:g}")
+            region = Region(kind="box", box_min=lo, box_max=hi)
+            amin, amax = np.array(lo), np.array(hi)
+        else:
+            self.check_keys(sub, k, CYLINDER)
+            p = self.vec3(sub["axis_point"], "length", f"{k}.axis_point")
+            d = self.direction(sub["axis_direction"], f"{k}.axis_direction")
+            r = self.positive(sub["radius"], "length", f"{k}.radius")
+            length = self.positive(sub["length"], "length", f"{k}.length")
+            region = Region(kind="cylinder", axis_point=p, axis_direction=d, radius=r,
+                            length=length)
+            amin, amax = region_bounds(region)
+        dlo, dhi = np.array(self.domain.min), np.array(self.domain.max)
+        tol = 1e-9 * float(np.max(dhi - dlo))
+        if np.any(amin < dlo - tol) or np.any(amax > dhi + tol):
+            raise self.err(k, f"the region (bounds {fmt(amin)} to {fmt(amax)}) must lie inside "
+                              f"the domain ({fmt(dlo)} to {fmt(dhi)})")
+        return region
+
+    def parse_fill(self, t: dict, key: str) -> ParticleFill:
+        self.check_keys(t, key, PARTICLE, required=("material",))
+        material = self.material_name(t["material"], f"{key}.material")
+        kw: dict[str, Any] = {}
+        if "velocity" in t:
+            kw["velocity"] = self.vec3(t["velocity"], "speed", f"{key}.velocity")
+        if "angular_velocity" in t:
+            kw["angular_velocity"] = self.vec3(t["angular_velocity"], "angular_speed",
+                                               f"{key}.angular_velocity")
+        if "temperature" in t:
+            kw["temperature"] = self.positive(t["temperature"], "temperature",
+                                              f"{key}.temperature")
+        if "moisture" in t:
+            kw["moisture"] = self.nonnegative(t["moisture"], "dimensionless", f"{key}.moisture")
+        if "fixed" in t:
+            kw["fixed"] = self.boolean(t["fixed"], f"{key}.fixed")
+        if "file" in t:
+            for k in ("count", "region", "radius"):
+                if k in t:
+                    raise self.err(f"{key}.{k}", "not allowed together with file (the file "
+                                                 "gives positions and radii); use either file "
+                                                 "or count + region + radius")
+            fname = self.string(t["file"], f"{key}.file")
+            arrays = self.read_csv(fname, f"{key}.file")
+            return ParticleFill(key=key, material=material, file=fname, **arrays, **kw)
+        for k in ("count", "region", "radius"):
+            if k not in t:
+                raise self.err(f"{key}.{k}", "required key is missing (a fill needs count, "
+                                             "region and radius, or file)")
+        radius = self.parse_radius(t["radius"], f"{key}.radius")
+        count = self.integer(t["count"], f"{key}.count")
+        if count < 0:
+            raise self.err(f"{key}.count", f"must be >= 0, got {count}")
+        region = self.parse_region(t["region"], f"{key}.region")
+        if count > 0:
+            self.check_fill_fits(key, radius, count, region)
+        return ParticleFill(key=key, material=material, radius=radius, count=count,
+                            region=region, **kw)
+
+    def check_fill_fits(self, key: str, radius: RadiusDistribution, count: int,
+                        region: Region) -> None:
+        """Refuse, before any placement, a fill that cannot fit its region: a sphere wider
+        than the region, or more spheres than the region's volume holds (a count of 1e15 would
+        otherwise be allocated by the placement)."""
+        width = _region_width(region)
+        r = radius.largest
+        if 2.0 * r > width:
+            raise self.err(f"{key}.radius", f"a sphere of radius {r:g} m does not fit in the "
+                                            f"region, which is {width:g} m across at its "
+                                            "narrowest (each sphere must lie wholly inside "
+                                            "it); check the units or enlarge the region")
+        volume = _region_volume(region)
+        solid = count * 4.0 / 3.0 * math.pi * radius.smallest ** 3
+        if solid > volume:
+            raise self.err(f"{key}.count", f"{count:,} spheres of radius {radius.smallest:g} m "
+                                           f"or more are {solid:.4g} m^3 of solid, more than "
+                                           f"the region's whole volume ({volume:.4g} m^3); "
+                                           "reduce count or enlarge the region")
+
+    def read_csv(self, fname: str, key: str) -> dict[str, Optional[np.ndarray]]:
+        path = Path(fname)
+        if not path.is_absolute():
+            path = self.base_dir / path
+        try:
+            data = path.read_bytes()
+        except FileNotFoundError:
+            raise self.err(key, f"particle file '{fname}' not found (looked for {path})") from None
+        except OSError as e:
+            raise self.err(key, f"cannot read particle file '{fname}' ({path}): "
+                                f"{e.strerror or e}") from None
+        csv_file = str(path)
+        try:
+            rows = list(csv.reader(io.StringIO(decode_utf8(data, csv_file, key), newline="")))
+        except csv.Error as e:
+            raise SceneError(csv_file, key, f"cannot read as CSV: {e}") from None
+
+        def bad(reason: str) -> SceneError:
+            return SceneError(csv_file, key, reason)
+
+        # skip leading blank lines / comments
+        lines = [(i + 1, r) for i, r in enumerate(rows)
+                 if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
+        if not lines:
+            raise bad("empty file; expected a header x,y,z,radius[,vx,vy,vz[,wx,wy,wz]]")
+        hline, header = lines[0]
+        names = [h.strip().lower() for h in header]
+        for n in names:
+            if n not in CSV_COLUMNS:
+                raise bad(f"line {hline}: unknown column '{n}' in the header; "
+                          f"{_suggest(n, CSV_COLUMNS)}expected x,y,z,radius[,vx,vy,vz[,wx,wy,wz]]")
+        for n in set(names):
+            if names.count(n) > 1:
+                raise bad(f"line {hline}: column '{n}' appears twice in the header")
+        for group in (("x", "y", "z", "radius"),):
+            for n in group:
+                if n not in names:
+                    raise bad(f"line {hline}: the header lacks column '{n}'; expected "
+                              f"x,y,z,radius[,vx,vy,vz[,wx,wy,wz]]")
+        for group in (("vx", "vy", "vz"), ("wx", "wy", "wz")):
+            present = [n for n in group if n in names]
+            if present and len(present) != 3:
+                raise bad(f"line {hline}: give all of {','.join(group)} or none of them")
+        data = np.empty((len(lines) - 1, len(names)), dtype=float)
+        for r, (lineno, row) in enumerate(lines[1:]):
+            if len(row) != len(names):
+                raise bad(f"line {lineno}: {len(row)} values, the header has {len(names)}")
+            for c, cell in enumerate(row):
+                try:
+                    v = float(cell)
+                except ValueError:
+                    raise bad(f"line {lineno}, column '{names[c]}': cannot read {cell.strip()!r} "
+                              f"as a number") from None
+                if not math.isfinite(v):
+                    raise bad(f"line {lineno}, column '{names[c]}': {cell.strip()} is not finite")
+                if v != 0.0 and not MIN_MAGNITUDE <= abs(v) <= MAX_MAGNITUDE:
+                    raise bad(f"line {lineno}, column '{names[c]}': {cell.strip()} is absurd "
+                              f"(SI magnitudes {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g} are "
+                              "accepted; wrong units?)")
+                data[r, c] = v
+        col = {n: data[:, i] for i, n in enumerate(names)}
+        positions = np.stack([col["x"], col["y"], col["z"]], axis=1)
+        radii = col["radius"].copy()
+        row_lines = [ln for ln, _ in lines[1:]]
+        badr = np.nonzero(~(radii > 0.0))[0]
+        if len(badr):
+            raise bad(f"line {row_lines[badr[0]]}: radius must be > 0, got {radii[badr[0]]:g}")
+        lo, hi = np.array(self.domain.min), np.array(self.domain.max)
+        outside = np.nonzero(np.any((positions < lo) | (positions > hi), axis=1))[0]
+        if len(outside):
+            j = outside[0]
+            raise bad(f"line {row_lines[j]}: the particle centre {fmt(positions[j])} lies "
+                      f"outside the domain ({fmt(lo)} to {fmt(hi)})")
+        vel = np.stack([col["vx"], col["vy"], col["vz"]], axis=1) if "vx" in col else None
+        ang = np.stack([col["wx"], col["wy"], col["wz"]], axis=1) if "wx" in col else None
+        return dict(positions=positions, radii=radii, velocities=vel, angular_velocities=ang)
+
+
+def region_bounds(region: Region) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounding box of a region."""
+    if region.kind == "box":
+        return np.array(region.box_min, float), np.array(region.box_max, float)
+    p0 = np.array(region.axis_point, float)
+    d = np.array(region.axis_direction, float)
+    p1 = p0 + d * region.length
+    ext = region.radius * np.sqrt(np.clip(1.0 - d * d, 0.0, 1.0))
+    return np.minimum(p0, p1) - ext, np.maximum(p0, p1) + ext
+
+
+def _region_width(region: Region) -> float:
+    """The region's narrowest extent, m: the widest sphere that fits is half of it."""
+    if region.kind == "box":
+        return float(np.min(np.array(region.box_max, float) - np.array(region.box_min, float)))
+    return min(2.0 * region.radius, region.length)
+
+
+def _region_volume(region: Region) -> float:
+    if region.kind == "box":
+        return float(np.prod(np.array(region.box_max, float) - np.array(region.box_min, float)))
+    return math.pi * region.radius ** 2 * region.length
+
+
+def fmt(v) -> str:
+    return "[" + ", ".join(f"{float(x):g}" for x in v) + "]"

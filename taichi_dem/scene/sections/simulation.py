@@ -1,0 +1,141 @@
+"""[simulation], [domain] and [output]: their keys and how they are read."""
+from __future__ import annotations
+
+from typing import Any
+
+from ...errors import SceneError
+from ..keys import AUTO, REQUIRED, Key, Section, register
+from ..keys import type_name as _type_name
+from ..model import Domain, Output, SimulationSettings
+
+# particle slots are indexed with 32-bit integers (Taichi fields)
+MAX_PARTICLES = 2 ** 31 - 1
+# a domain narrower than this on any axis is a unit mistake (as for meshes, geometry.mesh)
+MIN_DOMAIN_SIZE = 1e-6     # m
+AXES = ("x", "y", "z")
+_S = SimulationSettings
+
+SIMULATION = register(Section("simulation", "Time, gravity, precision and the step", (
+    Key("end_time", "quantity", "simulated time to run", unit="time", default=_S.end_time,
+        minimum=0.0, exclusive_minimum=True),
+    Key("dt", "quantity", "the time step; \"auto\": rayleigh_fraction x the Rayleigh time, "
+        "bounded by the Hertz contact time", unit="time", default="auto", auto=True,
+        minimum=0.0, exclusive_minimum=True),
+    Key("rayleigh_fraction", "quantity", "the automatic step as a fraction of the Rayleigh time",
+        unit="dimensionless", default=_S.rayleigh_fraction, minimum=0.0, maximum=1.0,
+        exclusive_minimum=True, why="typically 0.1 to 0.3"),
+    Key("gravity", "vector", "gravity", unit="acceleration", default=_S.gravity),
+    Key("precision", "choice", "floating-point precision of the particle state",
+        default=_S.precision, choices=("f32", "f64")),
+    Key("seed", "integer", "seeds numpy's generator (placement, factories)", default=_S.seed,
+        minimum=0, why="it seeds numpy's generator"),
+    Key("skin", "quantity", "the Verlet skin; default 0.1 x the mean diameter", unit="length",
+        default=None, minimum=0.0, exclusive_minimum=True),
+    Key("max_particles", "integer", "particle slots to allocate (default: the fills and the "
+        "factories' schedules until end_time)", default=None, minimum=1, maximum=MAX_PARTICLES),
+), owner=__name__))
+
+DOMAIN = register(Section("domain", "The box particles live in (they are lost outside it) and "
+                          "its periodic axes", (
+    Key("min", "vector", "the lower corner", unit="length", default=REQUIRED),
+    Key("max", "vector", "the upper corner", unit="length", default=REQUIRED),
+    Key("periodic", "any", "periodic axes: a subset of \"x\", \"y\", \"z\"", default=(),
+        schema={"type": "array", "items": {"enum": list(AXES)}, "uniqueItems": True}),
+), owner=__name__))
+
+OUTPUT = register(Section("output", "What is written and how often", (
+    Key("interval", "quantity", "time between samples (series, frames)", unit="time",
+        default=Output.interval, minimum=0.0, exclusive_minimum=True),
+    Key("rrd", "string", "rerun recording (.rrd) to write, relative to the scene", default=None),
+    Key("h5", "string", "HDF5 results file to write, relative to the scene", default=None),
+    Key("checkpoint_interval", "quantity", "simulated time between checkpoints (none when "
+        "absent)", unit="time", default=None, minimum=0.0, exclusive_minimum=True),
+), owner=__name__))
+
+
+class SimulationSections:
+    """Read by the loader's parser (scene/loader.py), which mixes this in with the reading
+    helpers of common.Reader."""
+
+    def simulation(self, value: Any) -> SimulationSettings:
+        key = "simulation"
+        t = self.table(value, key)
+        SIMULATION.check(t, self.source, key)
+        try:
+            kw = SIMULATION.read(t, self.source, key, only=("dt",))
+        except SceneError as e:
+            raise self.err(e.key, f"{e.reason}; dt is \"auto\" or a positive time") from None
+        if kw.get("dt") == AUTO:
+            kw["dt"] = None
+        kw.update(SIMULATION.read(t, self.source, key, only=(
+            "end_time", "rayleigh_fraction", "gravity", "precision", "seed", "skin")))
+        if "max_particles" in t:
+            k = f"{key}.max_particles"
+            kw["max_particles"] = self.integer(t["max_particles"], k)
+            if kw["max_particles"] < 1:
+                raise self.err(k, f"must be >= 1, got {kw['max_particles']}")
+            if kw["max_particles"] > MAX_PARTICLES:
+                raise self.err(k, f"{kw['max_particles']:,} is more than the "
+                                  f"{MAX_PARTICLES:,} particles the engine "
+                                  "can index (32-bit fields)")
+        return SimulationSettings(**kw)
+
+    def parse_domain(self, value: Any) -> Domain:
+        key = "domain"
+        t = self.table(value, key)
+        DOMAIN.check(t, self.source, key)
+        lo = self.vec3(t["min"], "length", f"{key}.min")
+        hi = self.vec3(t["max"], "length", f"{key}.max")
+        for i, ax in enumerate(AXES):
+            if not lo[i] < hi[i]:
+                raise self.err(f"{key}.max", f"max must exceed min on every axis; on {ax}: "
+                                             f"min = {lo[i]:g}, max = {hi[i]:g}")
+            if hi[i] - lo[i] < MIN_DOMAIN_SIZE:
+                raise self.err(f"{key}.max", f"the domain is {hi[i] - lo[i]:.3g} m across on "
+                                             f"{ax}: absurd for a DEM scene (wrong units? "
+                                             "lengths are in metres: write 0.2 or \"200 mm\")")
+        periodic = t.get("periodic", [])
+        if not isinstance(periodic, list):
+            raise self.err(f"{key}.periodic", f"expected an array of axis names (\"x\", \"y\", "
+                                              f"\"z\"), got {_type_name(periodic)}")
+        seen: list[str] = []
+        for i, a in enumerate(periodic):
+            if a not in AXES:
+                raise self.err(f"{key}.periodic[{i}]", f"must be \"x\", \"y\" or \"z\", got "
+                                                       f"{_type_name(a)}")
+            if a in seen:
+                raise self.err(f"{key}.periodic[{i}]", f"axis \"{a}\" is listed twice")
+            seen.append(a)
+        return Domain(min=lo, max=hi, periodic=tuple(seen))
+
+    def parse_output(self, value: Any) -> Output:
+        key = "output"
+        t = self.table(value, key)
+        kw = OUTPUT.read(t, self.source, key)
+        for k in ("rrd", "h5"):
+            if k in kw and not kw[k].strip():
+                raise self.err(f"{key}.{k}", "must be a non-empty file path")
+        return Output(**kw)
+
+    def check_particle_total(self, simulation: SimulationSettings, fills, factories) -> None:
+        """The fills, and the factories' schedules until end_time (unless max_particles caps
+        them), must stay within what the engine can index."""
+        total = 0
+        for f in fills:
+            total += f.expected_count
+            if total > MAX_PARTICLES:
+                raise self.err(f"{f.key}.count" if f.file is None else f"{f.key}.file",
+                               f"the fills hold {total:,} particles, more than the "
+                               f"{MAX_PARTICLES:,} the engine can index (32-bit fields)")
+        if simulation.max_particles is not None:
+            return
+        expected = float(total)
+        for f in factories:
+            mass = f.mass_rate.mass_until(simulation.end_time)
+            expected += mass / (self.materials[f.material].density * f.mean_particle_volume())
+            if not 1.1 * expected + 64 <= MAX_PARTICLES:
+                raise self.err(f"{f.key}.mass_rate",
+                               f"the schedules insert about {expected:.3g} particles by "
+                               f"end_time = {simulation.end_time:g} s, more than the "
+                               f"{MAX_PARTICLES:,} the engine can index; lower the rate, "
+                               "shorten end_time or cap them with [simulation] max_particles")
