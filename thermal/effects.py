@@ -27,6 +27,7 @@ from taichi_dem.effects.base import Effect
 from taichi_dem.errors import DivergenceError
 from taichi_dem.effects.regions import region_test
 from taichi_dem.engine.precision import make_compensated_add
+from taichi_dem.engine.tuning import MOST_KINDS
 
 from . import coarse_grained as coarse
 from . import convection as gas_convection
@@ -52,9 +53,9 @@ class Conduction(Effect):
         factor, correction = conduction_tables(scene, tables.names)
         return {"conductance_factor": factor, "radius_correction": correction}
 
-    def contact_func(self, engine):
-        factor, correction = engine.table["conductance_factor"], engine.table["radius_correction"]
-        skip_coarse = _skips_coarse(self, engine)
+    def contact_func(self, ctx):
+        factor, correction = ctx.table["conductance_factor"], ctx.table["radius_correction"]
+        skip_coarse = _skips_coarse(self, ctx)
 
         @ti.func
         def conduction(c, out):
@@ -88,7 +89,7 @@ class WallConduction(Conduction):
         return out
 
 
-def _skips_coarse(effect, engine):
+def _skips_coarse(effect, ctx):
     """ti.func (contact) -> 1 where ``effect`` must leave the particle alone (a coarse-grained
     material: CoarseGrainedWall stands in), else 0; a constant 0 when the scene has none."""
     if not getattr(effect, "skip_coarse", False):
@@ -96,7 +97,7 @@ def _skips_coarse(effect, engine):
         def never(c):
             return 0
         return never
-    alpha_ws = engine.table["coarse_alpha_ws"]
+    alpha_ws = ctx.table["coarse_alpha_ws"]
 
     @ti.func
     def coarse_grained(c):
@@ -128,12 +129,12 @@ class _GasGap(Effect):
     margin), the minimum gap (m), the model and, for the series model, the k_g/k_s table.
 
     In the step the gas-gap integral is looked up (gas_gap.py "tables"): one table per pair of
-    particle kinds (``engine.species``: (material index, radius m) of each kind the scene holds
+    particle kinds (``ctx.species``: (material index, radius m) of each kind the scene holds
     or inserts), or per kind against a wall, tabulated at set-up. Without a finite set of kinds
     (radii from a distribution) every contact integrates (Gauss-Legendre, as in the tests)."""
 
     stage = "contact"
-    MOST_KINDS = 8
+    MOST_KINDS = MOST_KINDS       # (engine/tuning.py)
 
     def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance",
                  porosity=0.4, coarse_materials=False):
@@ -154,22 +155,22 @@ class _GasGap(Effect):
             return {}
         return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
 
-    def _tabulate(self, engine) -> bool:
-        kinds = getattr(engine, "species", None)
+    def _tabulate(self, ctx) -> bool:
+        kinds = getattr(ctx, "species", None)
         return kinds is not None and 0 < len(kinds) <= self.MOST_KINDS
 
-    def _allocate_tables(self, engine, tree, prefix, shape):
+    def _allocate_tables(self, ctx, tree, prefix, shape):
         """Fields for the tables (shape + nodes) and their ranges (shape + 3: s_lo, s_hi,
         nodes per unit ln(1 + s/S))."""
-        self.kinds_tabulated = engine.species
-        self.table = tree.add(prefix + "_table", engine.real, shape + (gas_gap.TABLE_NODES,))
-        self.table_range = tree.add(prefix + "_range", engine.real, shape + (3,))
+        self.kinds_tabulated = ctx.species
+        self.table = tree.add(prefix + "_table", ctx.real, shape + (gas_gap.TABLE_NODES,))
+        self.table_range = tree.add(prefix + "_range", ctx.real, shape + (3,))
 
-    def _ratios(self, engine):
+    def _ratios(self, ctx):
         """k_g / k_s of each material (0: isothermal), from the engine's table."""
         if not self.solid:
             return None
-        return engine.table["gas_over_solid"].to_numpy()[:, 0].astype(np.float64)
+        return ctx.table["gas_over_solid"].to_numpy()[:, 0].astype(np.float64)
 
     def kind_func(self):
         """ti.func (material, radius) -> the kind's index in the tables, -1 if none."""
@@ -200,37 +201,37 @@ class GasGapWall(_GasGap):
             out["coarse_alpha_ws"] = CoarseGrainedWall.tables_for(scene, tables)["coarse_alpha_ws"]
         return out
 
-    def allocate(self, engine, tree):
+    def allocate(self, ctx, tree):
         # the isothermal plane has a closed form: tables only for the models with the solid
-        if self.solid and self._tabulate(engine):
-            self._allocate_tables(engine, tree, "gas_gap_wall", (len(engine.species),))
+        if self.solid and self._tabulate(ctx):
+            self._allocate_tables(ctx, tree, "gas_gap_wall", (len(ctx.species),))
 
-    def upload(self, engine):
+    def upload(self, ctx):
         if self.kinds_tabulated is None:
             return
         _, lens, min_gap = self.parameters
-        ratio = self._ratios(engine)
+        ratio = self._ratios(ctx)
         values, ranges = [], []
         for material, radius in self.kinds_tabulated:
             values.append(gas_gap.plane_table(radius, lens, min_gap, ratio[material],
                                               self.model, self.porosity))
             ranges.append(gas_gap.table_range(radius, radius, lens, min_gap))
-        npf = np.float64 if engine.real == ti.f64 else np.float32
+        npf = np.float64 if ctx.real == ti.f64 else np.float32
         self.table.from_numpy(np.array(values, npf))
         self.table_range.from_numpy(np.array(ranges, npf))
 
-    def contact_func(self, engine):
+    def contact_func(self, ctx):
         k_gas, lens, min_gap = self.parameters
         solid = self.solid
         voronoi = self.model == "voronoi"
         porosity = self.porosity
-        ratio = engine.table["gas_over_solid"] if solid else None
+        ratio = ctx.table["gas_over_solid"] if solid else None
         tabulated = self.kinds_tabulated is not None
         kind_of = self.kind_func() if tabulated else None
         table, table_range = (self.table, self.table_range) if tabulated else (None, None)
         last = gas_gap.TABLE_NODES
 
-        skip_coarse = _skips_coarse(self, engine)
+        skip_coarse = _skips_coarse(self, ctx)
 
         @ti.func
         def gas_gap_wall(c, out):
@@ -279,16 +280,16 @@ class GasGapPair(_GasGap):
     kinds = ("pair",)
     pair_fields = Conduction.pair_fields
 
-    def allocate(self, engine, tree):
-        if self._tabulate(engine):
-            k = len(engine.species)
-            self._allocate_tables(engine, tree, "gas_gap_pair", (k, k))
+    def allocate(self, ctx, tree):
+        if self._tabulate(ctx):
+            k = len(ctx.species)
+            self._allocate_tables(ctx, tree, "gas_gap_pair", (k, k))
 
-    def upload(self, engine):
+    def upload(self, ctx):
         if self.kinds_tabulated is None:
             return
         _, lens, min_gap = self.parameters
-        ratio = self._ratios(engine)
+        ratio = self._ratios(ctx)
         kinds = self.kinds_tabulated
         n = len(kinds)
         values = np.zeros((n, n, gas_gap.TABLE_NODES))
@@ -304,16 +305,16 @@ class GasGapPair(_GasGap):
                 values[a, b] = values[b, a] = v
                 ranges[a, b] = ranges[b, a] = gas_gap.table_range(min(ra, rb), max(ra, rb),
                                                                   lens, min_gap)
-        npf = np.float64 if engine.real == ti.f64 else np.float32
+        npf = np.float64 if ctx.real == ti.f64 else np.float32
         self.table.from_numpy(values.astype(npf))
         self.table_range.from_numpy(ranges.astype(npf))
 
-    def contact_func(self, engine):
+    def contact_func(self, ctx):
         k_gas, lens, min_gap = self.parameters
         solid = self.solid
         voronoi = self.model == "voronoi"
         porosity = self.porosity
-        ratio = engine.table["gas_over_solid"] if solid else None
+        ratio = ctx.table["gas_over_solid"] if solid else None
         tabulated = self.kinds_tabulated is not None
         kind_of = self.kind_func() if tabulated else None
         table, table_range = (self.table, self.table_range) if tabulated else (None, None)
@@ -417,12 +418,12 @@ class CoarseGrainedWall(Effect):
     def table_values(self, scene, tables):
         return self.tables_for(scene, tables)
 
-    def contact_func(self, engine):
-        s = engine.state
-        alpha_ws, effusivity_sq = engine.table["coarse_alpha_ws"], engine.table["coarse_effusivity_sq"]
-        area_over_r2 = engine.table["coarse_area_over_r2"]
+    def contact_func(self, ctx):
+        s = ctx.state
+        alpha_ws, effusivity_sq = ctx.table["coarse_alpha_ws"], ctx.table["coarse_effusivity_sq"]
+        area_over_r2 = ctx.table["coarse_area_over_r2"]
         reach = self.reach
-        thermal_dt = engine.dt * self.time_scale       # a step of thermal time (s)
+        thermal_dt = ctx.dt * self.time_scale       # a step of thermal time (s)
 
         @ti.func
         def coarse_grained_wall(c, out):
@@ -451,8 +452,8 @@ class WallContactAge(Effect):
     name = "wall_contact_age"
     stage = "particle"
 
-    def particle_func(self, engine):
-        s = engine.state
+    def particle_func(self, ctx):
+        s = ctx.state
 
         @ti.func
         def wall_contact_age(i, load):
@@ -476,8 +477,8 @@ class Convection(Effect):
         super().__init__(description)
         self.gas = gas
 
-    def particle_func(self, engine):
-        s = engine.state
+    def particle_func(self, ctx):
+        s = ctx.state
         gas = self.gas
         gas_velocity = ti.Vector(list(gas.velocity))
         prandtl_cube_root = (gas.heat_capacity * gas.viscosity / gas.conductivity) ** (1.0 / 3.0)
@@ -507,36 +508,38 @@ class PlugFlowGas(Effect):
     """Convection to the axial plug-flow gas of the particle's cell; the gas itself marches
     cell by cell between the pair and the particle stages (``after_pairs``)."""
 
-    name = "convection"
+    name = "plug_flow_convection"
     stage = "particle"
 
-    def __init__(self, description, gas):
+    def __init__(self, description, gas, time_scale=1.0):
         super().__init__(description)
         self.gas = gas
+        self.time_scale = float(time_scale)      # thermal.time_scale: the gas's step is S dt
+        self.stream = None                       # the AxialPlugFlowGas, once allocated
 
-    def allocate(self, engine, tree):
+    def allocate(self, ctx, tree):
         from .plug_flow import AxialPlugFlowGas
-        engine.gas_stream = AxialPlugFlowGas(self.gas, engine.state, tree, engine.real)
+        self.stream = AxialPlugFlowGas(self.gas, ctx.state, tree, ctx.real)
 
-    def after_pairs(self, engine, n, dt):
+    def after_pairs(self, ctx, n, dt):
         """The per-cell stage: the gas sees this step's particles (W, K); its energy
         integral advances by the thermal step (S dt)."""
-        engine.gas_stream.exchange(n, dt * engine.scene.thermal.time_scale, engine.serial)
+        self.stream.exchange(n, dt * self.time_scale, ctx.serial)
 
-    def cell_func(self, engine):
+    def cell_func(self, ctx):
         """``after_pairs`` as a ti.func (n, dt) for a loop that is already serial
         (Engine.run_steps, several steps in one launch)."""
-        exchange = engine.gas_stream.exchange_serial
-        time_scale = engine.scene.thermal.time_scale
+        exchange = self.stream.exchange_serial
+        time_scale = self.time_scale
 
         @ti.func
         def gas_march(n, dt):
             exchange(n, dt * time_scale)
         return gas_march
 
-    def particle_func(self, engine):
-        s = engine.state
-        stream = engine.gas_stream
+    def particle_func(self, ctx):
+        s = ctx.state
+        stream = self.stream
 
         @ti.func
         def plug_flow_convection(i, load):
@@ -561,29 +564,32 @@ class Radiation(Effect):
     name = "radiation"
     stage = "particle"
 
-    def __init__(self, description, thermal):
+    def __init__(self, description, thermal, emissivities):
         super().__init__(description)
         self.thermal = thermal
+        self.emissivities = dict(emissivities)     # material name -> grey-body emissivity
+        self.emissivity = None                     # per material index, once allocated
 
-    def allocate(self, engine, tree):
-        engine.emissivity = tree.add("emissivity", engine.real, len(engine.tables.names))
+    def allocate(self, ctx, tree):
+        self.emissivity = tree.add("emissivity", ctx.real, len(ctx.material_names))
 
-    def upload(self, engine):
-        npf = np.float64 if engine.real == ti.f64 else np.float32
-        engine.emissivity.from_numpy(np.array(
-            [engine.scene.materials[k].emissivity or 0.0 for k in engine.tables.names], npf))
+    def upload(self, ctx):
+        npf = np.float64 if ctx.real == ti.f64 else np.float32
+        self.emissivity.from_numpy(np.array(
+            [self.emissivities.get(k) or 0.0 for k in ctx.material_names], npf))
 
-    def particle_func(self, engine):
-        s = engine.state
+    def particle_func(self, ctx):
+        s = ctx.state
         th = self.thermal
-        stream = engine.gas_stream
+        plug_flow_effect = ctx.effect("plug_flow_convection")
+        stream = plug_flow_effect.stream if plug_flow_effect is not None else None
         plug_flow = stream is not None
         gas = th.gas
         radiate_to_gas = th.radiation_to == "gas"
         radiation_temperature = (gas.temperature if (radiate_to_gas and not plug_flow)
                                  else (th.radiation_temperature or 0.0))
         in_radiation_region = region_test(th.radiation_region)
-        emissivity = engine.emissivity
+        emissivity = self.emissivity
 
         @ti.func
         def radiation(i, load):
@@ -616,8 +622,8 @@ class Drying(Effect):
         if compensated:
             self.particle_fields["moisture_residual"] = (False, "f64")
 
-    def allocate(self, engine, tree):
-        engine.evaporated = tree.add("evaporated", ti.f64, 1)      # kg since the start
+    def allocate(self, ctx, tree):
+        self.evaporated = tree.add("evaporated", ti.f64, 1)      # kg since the start
 
 
 class Temperature(Effect):
@@ -631,6 +637,7 @@ class Temperature(Effect):
     def __init__(self, description, compensated, time_scale=1.0):
         super().__init__(description)
         self.compensated = compensated
+        self.warned = False          # the near-limit warning is printed once
         # heat capacities divided by S: the energy Q dt of a step changes T by S Q dt/(m c)
         self.time_scale = float(time_scale)
         self.particle_fields = {"temperature": (False, "real"),
@@ -649,16 +656,16 @@ class Temperature(Effect):
                 f"{ratio:.3g} >= 1 for some particle (dt the thermal step, thermal.time_scale x "
                 f"simulation.dt). Reduce simulation.dt or thermal.time_scale (by {ratio:.2g}x at "
                 f"least), or raise heat_capacity/lower thermal_conductivity if they are scaled")
-        if ratio >= 0.5 and not getattr(sim, "_warned_thermal", False):
-            sim._warned_thermal = True
+        if ratio >= 0.5 and not self.warned:
+            self.warned = True
             print(f"taichi-dem: warning: at t = {sim.time:.4g} s dt sum(h)/(m c) = {ratio:.3g}: "
                   f"the temperature update is near its stability limit (1)", file=sys.stderr)
 
-    def integrate_func(self, engine, drying_effect):
+    def integrate_func(self, ctx, drying_effect):
         """ti.func (i, heat W, conductance W/K, dt s): the particle's new temperature (and
         moisture, when drying)."""
-        s = engine.state
-        real = engine.real
+        s = ctx.state
+        real = ctx.real
         compensated = self.compensated
         moisture = drying_effect is not None
         compensated_add, split_f64 = make_compensated_add(real)
@@ -666,7 +673,7 @@ class Temperature(Effect):
         evaporated = None
         if moisture:
             t_evap, latent, c_water = drying_effect.constants
-            evaporated = engine.evaporated
+            evaporated = drying_effect.evaporated
 
         scale = self.time_scale
 
@@ -775,7 +782,7 @@ def thermal_effects(scene) -> list:
     if gas is not None and gas.plug_flow:
         speed = sum(c * c for c in gas.velocity) ** 0.5
         out.append(PlugFlowGas(f"convection to the plug-flow gas of the particle's cell "
-                               f"({gas.correlation}, u = {speed:.3g} m/s)", gas))
+                               f"({gas.correlation}, u = {speed:.3g} m/s)", gas, th.time_scale))
         out.append(PlugFlowStream(
             f"axial plug-flow gas: {gas.cells} cells over {gas.length:g} m "
             f"{gas.flow.replace('_', ' ')}, {gas.mass_flow:g} kg/s in at "
@@ -785,7 +792,8 @@ def thermal_effects(scene) -> list:
               "surface": f"'{th.radiation_surface}' at {th.radiation_temperature or 0:g} K",
               "enclosure": f"an enclosure at {th.radiation_temperature or 0:g} K"}[th.radiation_to]
         where = " inside radiation_region" if th.radiation_region is not None else ""
-        out.append(Radiation(f"grey-body radiation to {to}{where} (no shadowing)", th))
+        out.append(Radiation(f"grey-body radiation to {to}{where} (no shadowing)", th,
+                             {k: m.emissivity for k, m in scene.materials.items()}))
     if th.moisture:
         out.append(Drying(f"moisture: evaporation at {th.evaporation_temperature:g} K, "
                           f"latent heat {th.latent_heat:g} J/kg", th, compensated))

@@ -173,9 +173,11 @@ def describe_scene(scene) -> str:
     real_bytes = 8 if scene.simulation.precision == "f64" else 4
     # per particle: 6 vec3 + 4 reals + 3 ints of state, shadows and rows (~12 ints)
     per_particle = (6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes
-    # per neighbour entry (about 8 per particle at 1.5x headroom): ids, mirror, 5 vec3
+    # per neighbour entry (about 8 per particle, with the lists' growth headroom): ids,
+    # mirror, 5 vec3
+    from ..engine.tuning import LIST_GROWTH
     per_entry = 3 * 4 + 5 * 3 * real_bytes
-    memory = n * per_particle + int(1.5 * 8 * n) * per_entry
+    memory = n * per_particle + int(LIST_GROWTH * 8 * n) * per_entry
     steps = scene.simulation.end_time / ts.dt
     lines = [f"scene: {scene.source}", "effects (compiled and run, in step order):"]
     for e in enabled_effects(scene):

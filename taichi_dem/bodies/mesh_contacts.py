@@ -25,6 +25,7 @@ import taichi as ti
 from ..contacts.geometry import contact_types
 from ..contacts.law import has_effects, margin_fraction
 from ..effects.mesh_contact import closest_point_on_triangle
+from ..engine.tuning import LIST_GROWTH
 from ..engine.broadphase import exclusive_scan, previous_entry
 from ..engine.state import fit_rows, grown_capacity
 from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
@@ -657,12 +658,12 @@ class MeshContacts:
         self._update_frames(time)
         items = int(self._count_bins())
         if items > self.items_capacity:
-            self._alloc_items(int(items * 1.5) + 16)
+            self._alloc_items(int(items * LIST_GROWTH) + 16)
             self._compile_binning()
         self._fill_bins()
         longest = int(self._find_candidates(n))
         if longest > self.scratch_width:
-            self._alloc_scratch(int(longest * 1.5) + 1)
+            self._alloc_scratch(int(longest * LIST_GROWTH) + 1)
             self._compile_rows()
             self._find_candidates(n)
         entries = int(self.mesh_start[n])

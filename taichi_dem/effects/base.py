@@ -35,6 +35,44 @@ non-touching contacts are handed to the law (heat through the gas near a contact
 from __future__ import annotations
 
 
+class EffectContext:
+    """What an effect sees of the simulation it runs in: the model (``real`` precision,
+    ``dt`` s, ``grid``, the material-pair device ``table`` by name, ``material_names`` in
+    table order, ``species`` (kinds of particle), ``max_radius`` m) and the state
+    (``state``: the particle fields, its declared ones among them; ``broadphase`` and
+    ``mesh``: the neighbour cells and the mesh contacts, once built), the loop mode
+    (``serial``, ``serial_switch``) and ``effect(name)``, another enabled effect.
+
+    Read-only, and nothing else: an effect keeps what it allocates on itself, reads its
+    scene settings from its own constructor's arguments (effects/registry.py), and never the
+    engine or the raw scene (tests/unit/test_effect_boundary.py)."""
+
+    VISIBLE = frozenset(("real", "dt", "grid", "table", "material_names", "species",
+                         "max_radius", "state", "broadphase", "mesh", "serial",
+                         "serial_switch"))
+    __slots__ = ("_engine",)
+
+    def __init__(self, engine):
+        object.__setattr__(self, "_engine", engine)
+
+    def __getattr__(self, name):
+        if name in EffectContext.VISIBLE:
+            return getattr(object.__getattribute__(self, "_engine"), name)
+        raise AttributeError(f"an effect sees the model and the state, not {name!r} "
+                             f"(visible: {', '.join(sorted(EffectContext.VISIBLE))})")
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"an effect cannot set {name!r} on the simulation: keep it on "
+                             "the effect")
+
+    def effect(self, name: str):
+        """The enabled effect called ``name``, or None."""
+        for e in object.__getattribute__(self, "_engine").effect_list:
+            if e.name == name:
+                return e
+        return None
+
+
 class Effect:
     """One enabled physical effect (see the module docstring for what each attribute means)."""
 
@@ -56,11 +94,13 @@ class Effect:
             self.stage = stage
 
     def table_values(self, scene, tables) -> dict:
+        # (the one place an effect meets the scene: the material-pair tables are built from
+        # its materials and interactions once, before anything is allocated)
         """{table name: (M, M) numpy array} for the tables this effect declares; by default
         the attribute of that name of the scene's ``PairTables``."""
         return {name: getattr(tables, name) for name in self.tables}
 
-    def allocate(self, engine, tree) -> None:
+    def allocate(self, ctx, tree) -> None:
         """Allocate what the effect holds beyond its declared fields (e.g. a gas stream)."""
 
     def check(self, sim, measured: dict) -> None:
@@ -68,10 +108,10 @@ class Effect:
         taichi_dem.DivergenceError to stop the run, or warn. Effects that have one override
         it; the run driver attaches only those (run/simulation.py)."""
 
-    def contact_func(self, engine):
+    def contact_func(self, ctx):
         raise NotImplementedError(f"{self.name} is not a contact effect")
 
-    def particle_func(self, engine):
+    def particle_func(self, ctx):
         raise NotImplementedError(f"{self.name} is not a particle effect")
 
     def __repr__(self):

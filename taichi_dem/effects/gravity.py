@@ -12,7 +12,7 @@ class Gravity(Effect):
         super().__init__(description)
         self.gravity = tuple(float(g) for g in gravity)
 
-    def particle_func(self, engine):
+    def particle_func(self, ctx):
         g = ti.Vector(list(self.gravity))
 
         @ti.func

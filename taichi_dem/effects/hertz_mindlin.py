@@ -87,9 +87,9 @@ class HertzMindlin(Effect):
         values["tangential_damping_ratio"] = np.sqrt(ratio)
         return values
 
-    def contact_func(self, engine):
+    def contact_func(self, ctx):
         youngs_eff, shear_eff, damping, friction, tangential_damping_ratio = (
-            engine.table[n] for n in self.tables)
+            ctx.table[n] for n in self.tables)
 
         @ti.func
         def hertz_mindlin(c, out, history, dt):

@@ -2,6 +2,9 @@
 package docstring)."""
 from __future__ import annotations
 
+import importlib
+
+from ..scene.keys import effect_sections
 from ..scene.model import Scene
 from .base import Effect
 from .drag.effect import Drag
@@ -37,6 +40,10 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
         effects.append(Effect(f"{len(scene.bodies)} triangle-mesh bodies ({n_tri} triangles): "
                               "the contact law on each particle-triangle contact, loads on "
                               "each body", "mesh_contact", "detect"))
+    # the effects with a section of their own (effects/catalog.py), built by their modules
+    for path, settings in scene.settings.items():
+        module, _, function = effect_sections()[path].builds.partition(":")
+        effects.extend(getattr(importlib.import_module(module), function)(scene, settings))
     if scene.thermal is not None:
         # the thermal package registers its effects here, and only here
         from thermal.effects import thermal_effects
@@ -64,7 +71,7 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
             f"{m.solid_fraction_threshold:g}"
             + (f", rms acceleration > {m.acceleration_threshold:.3g} m/s^2"
                if m.acceleration_threshold < float("inf") else "")
-            + f", cells of {m.cell_size * 1e3:.3g} mm, {frame})", m))
+            + f", cells of {m.cell_size * 1e3:.3g} mm, {frame})", m, scene.bodies))
     if any(f.fixed for f in scene.fills):
         effects.append(Effect("fixed (frozen) particles", "fixed_particles", "integrate"))
     return tuple(effects)

@@ -72,8 +72,8 @@ class _Rolling(Effect):
     tables = ("rolling_friction", "rolling_model", "rolling_damping")
     model_code = -1
 
-    def contact_func(self, engine):
-        rolling_friction, rolling_model, rolling_damping = (engine.table[n] for n in self.tables)
+    def contact_func(self, ctx):
+        rolling_friction, rolling_model, rolling_damping = (ctx.table[n] for n in self.tables)
         code = self.model_code
         epsd_model = self.name == "rolling_epsd"
 

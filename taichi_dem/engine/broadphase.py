@@ -22,6 +22,7 @@ import numpy as np
 import taichi as ti
 
 from .state import PairState, grown_capacity
+from .tuning import LIST_GROWTH
 from .workers import WORKER_TASK, make_barrier, worker_range
 
 MAX_CELLS_PER_PARTICLE = 8      # a sparse domain gets coarser cells instead of millions of empty ones
@@ -781,7 +782,7 @@ class Broadphase:
         e = self.e
         longest = int(self._find_candidates(alive))
         if longest > self.scratch_width:
-            self._compile_search(int(longest * 1.5) + 1)
+            self._compile_search(int(longest * LIST_GROWTH) + 1)
             if e.pairs is not None:
                 self._compact = self._make_compact(e.pairs)
             longest = int(self._find_candidates(alive))

@@ -10,7 +10,11 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
+from .tuning import LIST_GROWTH
+
 VEC = 3
+# the moment of inertia of a solid sphere, I = SPHERE_INERTIA m r^2 (2/5)
+SPHERE_INERTIA = 0.4
 
 
 class FieldTree:
@@ -78,12 +82,12 @@ def fit_rows(a: np.ndarray, n: int) -> np.ndarray:
 
 def grown_capacity(entries: int, alive: int, particle_capacity: int, floor: int = 16) -> int:
     """Room for list entries (pairs, mesh candidates) once ``entries`` no longer fit: 1.5x
-    today's, and at least what the particle capacity would need at today's entries per
+    today's (LIST_GROWTH), and at least what the particle capacity would need at today's entries per
     particle. Every reallocation recompiles the kernels that read the list (~0.3-1 s of
     Python-side compilation each time, even from the kernel cache), so a scene filling from a
     factory should reallocate a few times, not at every half-again of its hold-up."""
     per_particle = entries / max(alive, 1)
-    return int(max(1.5 * entries, 1.2 * per_particle * particle_capacity, floor))
+    return int(max(LIST_GROWTH * entries, 1.2 * per_particle * particle_capacity, floor))
 
 
 class ParticleState:

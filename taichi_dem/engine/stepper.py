@@ -44,49 +44,16 @@ from .precision import make_compensated_add
 from ..contacts.geometry import contact_types, make_geometry
 from ..contacts.law import make_contact_law, margin_fraction
 from ..effects import enabled_effects
+from ..effects.base import EffectContext
 from ..setup.pair_tables import PairTables
-from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
+from .state import (SPHERE_INERTIA, FieldTree, Flag, PairState, ParticleState, Reduction,
+                    ThermalSum, fit_rows)
 from .workers import WORKER_TASK, make_barrier
 
 
-# Below this many particles a CPU runs every loop of the step on one thread (Engine.serial).
-# Dispatching one parallel loop to Taichi's CPU thread pool costs ~100 us on this project's
-# 2-core machines, with one thread as with two (a serial loop: nothing; a launch: ~15 us;
-# bench/launch_cost.py), while two threads save ~40 % of the physics. Measured break-even
-# (bench/cost_curve.py, BENCHMARKS.md "Cost curve"): the chute (0.14 us per particle-step)
-# ~10,000 particles - serial 1.7x faster at 4,000, parallel 1.16x faster at 16,000; the
-# cooler (0.5 us per particle-step) ~3,000. 5,000 is within ~15 % of the better mode for both.
-PARALLEL_FROM = 5000
-
-# Runs of steps on every thread (Engine.workers, CPU, from parallel_from particles on): one
-# launch runs whole steps - the pair stage, the cell stage, the particle stage with the next
-# drift - on T workers that meet at a spin barrier after each stage (~0.1 - 0.2 us here),
-# instead of two parallel launches per step (each ~100 us to dispatch to Taichi's thread pool
-# on these machines). In the pair stage worker w computes the owned pairs of a fixed range of
-# cell-sorted particles (cut at equal shares of owned entries + particles) and adds each
-# partner's share to copy w of the partners' sums, as the serial mode does to its one copy:
-# no race, no store of the share at the entry and no second pass through the mirror index
-# (1.24 - 1.27x the chunk-claiming pair stage at 32k, BENCHMARKS.md stop 18); fixed ranges keep
-# every sum's order, and so the results, independent of the threads' timing. In the particle
-# stage the workers claim chunks of particles from an atomic counter (WORKER_CHUNK); each
-# particle adds its copies in order. Where shares must stay at the entries ([mobility]:
-# Engine.scatter_ok) the pair stage claims chunks too and the particle stage gathers through
-# the mirror: the parallel kernels' results bit for bit. (WORKER_TASK and the barrier:
-# engine/workers.py; the rebuild runs on the same workers, Broadphase.rebuild_on_workers.)
-WORKER_CHUNK = 128      # particles per claim at least, and WORKER_CHUNKS claims per worker and
-WORKER_CHUNKS = 16      # stage at most: a claim costs an atomic on a line both workers hit,
-# a particle of the particle stage ~14 ns; the last chunk is ~1/16 of a worker's stage. (Against
-# stop 17's 128-particle chunks, in-process A/B: 1.06x at 32k and 8k with one order of the
-# windows, 0.97x and 0.98x with the other: no gain this host's noise can show; kept as fewer
-# contended atomics for more threads, the results being the same.)
-WORKER_COPIES = True    # False: the pair stage claims chunks and stores shares at the entries
-                        # in every scene, as under [mobility] (tests, bench A/B)
-STALL_SPINS = 20_000    # a barrier wait this long (~0.5 - 1 ms), plus half a spin per particle
-# (STALL_SPINS_PER_PARTICLE: ~a quarter of a stage, whose particles take ~25 - 50 ns each on
-# a worker, so that an uneven split of a large scene's stage is not taken for a stall): a
-# worker had lost its core. (At 128k a fixed 20,000 counted 16 % of the waits of a run alone.)
-STALL_SPINS_PER_PARTICLE = 0.5
-PROBE_SPINS = 300_000_000   # the start-up check that the workers run at once (seconds at most)
+# the loop modes' and workers' tuning constants (chosen in BENCHMARKS.md; see tuning.py)
+from .tuning import (PARALLEL_FROM, PROBE_SPINS, STALL_SPINS, STALL_SPINS_PER_PARTICLE,  # noqa: E402
+                     WORKER_CHUNK, WORKER_CHUNKS, WORKER_COPIES)
 _probe_result: dict = {}     # per worker count; "gave way": see _count_stalls
 
 
@@ -168,6 +135,9 @@ class Engine:
         # what they do is unrolled into the kernels; nothing else is compiled
         self.effect_list = enabled_effects(scene)
         self.effects = {e.name for e in self.effect_list}
+        # what the effects see of this engine: the model and the state, read-only
+        self.context = EffectContext(self)
+        self.material_names = tables.names
         by_name = {e.name: e for e in self.effect_list}
         self.contact_effects = tuple(e for e in self.effect_list if e.stage == "contact")
         self.particle_effects = tuple(e for e in self.effect_list if e.stage == "particle")
@@ -178,29 +148,20 @@ class Engine:
                                                      for e in self.cell_effects)
         self.temperature_effect = by_name.get("temperature")
         self.drying_effect = by_name.get("drying")
-        self.rolling_cdt = "rolling_constant_torque" in self.effects
         self.rolling_epsd = "rolling_epsd" in self.effects
         self.thermal = scene.thermal is not None
-        self.conduction = "conduction" in self.effects
         self.wall_conduction = "wall_conduction" in self.effects
         self.gas_gap = "gas_gap_wall" in self.effects
-        self.gas_gap_parameters = (by_name["gas_gap_wall"].parameters if self.gas_gap
-                                   else (0.0, 0.0, 1.0))
-        self.convection = "convection" in self.effects
-        self.plug_flow = "plug_flow_gas" in self.effects
-        self.radiation = "radiation" in self.effects
         self.moisture = "drying" in self.effects
         # [mobility] (effects/mobility.py): inactive particles skip mutual contacts and their
         # integration; "body_frame" carries them with that body (its index, else -1)
         self.mobility = by_name.get("mobility")
-        self.mobility_frame = -1
+        self.mobility_frame = self.mobility.frame if self.mobility is not None else -1
         # the serial mode's pair stage adds partner shares to the partner directly, with no
         # gather through the mirror index (one thread: no race); [mobility] keeps the entries
         # (its frozen pairs re-use their stored shares). The mirror is still built at every
         # rebuild: a checkpoint of a serial run restores into a parallel one (or a GPU)
         self.scatter_ok = self.mobility is None
-        if self.mobility is not None and scene.mobility.mode == "body_frame":
-            self.mobility_frame = [b.name for b in scene.bodies].index(scene.mobility.body)
         self.trees: list[FieldTree] = []
         # runs of steps on every thread above parallel_from (persistent_workers; off again,
         # for good, if its barrier waits show the threads sharing the cores with other work)
@@ -274,15 +235,13 @@ class Engine:
         self.flags = t.add("flags", ti.i32, Flag.SIZE)
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
         self.reduction = t.add("reduction", real, Reduction.SIZE)   # named slots: Reduction
-        self.gas_stream = None
-        self.drag = None            # the Drag effect, when enabled (it sets itself here)
         if self.thermal:
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
             # f64 sums over the particles: sum m c T (J), sum m c (J/K), water (kg), dry solid
             # (kg); an f32 sum of m c T at 723 K would round the heat balance away
             self.thermal_sums = t.add("thermal_sums", ti.f64, ThermalSum.SIZE)
         for e in self.effect_list:
-            e.allocate(self, t)
+            e.allocate(self.context, t)
         self.process = None
         if scene.factories or scene.outlets or has_planes:
             from ..process.outlets import ProcessDevice
@@ -303,7 +262,7 @@ class Engine:
             field.from_numpy(values.astype(np.int32 if field.dtype == ti.i32 else npf))
         for e in self.effect_list:
             if hasattr(e, "upload"):
-                e.upload(self)
+                e.upload(self.context)
         if self.gas_stream is not None:
             self.gas_stream.compile()
         self.max_radius = max_radius
@@ -317,11 +276,28 @@ class Engine:
             self.kinematics = BodyKinematics(scene.bodies)
             self.mesh = MeshContacts(self, self.kinematics)
         if self.mobility is not None:
-            self.mobility.compile(self)
+            self.mobility.compile(self.context)
         self._compile_particle_kernels()
         if scene.factories:
             self._compile_insert()
             self._compile_occupied()
+
+    # what enabled effects hold, for the sensors and the measure kernel (None when absent)
+    @property
+    def gas_stream(self):
+        """The axial plug-flow gas (thermal/plug_flow.py) of the plug-flow effect, or None."""
+        e = self.context.effect("plug_flow_convection")
+        return e.stream if e is not None else None
+
+    @property
+    def drag(self):
+        """The Drag effect, or None."""
+        return self.context.effect("drag")
+
+    @property
+    def evaporated(self):
+        """The drying effect's evaporated water, kg since the start (a 1-entry f64 field)."""
+        return self.drying_effect.evaporated
 
     def choose_loop_mode(self, n: int) -> bool:
         """Serial loops for ``n`` particles? On a GPU never; on one CPU thread always; else
@@ -400,8 +376,8 @@ class Engine:
         mobility = self.mobility is not None
         active = self.mobility.particle_active if mobility else None
         body_frame = self.mobility_frame >= 0
-        rigid_drift = self.mobility.make_rigid_drift(self) if body_frame else None
-        rigid_velocity = self.mobility.make_rigid_velocity(self) if body_frame else None
+        rigid_drift = self.mobility.make_rigid_drift(self.context) if body_frame else None
+        rigid_velocity = self.mobility.make_rigid_velocity(self.context) if body_frame else None
 
         @ti.func
         def drift_particle(i, dt, t_new):
@@ -480,7 +456,7 @@ class Engine:
             for i in range(n):
                 if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
                     m = s.mass[i]
-                    inertia = 0.4 * m * s.radius[i] ** 2
+                    inertia = SPHERE_INERTIA * m * s.radius[i] ** 2
                     v2 = s.velocity[i].dot(s.velocity[i])
                     red[Reduction.KINETIC_ENERGY] += (0.5 * m * v2 + 0.5 * inertia
                                                       * s.angular_velocity[i].dot(s.angular_velocity[i]))
@@ -522,8 +498,8 @@ class Engine:
         # effects (contacts/): the same law runs on pairs, planes and triangles
         _, sphere_surface, sphere_sphere_gap, with_motion = make_geometry(real, self.thermal)
         _, _, History = contact_types(real)
-        pair_law = make_contact_law(effects, "pair", real, self)
-        plane_law = make_contact_law(effects, "plane", real, self)
+        pair_law = make_contact_law(effects, "pair", real, self.context)
+        plane_law = make_contact_law(effects, "plane", real, self.context)
         # a pair is handed to the law while its gap is below the margin an effect asks for
         pair_margin = self.pair_margin
         epsd = self.rolling_epsd
@@ -541,13 +517,13 @@ class Engine:
         mesh_contacts = None
         if self.mesh is not None:
             mesh_contacts = self.mesh.make_particle_contacts(
-                make_contact_law(effects, "triangle", real, self),
-                make_contact_law(effects, "surface", real, self), sphere_surface)
+                make_contact_law(effects, "triangle", real, self.context),
+                make_contact_law(effects, "surface", real, self.context), sphere_surface)
         has_mesh = mesh_contacts is not None
         Load = ti.types.struct(acceleration=ti.types.vector(3, real), heat=real,
                                conductance=real)
-        particle_effects = tuple(e.particle_func(self) for e in self.particle_effects)
-        update_temperature = (self.temperature_effect.integrate_func(self, self.drying_effect)
+        particle_effects = tuple(e.particle_func(self.context) for e in self.particle_effects)
+        update_temperature = (self.temperature_effect.integrate_func(self.context, self.drying_effect)
                               if thermal else None)
         vec0 = ti.Vector([0.0, 0.0, 0.0])
 
@@ -908,7 +884,7 @@ class Engine:
         self._gather = self.serial_switch(gather)
 
         # runs of steps (serial mode): the cell stage of each effect as a ti.func
-        cell_funcs = tuple(e.cell_func(self) for e in self.cell_effects) if self.runs else ()
+        cell_funcs = tuple(e.cell_func(self.context) for e in self.cell_effects) if self.runs else ()
         set_frames = self.mesh.set_frames if has_mesh else None
         flags = self.flags
         n_wall_slots = max(n_walls, 1)
@@ -1104,14 +1080,14 @@ class Engine:
         self.choose_loop_mode(n)
         self.count = self.broadphase.rebuild(n)
         if self.mobility is not None:
-            self.mobility.update(self, self.count, self.time)
+            self.mobility.update(self.context, self.count, self.time)
         if self.serial and self.runs:
             # one step of no length in the kernel the runs use (nothing else to compile)
             self._run_steps(self.count, 0.0, self.time, 0.0, 1, 1, 0, 0)
             return self.count
         self._pair_forces(self.count, 0.0, 1)
         for e in self.cell_effects:
-            e.after_pairs(self, self.count, 0.0)
+            e.after_pairs(self.context, self.count, 0.0)
         self._gather(self.count, 0.0, 0, 0, self.time)
         return self.count
 
@@ -1131,7 +1107,7 @@ class Engine:
         self.count = self.broadphase.rebuild(n)
         self.flags[Flag.DEAD_IN_SLOTS] = 0
         if self.mobility is not None:
-            self.mobility.update(self, self.count, self.time)
+            self.mobility.update(self.context, self.count, self.time)
 
     def advance(self, steps: int, record_last: bool = False):
         """Advance ``steps`` time steps of ``self.dt``: in runs of steps per launch in the
@@ -1166,7 +1142,7 @@ class Engine:
                     self.wall_heat.fill(0.0)
             self._pair_forces(self.count, dt, 1 if rebuild else 0)
             for e in self.cell_effects:
-                e.after_pairs(self, self.count, dt)     # the gas sees this step's particles
+                e.after_pairs(self.context, self.count, dt)     # the gas sees this step's particles
             # the state is left at a whole step (no pending drift) when advance returns
             self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
 
@@ -1384,7 +1360,7 @@ class Engine:
                 s.radius[i] = r
                 s.mass[i] = m
                 s.inverse_mass[i] = 1.0 / m
-                s.inverse_inertia[i] = 1.0 / (0.4 * m * r * r)
+                s.inverse_inertia[i] = 1.0 / (SPHERE_INERTIA * m * r * r)
                 s.material[i] = ints[q, 0]
                 s.particle_id[i] = ints[q, 1]
                 s.alive[i] = 1

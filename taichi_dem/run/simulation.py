@@ -21,6 +21,8 @@ from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
 from ..effects.base import Effect
 from ..engine import backend
+from ..engine.state import SPHERE_INERTIA
+from ..engine.tuning import MOST_KINDS
 from ..errors import DivergenceError, SceneError, StaleSimulationError
 from ..scene.loader import load_scene, parse_scene
 from ..scene.model import Scene
@@ -48,7 +50,7 @@ def _sizes_to_expect(scene: Scene, placed, names):
             np.concatenate(speeds), np.concatenate(fixed))
 
 
-def _particle_kinds(scene: Scene, placed, names, most: int = 8):
+def _particle_kinds(scene: Scene, placed, names, most: int = MOST_KINDS):
     """The kinds of particle the scene holds or inserts: ((material index, radius m), ...)
     sorted, or None when there are more than ``most`` or a factory samples its radii from a
     distribution (engine tables per kind: the gas gap's)."""
@@ -293,7 +295,7 @@ class Simulation:
         s.radius.from_numpy(scal(placed.radius))
         s.mass.from_numpy(scal(mass))
         s.inverse_mass.from_numpy(scal(np.where(movable, 1.0 / mass, 0.0)))
-        s.inverse_inertia.from_numpy(scal(np.where(movable, 1.0 / (0.4 * mass * placed.radius ** 2), 0.0)))
+        s.inverse_inertia.from_numpy(scal(np.where(movable, 1.0 / (SPHERE_INERTIA * mass * placed.radius ** 2), 0.0)))
         s.material.from_numpy(scal(placed.material, np.int32))
         s.particle_id.from_numpy(scal(np.arange(n), np.int32))
         s.alive.from_numpy(scal(np.ones(n), np.int32))

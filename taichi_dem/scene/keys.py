@@ -192,6 +192,8 @@ class Key:
         if self.in_range(x):
             return
         text = self.range_text()
+        if self.kind == "integer" and text.startswith("in ["):
+            text = f"between {self.minimum:g} and {self.maximum:g}"
         why = f" ({self.why})" if self.why else ""
         verb = "lie" if text.startswith("strictly") else "be"
         raise SceneError(file, key, f"must {verb} {text}, got {shown}{why}")
@@ -225,6 +227,14 @@ class Section:
     owner: str = ""
     # key -> nested Section for keys whose value is a table the section's code reads with it
     nested: dict = field(default_factory=dict)
+    # an effect's own top-level section: ``reader(table, parser) -> settings`` (parser: the
+    # loader's, with ``source``, ``materials``, ``domain``, ``simulation``, ``sources``,
+    # ``walls``, ``bodies``, ``parse_region``); the loader calls it when the scene has the
+    # section and keeps the result in ``Scene.settings[path]``
+    reader: Optional[Callable[[Any, Any], Any]] = None
+    # with a reader: "module:function" building the effect objects from (scene, settings);
+    # effects/registry.py imports it only for a scene that has the section
+    builds: str = ""
 
     def __post_init__(self):
         names = [k.name for k in self.keys]
@@ -293,6 +303,11 @@ def register(section: Section) -> Section:
 
 def registered() -> dict[str, Section]:
     return dict(_REGISTRY)
+
+
+def effect_sections() -> dict[str, Section]:
+    """The registered top-level sections that an effect reads itself (``reader``)."""
+    return {p: s for p, s in _REGISTRY.items() if s.reader is not None}
 
 
 def reader_for(file: str) -> Callable[[Key, Any, str], Any]:

@@ -22,8 +22,9 @@ from thermal.settings import parse_thermal
 
 from ..effects.drag.settings import parse as parse_drag
 from ..effects.mobility.settings import parse as parse_mobility
+from ..effects import catalog as _catalog  # noqa: F401 (registers the effects' sections)
 from ..errors import SceneError
-from .keys import suggest as _suggest
+from .keys import effect_sections, suggest as _suggest
 from .model import Scene
 from .sections.common import Reader, decode_utf8 as _decode_utf8
 from .sections.materials import MaterialSections
@@ -32,8 +33,12 @@ from .sections.process import ProcessSections
 from .sections.simulation import SimulationSections
 from .sections.surfaces import SurfaceSections
 
-SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls", "bodies",
-            "factories", "outlets", "sensors", "thermal", "mobility", "output", "gas")
+# the sections this module reads itself; every effect section with a reader of its own
+# (effects/catalog.py) is accepted too
+BUILT_IN_SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls",
+                     "bodies", "factories", "outlets", "sensors", "thermal", "mobility",
+                     "output", "gas")
+SECTIONS = BUILT_IN_SECTIONS + tuple(p for p in effect_sections() if p not in BUILT_IN_SECTIONS)
 PLANNED_SECTIONS: tuple[str, ...] = ()
 
 
@@ -122,8 +127,14 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
         drag = parse_drag(doc, self.source, thermal.gas if thermal is not None else None)
         mobility = (parse_mobility(doc["mobility"], self.source, simulation.gravity, sources, bodies)
                     if "mobility" in doc else None)
+        # every other effect's section, read by its own settings module (scene/keys.py)
+        self.simulation, self.sources, self.walls, self.bodies = simulation, sources, walls, bodies
+        self.thermal = thermal
+        settings = {path: section.reader(doc[path], self)
+                    for path, section in effect_sections().items()
+                    if path in doc and path not in BUILT_IN_SECTIONS}
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
                      walls=walls, bodies=bodies, output=output, thermal=thermal,
                      factories=factories, outlets=outlets, sensors=sensors, drag=drag,
-                     mobility=mobility)
+                     mobility=mobility, settings=settings)

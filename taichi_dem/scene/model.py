@@ -363,6 +363,9 @@ class Scene:
     sensors: tuple[Sensor, ...] = ()
     drag: Optional[DragSettings] = None
     mobility: Optional[MobilitySettings] = None
+    # the settings of every other effect section the scene has, by section name: what an
+    # effect's settings module returns for it (scene/keys.py ``Section.reader``)
+    settings: dict = field(default_factory=dict)
 
     def interaction(self, a: str, b: str) -> Interaction:
         return self.interactions[frozenset((a, b))]

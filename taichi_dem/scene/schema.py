@@ -17,7 +17,7 @@ from typing import Any
 
 from geometry.builders import BUILDERS, COMMON, KINDS as BUILDER_KINDS, REQUIRED as BUILDER_REQUIRED
 
-from .keys import REQUIRED, Key, Section, registered
+from .keys import REQUIRED, Key, Section, effect_sections, registered
 from .units import DIMENSIONS, units_for
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
@@ -25,10 +25,7 @@ DIALECT = "https://json-schema.org/draft/2020-12/schema"
 
 def _sections() -> dict[str, Section]:
     """Every declared section (importing the modules that declare them)."""
-    from thermal import settings as _thermal  # noqa: F401
-    from ..effects.drag import settings as _drag  # noqa: F401
-    from ..effects.mobility import settings as _mobility  # noqa: F401
-    from . import loader as _loader  # noqa: F401 (the scene's own sections)
+    from . import loader as _loader  # noqa: F401 (the scene's own and the effects' sections)
     return registered()
 
 
@@ -124,7 +121,8 @@ def builder_schema() -> dict:
     return {"anyOf": variants}
 
 
-# where each top-level section sits and whether it is an array of tables or named tables
+# where each built-in top-level section is declared (an array of tables "x[]", named tables
+# "x.*"); an effect's own sections (effects/catalog.py) are added as they are
 _TOP = {"simulation": "simulation", "domain": "domain", "output": "output",
         "materials": "materials.*", "interactions": "interactions[]", "particles": "particles[]",
         "walls": "walls[]", "bodies": "bodies[]", "factories": "factories[]",
@@ -136,7 +134,9 @@ def scene_schema() -> dict:
     """The JSON Schema of a scene file (every section the loader accepts)."""
     sections = _sections()
     props: dict[str, Any] = {}
-    for name, path in _TOP.items():
+    top = dict(_TOP)
+    top.update({p: p for p in effect_sections() if p not in top})
+    for name, path in top.items():
         s = section_schema(sections[path], sections)
         if path.endswith("[]"):
             props[name] = {"type": "array", "items": s, "description": s["description"]}

@@ -40,16 +40,15 @@ class Drag(Effect):
         super().__init__(description)
         self.drag = drag
 
-    def allocate(self, engine, tree):
-        g = engine.grid
-        self.cell_solid = tree.add("drag_cell_solid", engine.real, g.n_cells)      # m^3
+    def allocate(self, ctx, tree):
+        g = ctx.grid
+        self.cell_solid = tree.add("drag_cell_solid", ctx.real, g.n_cells)      # m^3
         # the force on each particle in the last step, N (for the sensors; not state)
-        self.force = tree.add("drag_force", engine.real, engine.state.capacity, vector=True)
-        engine.drag = self
-        self._compile_cells(engine)
+        self.force = tree.add("drag_force", ctx.real, ctx.state.capacity, vector=True)
+        self._compile_cells(ctx)
 
-    def _compile_cells(self, engine):
-        s = engine.state
+    def _compile_cells(self, ctx):
+        s = ctx.state
         cell_solid = self.cell_solid
 
         @ti.kernel
@@ -63,7 +62,7 @@ class Drag(Effect):
                     r = s.radius[i]
                     ti.atomic_add(cell_solid[s.cell[i]], 4.0 / 3.0 * math.pi * r * r * r)
 
-        self._solid_per_cell = engine.serial_switch(solid_per_cell)
+        self._solid_per_cell = ctx.serial_switch(solid_per_cell)
 
         @ti.func
         def solid_per_cell_serial(n, dt):
@@ -78,17 +77,17 @@ class Drag(Effect):
 
         self._solid_per_cell_serial = solid_per_cell_serial
 
-    def after_pairs(self, engine, n, dt):
+    def after_pairs(self, ctx, n, dt):
         """The cell stage: solid volume per contact cell (m^3)."""
         self._solid_per_cell(n)
 
-    def cell_func(self, engine):
+    def cell_func(self, ctx):
         """``after_pairs`` as a ti.func (n, dt) for Engine.run_steps."""
         return self._solid_per_cell_serial
 
-    def particle_func(self, engine):
-        s = engine.state
-        g = engine.grid
+    def particle_func(self, ctx):
+        s = ctx.state
+        g = ctx.grid
         d = self.drag
         dims = ti.Vector(list(g.dims))
         periodic = g.periodic

@@ -93,9 +93,14 @@ class Mobility(Effect):
 
     name, stage = "mobility", "detect"
 
-    def __init__(self, description: str, settings):
+    def __init__(self, description: str, settings, bodies=()):
         super().__init__(description)
         self.settings = settings
+        # the scene's bodies (plain data): which move, and the frame body's motion and reach
+        self.bodies = tuple(bodies)
+        # "body_frame": the index of the body whose rigid motion the bed follows, else -1
+        self.frame = ([b.name for b in self.bodies].index(settings.body)
+                      if settings.mode == "body_frame" else -1)
 
     # ------------------------------------------------------------------ layout
     def layout(self, grid):
@@ -108,12 +113,12 @@ class Mobility(Effect):
             blocks.append(max(1, min(grid.dims[k], n)))
         return tuple(blocks)
 
-    def allocate(self, engine, tree):
-        g = engine.grid
+    def allocate(self, ctx, tree):
+        g = ctx.grid
         self.blocks = self.layout(g)
         self.n_blocks = int(np.prod(self.blocks))
-        cap = engine.state.capacity
-        real = engine.real
+        cap = ctx.state.capacity
+        real = ctx.real
         self.particle_active = tree.add("particle_active", ti.i32, cap)
         self.block_count = tree.add("mobility_count", ti.i32, self.n_blocks)
         self.block_temperature = tree.add("mobility_temperature", real, self.n_blocks)   # (m/s)^2
@@ -132,10 +137,10 @@ class Mobility(Effect):
         # [inactive particles, cells inactive, active, mobile, particles outside the reach]
         self.counts = tree.add("mobility_counts", ti.i32, 5)
 
-    def upload(self, engine):
+    def upload(self, ctx):
         """The volume (m^3) of each mobility cell inside the domain (a non-periodic axis's last
         contact cell reaches past the face)."""
-        g = engine.grid
+        g = ctx.grid
         edges = []
         for k in range(3):
             d, nb = g.dims[k], self.blocks[k]
@@ -147,36 +152,35 @@ class Mobility(Effect):
         self.plain_volume = np.maximum(vol, 1e-30).reshape(-1)
         beyond = np.zeros(vol.shape, np.int32)
         outside = np.zeros(vol.shape, np.int32)
-        reach = self.frame_reach(engine)
+        reach = self.frame_reach(ctx)
         self.reach_in_use = reach is not None
         if reach is not None:
             # where particle centres can be: a largest radius inside the body's reach; a cell
             # of which less than a quarter is there may well hold no centre in a full drum
             point, axis, radius = reach
-            inside = self.fraction_within(engine, edges, point, axis,
-                                          max(radius - engine.max_radius, 0.0))
+            inside = self.fraction_within(ctx, edges, point, axis,
+                                          max(radius - ctx.max_radius, 0.0))
             vol = vol * inside
             beyond = (inside < 0.25).astype(np.int32)
-            outside = (self.fraction_within(engine, edges, point, axis, radius) == 0.0
+            outside = (self.fraction_within(ctx, edges, point, axis, radius) == 0.0
                        ).astype(np.int32)
-        self._upload_volumes(engine, np.maximum(vol, 1e-30).reshape(-1), beyond.reshape(-1))
+        self._upload_volumes(ctx, np.maximum(vol, 1e-30).reshape(-1), beyond.reshape(-1))
         self.block_outside.from_numpy(outside.reshape(-1))
         self.particle_active.fill(1)
 
-    def _upload_volumes(self, engine, volume, beyond):
-        npf = np.float64 if engine.real == ti.f64 else np.float32
+    def _upload_volumes(self, ctx, volume, beyond):
+        npf = np.float64 if ctx.real == ti.f64 else np.float32
         self.block_volume.from_numpy(volume.astype(npf))
         self.block_beyond.from_numpy(beyond.astype(np.int32))
 
-    @staticmethod
-    def frame_reach(engine):
+    def frame_reach(self, ctx):
         """(axis point m, unit axis, radius m) of the cylinder that the frame body sweeps as it
         turns (its farthest vertex from the axis), or None: in mode "at_rest", or for a body
         that also translates (its reach moves)."""
-        frame = engine.mobility_frame
+        frame = self.frame
         if frame < 0:
             return None
-        body = engine.scene.bodies[frame]
+        body = self.bodies[frame]
         motion = body.motion
         if any(v != 0 for v in motion.velocity):
             return None
@@ -188,11 +192,11 @@ class Mobility(Effect):
         return point, axis, float(np.sqrt(np.max(np.sum(radial ** 2, axis=1))))
 
     @staticmethod
-    def fraction_within(engine, edges, point, axis, radius, samples: int = 6):
+    def fraction_within(ctx, edges, point, axis, radius, samples: int = 6):
         """Fraction of each mobility cell's volume (per axis widths ``edges``, from the grid's
         lower corner) within ``radius`` of the axis through ``point`` along ``axis``: the
         midpoints of samples^3 sub-cells, numpy at set-up (m, unit vector, m)."""
-        g = engine.grid
+        g = ctx.grid
         lows = [g.lo[k] + np.concatenate([[0.0], np.cumsum(edges[k])[:-1]]) for k in range(3)]
         u = (np.arange(samples) + 0.5) / samples
         coords = [lows[k][:, None] + edges[k][:, None] * u[None, :] for k in range(3)]  # (n_k, s)
@@ -208,14 +212,14 @@ class Mobility(Effect):
         return out
 
     # ------------------------------------------------------------------ kernels
-    def compile(self, engine):
+    def compile(self, ctx):
         """The status kernel; needs the broadphase's cell ranges (and the mesh's candidate
-        lists when the scene has bodies). ``engine.mobility_frame``: the frame body's index
+        lists when the scene has bodies). ``self.frame``: the frame body's index
         or -1."""
-        s = engine.state
-        g = engine.grid
+        s = ctx.state
+        g = ctx.grid
         st = self.settings
-        cell_start = engine.broadphase.cell_start
+        cell_start = ctx.broadphase.cell_start
         dims = g.dims
         blocks = self.blocks
         periodic = g.periodic
@@ -231,22 +235,22 @@ class Mobility(Effect):
         phi, volume, flag = self.block_solid_fraction, self.block_volume, self.block_flag
         mobile, status = self.block_mobile, self.block_status
         beyond, outside = self.block_beyond, self.block_outside
-        mesh = engine.mesh
-        frame = engine.mobility_frame
+        mesh = ctx.mesh
+        frame = self.frame
         body_frame = frame >= 0
         # bodies that move (other than the frame's): their candidate contacts make a cell mobile
         moving = []
-        for b, body in enumerate(engine.scene.bodies):
+        for b, body in enumerate(self.bodies):
             m = body.motion
             if b != frame and (m.speed is not None and any(v != 0 for _, v in m.speed.points)
                                or any(v != 0 for v in m.velocity)):
                 moving.append(b)
-        moving_flags = tuple(1 if b in moving else 0 for b in range(len(engine.scene.bodies)))
+        moving_flags = tuple(1 if b in moving else 0 for b in range(len(self.bodies)))
         check_bodies = mesh is not None and len(moving) > 0
-        rigid_velocity = self.make_rigid_velocity(engine)
-        rigid_spin_ = self.make_rigid_spin(engine)
+        rigid_velocity = self.make_rigid_velocity(ctx)
+        rigid_spin_ = self.make_rigid_spin(ctx)
         rigid_frame = frame >= 0
-        centre_of = self.make_rigid_centre(engine) if rigid_frame else None
+        centre_of = self.make_rigid_centre(ctx) if rigid_frame else None
 
         @ti.func
         def rigid_acceleration(x, t):
@@ -378,23 +382,23 @@ class Mobility(Effect):
                     inside = False
             return (cell[0] * nby + cell[1]) * nbz + cell[2], inside
 
-        rigid_spin = self.make_rigid_spin(engine)
-        self._update = engine.serial_switch(update)
+        rigid_spin = self.make_rigid_spin(ctx)
+        self._update = ctx.serial_switch(update)
         self.body_frame = body_frame
 
-    def make_rigid_velocity(self, engine):
+    def make_rigid_velocity(self, ctx):
         """ti.func (x, t) -> the frame body's velocity at point x (m/s); zero in "at_rest"."""
-        frame = engine.mobility_frame
+        frame = self.frame
         if frame < 0:
             @ti.func
             def at_rest(x, t):
                 return ti.Vector([0.0, 0.0, 0.0]) * x[0]
             return at_rest
-        motion = engine.scene.bodies[frame].motion
+        motion = self.bodies[frame].motion
         point = ti.Vector(list(motion.axis_point))
         velocity = ti.Vector(list(motion.velocity))
-        spin = self.make_rigid_spin(engine)
-        real = engine.real
+        spin = self.make_rigid_spin(ctx)
+        real = ctx.real
 
         @ti.func
         def body_velocity(x, t):
@@ -402,34 +406,34 @@ class Mobility(Effect):
             return velocity + spin(t).cross(x - centre)
         return body_velocity
 
-    def make_rigid_centre(self, engine):
+    def make_rigid_centre(self, ctx):
         """ti.func t -> the frame body's axis point at t (m)."""
-        motion = engine.scene.bodies[engine.mobility_frame].motion
+        motion = self.bodies[self.frame].motion
         point = ti.Vector(list(motion.axis_point))
         velocity = ti.Vector(list(motion.velocity))
-        real = engine.real
+        real = ctx.real
 
         @ti.func
         def centre(t):
             return point + velocity * ti.cast(t, real)
         return centre
 
-    def make_rigid_spin(self, engine):
+    def make_rigid_spin(self, ctx):
         """ti.func t -> the frame body's angular velocity vector (rad/s); zero in "at_rest"."""
-        frame = engine.mobility_frame
+        frame = self.frame
         if frame < 0:
             @ti.func
             def no_spin(t):
                 return ti.Vector([0.0, 0.0, 0.0])
             return no_spin
-        motion = engine.scene.bodies[frame].motion
+        motion = self.bodies[frame].motion
         axis = ti.Vector(list(motion.axis_direction))
         points = tuple(motion.speed.points) if motion.speed is not None else ((0.0, 0.0),)
 
         # the piecewise-constant schedule as a sum of steps: speed(t) = sum_k dv_k [t >= t_k]
         steps = [(points[0][0], points[0][1])] + [
             (points[k][0], points[k][1] - points[k - 1][1]) for k in range(1, len(points))]
-        real = engine.real
+        real = ctx.real
 
         @ti.func
         def spin(t):
@@ -439,16 +443,16 @@ class Mobility(Effect):
             return speed * axis
         return spin
 
-    def make_rigid_drift(self, engine):
+    def make_rigid_drift(self, ctx):
         """ti.func (x, dt, t) -> x carried rigidly by the frame body over the step ending at
         t (rotation about its axis by |omega| dt, Rodrigues, plus its translation)."""
-        frame = engine.mobility_frame
-        motion = engine.scene.bodies[frame].motion
+        frame = self.frame
+        motion = self.bodies[frame].motion
         point = ti.Vector(list(motion.axis_point))
         velocity = ti.Vector(list(motion.velocity))
         axis = ti.Vector(list(motion.axis_direction))
-        spin = self.make_rigid_spin(engine)
-        real = engine.real
+        spin = self.make_rigid_spin(ctx)
+        real = ctx.real
 
         @ti.func
         def rigid_drift(x, dt, t):
@@ -461,19 +465,19 @@ class Mobility(Effect):
         return rigid_drift
 
     # ------------------------------------------------------------------ driver
-    def update(self, engine, n: int, time: float):
+    def update(self, ctx, n: int, time: float):
         self._update(n, time)
         if self.reach_in_use and int(self.counts[4]) > 0:
             # a particle centre beyond the frame body's reach: the body does not enclose the
             # bed (a paddle shaft, not a drum shell), so its reach says nothing about where
             # particles can be; judge again with the plain cell volumes and every empty cell
-            body = engine.scene.bodies[engine.mobility_frame].name
+            body = self.bodies[self.frame].name
             print(f"taichi-dem: warning: [mobility] {int(self.counts[4])} particles lie beyond "
                   f"the reach of body '{body}'; mode \"body_frame\" counts cells outside the "
                   f"frame body as walls only when the body encloses the bed (a drum shell); "
                   f"judging with the plain cell volumes from now on", file=sys.stderr)
             self.reach_in_use = False
-            self._upload_volumes(engine, self.plain_volume,
+            self._upload_volumes(ctx, self.plain_volume,
                                  np.zeros(len(self.plain_volume), np.int32))
             self.block_outside.fill(0)
             self._update(n, time)

@@ -1,0 +1,10 @@
+"""Viscous background damping (LIGGGHTS's ``fix viscous``): every moving particle's velocity
+relaxes towards rest, a = -v / tau. For settling a bed quickly before the run that matters;
+it is not physics of the granular flow, so it is off unless a scene has [viscous_damping].
+
+``settings.py``: the [viscous_damping] keys and ``DampingSettings`` (plain Python);
+``effect.py``: the ``ViscousDamping`` effect (a particle stage; Taichi), loaded on first use.
+This package is the worked example of docs/architecture.md: an effect is its package, one
+line in effects/catalog.py and its tests (tests/verification/test_viscous_damping.py).
+"""
+from .settings import SECTION, DampingSettings  # noqa: F401

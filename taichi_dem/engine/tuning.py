@@ -1,0 +1,39 @@
+"""The engine's tuning constants, in one place: each was chosen by a measurement recorded in
+BENCHMARKS.md (the section named beside it), and none changes a result beyond round-off -
+they pick loop modes, chunk sizes and array growth, not physics. The engine modules import
+them by name (tests and bench/workers_ab.py set them on engine.stepper)."""
+
+# Below this many particles a CPU runs every loop of the step on one thread (Engine.serial):
+# dispatching one parallel loop to Taichi's thread pool costs ~100 us here, two threads save
+# ~40 % of the physics. Break-even ~10,000 particles for the chute, ~3,000 for the cooler;
+# 5,000 is within ~15 % of the better mode for both. BENCHMARKS.md "Cost curve" (issue 14),
+# bench/launch_cost.py.
+PARALLEL_FROM = 5000
+
+# The worker threads' particle stage claims chunks of at least WORKER_CHUNK particles, at most
+# WORKER_CHUNKS claims per worker and stage (a claim is an atomic on a line both workers hit;
+# a particle ~14 ns). BENCHMARKS.md "The rebuild on the workers ... (stop 20)".
+WORKER_CHUNK = 128
+WORKER_CHUNKS = 16
+# True: in the pair stage each worker adds partners' shares to a copy of the sums of its own
+# (1.24 - 1.27x the chunk-claiming pair stage at 32k, BENCHMARKS.md stop 18); False: the pair
+# stage claims chunks and stores shares at the entries, as under [mobility] (tests, bench A/B).
+WORKER_COPIES = True
+# A barrier wait this long (spins, ~0.5 - 1 ms), plus STALL_SPINS_PER_PARTICLE per particle,
+# means a worker lost its core (the runs then give way to the parallel kernels); at 128k a fixed
+# 20,000 counted 16 % of a lone run's waits. BENCHMARKS.md stop 18.
+STALL_SPINS = 20_000
+STALL_SPINS_PER_PARTICLE = 0.5
+# the start-up check that the workers run at once: give up after this many spins
+PROBE_SPINS = 300_000_000
+
+# Lists that outgrow their arrays (neighbour rows, mesh candidates, pair entries) are
+# reallocated at this factor: every reallocation recompiles the kernels that read them (~0.3 -
+# 1 s), so a filling scene should reallocate a few times, not at every step of its hold-up.
+LIST_GROWTH = 1.5
+
+# The gas-gap conduction is tabulated per pair of particle kinds (material, radius) when a scene
+# has at most this many kinds (the kernels unroll a lookup over them); beyond, or with radii
+# from a distribution, each contact integrates (Gauss-Legendre). BENCHMARKS.md "What gas-gap
+# conduction costs" (issue 10 item 8).
+MOST_KINDS = 8
