@@ -101,12 +101,49 @@ class GridSpec:
         self.span = tuple(float(s) for s in span)
         self.n_cells = int(np.prod(self.dims))
 
+    def make_cell_arithmetic(self, dims=None):
+        """The one place cells are numbered (z fastest) and stepped across periodic faces:
+        ti.funcs ``number(v)`` (integer coordinates -> the cell's number), ``coordinates(c)``
+        (number -> coordinates) and ``neighbour(v, offset)`` (offset 0..26 of the 3 x 3 x 3
+        block around v -> (the neighbour's number, inside: 0 beyond a closed face), wrapped
+        on periodic axes). ``dims``: cells per axis of a coarser grid over the same domain
+        and periodic axes (the mobility cells), default this grid's. (The neighbour search
+        unrolls its own stencil, with thin periodic axes handled: Broadphase.)"""
+        d = tuple(int(x) for x in (self.dims if dims is None else dims))
+        periodic = self.periodic
+
+        @ti.func
+        def number(v):
+            return (v[0] * d[1] + v[1]) * d[2] + v[2]
+
+        @ti.func
+        def coordinates(c):
+            return ti.Vector([c // (d[1] * d[2]), (c // d[2]) % d[1], c % d[2]])
+
+        @ti.func
+        def neighbour(v, offset):
+            nb = v + ti.Vector([offset // 9 - 1, (offset // 3) % 3 - 1, offset % 3 - 1])
+            inside = True
+            for k in ti.static(range(3)):
+                if ti.static(periodic[k]):
+                    # one step at most: the wrap by a compare, as (nb + d) % d
+                    if nb[k] < 0:
+                        nb[k] += d[k]
+                    elif nb[k] >= d[k]:
+                        nb[k] -= d[k]
+                elif nb[k] < 0 or nb[k] >= d[k]:
+                    inside = False
+            return number(nb), inside
+
+        return number, coordinates, neighbour
+
     def make_cell_of(self):
         """ti.funcs position (m) -> the cell's integer coordinates (a vector), and position ->
         the cell's number (z fastest). Positions outside the grid go to its border cells."""
         lo = ti.Vector(list(self.lo))
         inv_cell = ti.Vector([1.0 / c for c in self.cell_size])
         dims = ti.Vector(list(self.dims))
+        number, _, _ = self.make_cell_arithmetic()
 
         @ti.func
         def cell_coordinates(p):
@@ -115,8 +152,7 @@ class GridSpec:
 
         @ti.func
         def cell_of(p):
-            c = cell_coordinates(p)
-            return (c[0] * dims[1] + c[1]) * dims[2] + c[2]
+            return number(cell_coordinates(p))
         return cell_coordinates, cell_of
 
     def make_minimum_image(self):

@@ -89,8 +89,6 @@ class Drag(Effect):
         s = ctx.state
         g = ctx.grid
         d = self.drag
-        dims = ti.Vector(list(g.dims))
-        periodic = g.periodic
         cell_volume = float(g.cell_size[0] * g.cell_size[1] * g.cell_size[2])
         cell_solid = self.cell_solid
         force_field = self.force
@@ -98,25 +96,17 @@ class Drag(Effect):
         rho, mu = d.density, d.viscosity
         di_felice = d.model == "di_felice"
 
+        _, coordinates, neighbour = g.make_cell_arithmetic()
+
         @ti.func
         def voidage(i):
-            c = s.cell[i]
-            cz = c % dims[2]
-            cy = (c // dims[2]) % dims[1]
-            cx = c // (dims[1] * dims[2])
+            v = coordinates(s.cell[i])
             solid = 0.0 * s.radius[i]
             cells = 0
             for offset in range(27):
-                nb = ti.Vector([cx + offset // 9 - 1, cy + (offset // 3) % 3 - 1,
-                                cz + offset % 3 - 1])
-                inside = True
-                for k in ti.static(range(3)):
-                    if ti.static(periodic[k]):
-                        nb[k] = (nb[k] + dims[k]) % dims[k]
-                    elif nb[k] < 0 or nb[k] >= dims[k]:
-                        inside = False
+                nb, inside = neighbour(v, offset)
                 if inside:
-                    solid += cell_solid[(nb[0] * dims[1] + nb[1]) * dims[2] + nb[2]]
+                    solid += cell_solid[nb]
                     cells += 1
             return ti.min(ti.max(1.0 - solid / (cells * ti.static(cell_volume)), 0.1), 1.0)
 

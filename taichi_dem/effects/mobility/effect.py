@@ -222,7 +222,6 @@ class Mobility(Effect):
         cell_start = ctx.broadphase.cell_start
         dims = g.dims
         blocks = self.blocks
-        periodic = g.periodic
         nbx, nby, nbz = blocks
         threshold = st.granular_temperature_threshold
         # mean squared acceleration above which a cell is not in equilibrium, (m/s^2)^2
@@ -264,12 +263,14 @@ class Mobility(Effect):
         n_blocks = self.n_blocks
         four_thirds_pi = 4.0 / 3.0 * math.pi
 
+        # cells and mobility cells are numbered and stepped by the grid (GridSpec)
+        cell_number, cell_coordinates, _ = g.make_cell_arithmetic()
+        _, block_coordinates, neighbour_block = g.make_cell_arithmetic(blocks)
+
         @ti.func
         def block_of_cell(c):
-            cz = c % dims[2]
-            cy = (c // dims[2]) % dims[1]
-            cx = c // (dims[1] * dims[2])
-            return ((cx * nbx // dims[0]) * nby + cy * nby // dims[1]) * nbz + cz * nbz // dims[2]
+            v = cell_coordinates(c)
+            return ((v[0] * nbx // dims[0]) * nby + v[1] * nby // dims[1]) * nbz + v[2] * nbz // dims[2]
 
         @ti.func
         def first_cell(b, n, d):
@@ -281,9 +282,8 @@ class Mobility(Effect):
                 counts[k] = 0
             ti.loop_config(serialize=serial_loops)
             for b in range(n_blocks):
-                bz = b % nbz
-                by = (b // nbz) % nby
-                bx = b // (nby * nbz)
+                v = block_coordinates(b)
+                bx, by, bz = v[0], v[1], v[2]
                 number = 0
                 velocity_sum = ti.Vector([0.0, 0.0, 0.0])
                 solid = 0.0
@@ -292,7 +292,7 @@ class Mobility(Effect):
                 for cx in range(first_cell(bx, nbx, dims[0]), first_cell(bx + 1, nbx, dims[0])):
                     for cy in range(first_cell(by, nby, dims[1]), first_cell(by + 1, nby, dims[1])):
                         for cz in range(first_cell(bz, nbz, dims[2]), first_cell(bz + 1, nbz, dims[2])):
-                            c = (cx * dims[1] + cy) * dims[2] + cz
+                            c = cell_number(ti.Vector([cx, cy, cz]))
                             for i in range(cell_start[c], cell_start[c + 1]):
                                 number += 1
                                 velocity_sum += s.velocity[i] - rigid_velocity(s.position[i], t)
@@ -312,7 +312,7 @@ class Mobility(Effect):
                 for cx in range(first_cell(bx, nbx, dims[0]), first_cell(bx + 1, nbx, dims[0])):
                     for cy in range(first_cell(by, nby, dims[1]), first_cell(by + 1, nby, dims[1])):
                         for cz in range(first_cell(bz, nbz, dims[2]), first_cell(bz + 1, nbz, dims[2])):
-                            c = (cx * dims[1] + cy) * dims[2] + cz
+                            c = cell_number(ti.Vector([cx, cy, cz]))
                             for i in range(cell_start[c], cell_start[c + 1]):
                                 u = s.velocity[i] - rigid_velocity(s.position[i], t) - mean
                                 fluctuation += u.dot(u)
@@ -328,9 +328,7 @@ class Mobility(Effect):
                         flag[b] = 1
             ti.loop_config(serialize=serial_loops)
             for b in range(n_blocks):
-                bz = b % nbz
-                by = (b // nbz) % nby
-                bx = b // (nby * nbz)
+                v = block_coordinates(b)
                 state = INACTIVE
                 if count[b] == 0:
                     state = EMPTY
@@ -339,19 +337,17 @@ class Mobility(Effect):
                     state = MOBILE
                 else:
                     for offset in range(27):
-                        nb, inside = neighbour(bx, by, bz, offset)
+                        nb, inside = neighbour_block(v, offset)
                         if inside and count[nb] == 0 and beyond[nb] == 0:
                             state = MOBILE
                 mobile[b] = state
             ti.loop_config(serialize=serial_loops)
             for b in range(n_blocks):
-                bz = b % nbz
-                by = (b // nbz) % nby
-                bx = b // (nby * nbz)
+                v = block_coordinates(b)
                 state = mobile[b]
                 if state == INACTIVE:
                     for offset in range(27):
-                        nb, inside = neighbour(bx, by, bz, offset)
+                        nb, inside = neighbour_block(v, offset)
                         if inside and mobile[nb] == MOBILE:
                             state = ACTIVE
                 status[b] = state
@@ -370,17 +366,6 @@ class Mobility(Effect):
                     ti.atomic_add(counts[0], 1)
                 active[i] = a
 
-        @ti.func
-        def neighbour(bx, by, bz, offset):
-            step = ti.Vector([offset // 9 - 1, (offset // 3) % 3 - 1, offset % 3 - 1])
-            cell = ti.Vector([bx, by, bz]) + step
-            inside = True
-            for k in ti.static(range(3)):
-                if ti.static(periodic[k]):
-                    cell[k] = (cell[k] + blocks[k]) % blocks[k]
-                elif cell[k] < 0 or cell[k] >= blocks[k]:
-                    inside = False
-            return (cell[0] * nby + cell[1]) * nbz + cell[2], inside
 
         rigid_spin = self.make_rigid_spin(ctx)
         self._update = ctx.serial_switch(update)
