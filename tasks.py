@@ -47,7 +47,10 @@ def main(argv):
             # parallel mode's launches (the same results bit for bit) except where
             # tests/unit/test_loop_mode.py asks for the threads
             os.environ.setdefault("TAICHI_DEM_WORKERS", "0")
-            run(PY, "-m", "pytest", "-q", "-n", "auto", "--dist", "loadfile", *argv[2:])
+            # --no-loadscope-reorder: hand the files out in the collection order, which
+            # tests/conftest.py makes slowest first (xdist's default goes by test count)
+            run(PY, "-m", "pytest", "-q", "-n", "auto", "--dist", "loadfile",
+                "--no-loadscope-reorder", *argv[2:])
         else:
             print(__doc__)
             return 2

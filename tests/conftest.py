@@ -141,3 +141,118 @@ def pairs_within(sim, cutoff_extra: float) -> set:
     close = np.linalg.norm(d, axis=2) < r[:, None] + r[None, :] + cutoff_extra
     i, j = np.nonzero(close & (ids[:, None] < ids[None, :]))
     return {(int(ids[a]), int(ids[b])) for a, b in zip(i, j)}
+
+
+# ------------------------------------------------------------------ scheduling (tasks.py test)
+# The suite runs on two pytest-xdist workers, each test file on one worker (--dist loadfile,
+# so module fixtures run once). Two things keep both cores busy to the end:
+#
+# 1. Files go out slowest first (longest-processing-time order, --no-loadscope-reorder in
+#    tasks.py keeps this order): a long file handed out last would leave the other worker
+#    idle for its whole duration. SLOW_FILES lists the files that take over ~20 s (seconds
+#    measured on a two-core machine in a two-worker run, 2026-12-03); the rest keep their
+#    collection order after them. Only the order of the files changes, never a test.
+# 2. Tests marked ``two_cores`` (the engine's own worker threads: two threads meeting at spin
+#    barriers) run while the other pytest worker waits between its tests: a barrier whose
+#    partner thread has lost its core spins until the OS preempts it, which made those tests
+#    ten times slower with another process on the second core. The gate: a ``two_cores``
+#    test takes an exclusive lock, every other test a shared one (both through a gate lock,
+#    so that a waiting exclusive request is served before new shared ones).
+SLOW_FILES = {
+    "tests/unit/test_loop_mode.py": 430,
+    "tests/stability/test_periodic_slices.py": 380,
+    "tests/unit/test_sweep_runs.py": 340,
+    "tests/verification/test_coarse_grained_wall.py": 230,
+    "tests/verification/test_drum_wall_heat.py": 230,
+    "tests/verification/test_mesh_contacts.py": 185,
+    "tests/regression/test_cooler.py": 175,
+    "tests/unit/test_mobility.py": 165,
+    "tests/unit/test_plots.py": 160,
+    "tests/verification/test_process.py": 160,
+    "tests/unit/test_checkpoint_cli.py": 150,
+    "tests/stability/test_far_drum.py": 140,
+    "tests/verification/test_energy.py": 100,
+    "tests/unit/test_checkpoint.py": 100,
+    "tests/unit/test_neighbour_search.py": 85,
+    "tests/verification/test_thermal.py": 80,
+    "tests/unit/test_engine_surface.py": 75,
+    "tests/regression/test_hopper_beverloo.py": 75,
+    "tests/verification/test_chung_ooi.py": 65,
+    "tests/verification/test_resume.py": 60,
+    "tests/verification/test_thermal_gas.py": 60,
+    "tests/regression/test_angle_of_repose.py": 57,
+    "tests/regression/test_hard_cases.py": 55,
+    "tests/stability/test_thin_paddle.py": 51,
+    "tests/unit/test_rerun.py": 48,
+    "tests/verification/test_gas_gap_table.py": 32,
+    "tests/verification/test_rolling_friction.py": 30,
+}
+
+
+# Before them: the file with the ``two_cores`` tests, those tests first, on one worker while
+# the other starts on the fuzz corpus (hundreds of tests of milliseconds each), so that the
+# exclusive hold waits milliseconds for the other worker's test in progress, not minutes.
+FIRST_FILES = ["tests/unit/test_loop_mode.py", "tests/fuzz/test_fuzz_scenes.py"]
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """The files in the order above; within a file the tests keep their order but for the
+    ``two_cores`` ones, which go first."""
+    def rank(item):
+        path = item.nodeid.split("::", 1)[0]
+        first = FIRST_FILES.index(path) if path in FIRST_FILES else len(FIRST_FILES)
+        return first, -SLOW_FILES.get(path, 0), item.get_closest_marker("two_cores") is None
+    items.sort(key=rank)            # (a stable sort: the rest keep their order)
+
+
+class _CoreGate:
+    """Shared (most tests) or exclusive (``two_cores`` tests) hold on the cores, across the
+    pytest-xdist workers of one run (flock on files named by the run's id)."""
+
+    def __init__(self, run_id: str):
+        import tempfile
+        base = Path(tempfile.gettempdir()) / f"taichi-dem-cores-{run_id}"
+        self.gate = open(f"{base}.gate", "a+")
+        self.hold = open(f"{base}.hold", "a+")
+
+    def acquire(self, exclusive: bool) -> None:
+        import fcntl
+        fcntl.flock(self.gate, fcntl.LOCK_EX)
+        try:
+            fcntl.flock(self.hold, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        finally:
+            if not exclusive:
+                fcntl.flock(self.gate, fcntl.LOCK_UN)
+
+    def release(self, exclusive: bool) -> None:
+        import fcntl
+        fcntl.flock(self.hold, fcntl.LOCK_UN)
+        if exclusive:
+            fcntl.flock(self.gate, fcntl.LOCK_UN)
+
+
+_gate: list = []
+
+
+def _core_gate():
+    import os
+    run_id = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+    if not run_id or os.name != "posix":
+        return None                 # one process: nothing to share the cores with
+    if not _gate:
+        _gate.append(_CoreGate(run_id))
+    return _gate[0]
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    gate = _core_gate()
+    if gate is None:
+        yield
+        return
+    exclusive = item.get_closest_marker("two_cores") is not None
+    gate.acquire(exclusive)
+    try:
+        yield
+    finally:
+        gate.release(exclusive)

@@ -94,8 +94,15 @@ def test_runs_of_steps_equal_parallel_steps_on_planes():
         assert np.max(np.abs(parallel["series"][name])) > 0.0, name     # the floor was loaded
 
 
-needs_two_cores = pytest.mark.skipif(
+_skip_below_two_cores = pytest.mark.skipif(
     len(os.sched_getaffinity(0)) < 2, reason="the worker threads need two cores")
+
+
+def needs_two_cores(test):
+    """Skipped below two cores; marked ``two_cores``, which in a two-worker pytest run makes
+    the other worker wait between its tests while this one runs (tests/conftest.py: a spin
+    barrier whose partner thread has lost its core waits for the OS to preempt it)."""
+    return pytest.mark.two_cores(_skip_below_two_cores(test))
 
 
 @pytest.fixture(autouse=True)
