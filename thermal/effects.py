@@ -27,7 +27,7 @@ from taichi_dem.effects.base import Effect
 from taichi_dem.errors import DivergenceError
 from taichi_dem.effects.regions import region_test
 from taichi_dem.engine.precision import make_compensated_add
-from taichi_dem.engine.tuning import MOST_KINDS
+from taichi_dem.engine.tuning import MOST_SPECIES
 
 from . import coarse_grained as coarse
 from . import convection as gas_convection
@@ -129,12 +129,12 @@ class _GasGap(Effect):
     margin), the minimum gap (m), the model and, for the series model, the k_g/k_s table.
 
     In the step the gas-gap integral is looked up (gas_gap.py "tables"): one table per pair of
-    particle kinds (``ctx.species``: (material index, radius m) of each kind the scene holds
-    or inserts), or per kind against a wall, tabulated at set-up. Without a finite set of kinds
+    particle species (``ctx.species``: (material index, radius m) of each species the scene
+    holds or inserts), or per species against a wall, tabulated at set-up. Without a finite set
     (radii from a distribution) every contact integrates (Gauss-Legendre, as in the tests)."""
 
     stage = "contact"
-    MOST_KINDS = MOST_KINDS       # (engine/tuning.py)
+    MOST_SPECIES = MOST_SPECIES       # (engine/tuning.py)
 
     def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance",
                  porosity=0.4, coarse_materials=False):
@@ -148,7 +148,7 @@ class _GasGap(Effect):
         self.tables = ("gas_over_solid",) if self.solid else ()
         if self.skip_coarse:
             self.tables = self.tables + ("coarse_alpha_ws",)
-        self.kinds_tabulated = None     # the species the tables are for (None: no tables)
+        self.species_tabulated = None     # the species the tables are for (None: no tables)
 
     def table_values(self, scene, tables):
         if not self.solid:
@@ -156,13 +156,13 @@ class _GasGap(Effect):
         return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
 
     def _tabulate(self, ctx) -> bool:
-        kinds = getattr(ctx, "species", None)
-        return kinds is not None and 0 < len(kinds) <= self.MOST_KINDS
+        species = getattr(ctx, "species", None)
+        return species is not None and 0 < len(species) <= self.MOST_SPECIES
 
     def _allocate_tables(self, ctx, tree, prefix, shape):
         """Fields for the tables (shape + nodes) and their ranges (shape + 3: s_lo, s_hi,
         nodes per unit ln(1 + s/S))."""
-        self.kinds_tabulated = ctx.species
+        self.species_tabulated = ctx.species
         self.table = tree.add(prefix + "_table", ctx.real, shape + (gas_gap.TABLE_NODES,))
         self.table_range = tree.add(prefix + "_range", ctx.real, shape + (3,))
 
@@ -172,20 +172,20 @@ class _GasGap(Effect):
             return None
         return ctx.table["gas_over_solid"].to_numpy()[:, 0].astype(np.float64)
 
-    def kind_func(self):
+    def species_func(self):
         """ti.func (material, radius) -> the kind's index in the tables, -1 if none."""
-        kinds = self.kinds_tabulated
+        species = self.species_tabulated
 
         @ti.func
-        def kind_of(material, radius):
+        def species_of(material, radius):
             k = -1
-            for q in ti.static(range(len(kinds))):
-                if material == ti.static(kinds[q][0]) and ti.abs(
-                        radius - ti.static(kinds[q][1])) <= ti.static(1e-5 * kinds[q][1]):
+            for q in ti.static(range(len(species))):
+                if material == ti.static(species[q][0]) and ti.abs(
+                        radius - ti.static(species[q][1])) <= ti.static(1e-5 * species[q][1]):
                     k = q
             return k
 
-        return kind_of
+        return species_of
 
 
 class GasGapWall(_GasGap):
@@ -207,12 +207,12 @@ class GasGapWall(_GasGap):
             self._allocate_tables(ctx, tree, "gas_gap_wall", (len(ctx.species),))
 
     def upload(self, ctx):
-        if self.kinds_tabulated is None:
+        if self.species_tabulated is None:
             return
         _, lens, min_gap = self.parameters
         ratio = self._ratios(ctx)
         values, ranges = [], []
-        for material, radius in self.kinds_tabulated:
+        for material, radius in self.species_tabulated:
             values.append(gas_gap.plane_table(radius, lens, min_gap, ratio[material],
                                               self.model, self.porosity))
             ranges.append(gas_gap.table_range(radius, radius, lens, min_gap))
@@ -226,8 +226,8 @@ class GasGapWall(_GasGap):
         voronoi = self.model == "voronoi"
         porosity = self.porosity
         ratio = ctx.table["gas_over_solid"] if solid else None
-        tabulated = self.kinds_tabulated is not None
-        kind_of = self.kind_func() if tabulated else None
+        tabulated = self.species_tabulated is not None
+        species_of = self.species_func() if tabulated else None
         table, table_range = (self.table, self.table_range) if tabulated else (None, None)
         last = gas_gap.TABLE_NODES
 
@@ -242,7 +242,7 @@ class GasGapWall(_GasGap):
                 integrate = True
                 value = 0.0 * distance
                 if ti.static(tabulated):
-                    k = kind_of(c.material_i, c.radius_i)
+                    k = species_of(c.material_i, c.radius_i)
                     if k >= 0:
                         index, fraction = gas_gap.table_position(
                             -c.normal_overlap, table_range[k, 0], table_range[k, 1],
@@ -286,17 +286,17 @@ class GasGapPair(_GasGap):
             self._allocate_tables(ctx, tree, "gas_gap_pair", (k, k))
 
     def upload(self, ctx):
-        if self.kinds_tabulated is None:
+        if self.species_tabulated is None:
             return
         _, lens, min_gap = self.parameters
         ratio = self._ratios(ctx)
-        kinds = self.kinds_tabulated
-        n = len(kinds)
+        species = self.species_tabulated
+        n = len(species)
         values = np.zeros((n, n, gas_gap.TABLE_NODES))
         ranges = np.zeros((n, n, 3))
         for a in range(n):
             for b in range(a, n):
-                (ma, ra), (mb, rb) = kinds[a], kinds[b]
+                (ma, ra), (mb, rb) = species[a], species[b]
                 if ratio is None:
                     v = gas_gap.pair_table(ra, rb, lens, min_gap, "isothermal")
                 else:
@@ -315,8 +315,8 @@ class GasGapPair(_GasGap):
         voronoi = self.model == "voronoi"
         porosity = self.porosity
         ratio = ctx.table["gas_over_solid"] if solid else None
-        tabulated = self.kinds_tabulated is not None
-        kind_of = self.kind_func() if tabulated else None
+        tabulated = self.species_tabulated is not None
+        species_of = self.species_func() if tabulated else None
         table, table_range = (self.table, self.table_range) if tabulated else (None, None)
         last = gas_gap.TABLE_NODES
 
@@ -326,8 +326,8 @@ class GasGapPair(_GasGap):
             integrate = True
             value = 0.0 * distance
             if ti.static(tabulated):
-                a = kind_of(c.material_i, c.radius_i)
-                b = kind_of(c.material_j, c.radius_j)
+                a = species_of(c.material_i, c.radius_i)
+                b = species_of(c.material_j, c.radius_j)
                 if a >= 0 and b >= 0:
                     index, fraction = gas_gap.table_position(
                         -c.normal_overlap, table_range[a, b, 0], table_range[a, b, 1],

@@ -53,7 +53,8 @@ from .workers import WORKER_TASK, make_barrier
 
 # the loop modes' and workers' tuning constants (chosen in BENCHMARKS.md; see tuning.py)
 from .tuning import (PARALLEL_FROM, PROBE_SPINS, STALL_SPINS, STALL_SPINS_PER_PARTICLE,  # noqa: E402
-                     WORKER_CHUNK, WORKER_CHUNKS, WORKER_COPIES)
+                     WORKER_CHUNK, WORKER_CHUNKS, WORKER_COPIES, WORKER_STALL_LIMIT,
+                     WORKER_STALL_WINDOW, WORKER_STALLED_WINDOWS)
 _probe_result: dict = {}     # per worker count; "gave way": see _count_stalls
 
 
@@ -118,8 +119,8 @@ class Engine:
                  max_radius: float, dt: float, parallel_from: "int | None" = None,
                  species: "tuple | None" = None):
         self.scene = scene
-        # the kinds of particle, ((material index, radius m), ...) or None (radii from a
-        # distribution): what per-kind tables (the gas gap's) are built for
+        # the species of particle, ((material index, radius m), ...) or None (radii from a
+        # distribution): what per-species tables (the gas gap's) are built for
         self.species = species
         # the loop mode of every kernel (serial_switch); updated with the particle count
         self.threads = backend.cpu_threads()
@@ -1147,16 +1148,10 @@ class Engine:
             self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
 
     # the stalled share of barrier waits, judged over windows of WORKER_STALL_WINDOW waits, at
-    # which the workers give way to the parallel kernels (None: never, for tests). Measured on
-    # this noisy 2-core VM with the workers' fixed ranges in the pair stage (2026-12-03): alone
-    # 0.9 - 3 % of the waits stall (the hypervisor takes a core now and then; 32k chute 62 -
-    # 125 of 4,120 - 4,200), 5.4 % in a slow phase of the host, the first few hundred waits
-    # after a start up to 3 %, and 10 - 16 % at 128k in a noisy phase that passed (1.2 % an
-    # hour later); with a busy process beside them 5 - 16 % (8k chute, 4.4 - 9.2 M
-    # particle-steps/s against 20 - 26 alone) and 36 - 57 % (32k, 1.3 - 6.4 M/s)
-    worker_stall_limit: "float | None" = 0.08
-    WORKER_STALL_WINDOW = 2000
-    WORKER_STALLED_WINDOWS = 2
+    # which the workers give way to the parallel kernels (None: never, for tests; tuning.py)
+    worker_stall_limit: "float | None" = WORKER_STALL_LIMIT
+    WORKER_STALL_WINDOW = WORKER_STALL_WINDOW
+    WORKER_STALLED_WINDOWS = WORKER_STALLED_WINDOWS
 
     def _count_stalls(self, stalls: int, barriers: int):
         """Book a run on the workers: ``barriers`` waits of which ``stalls`` stalled. When more

@@ -26,6 +26,13 @@ STALL_SPINS = 20_000
 STALL_SPINS_PER_PARTICLE = 0.5
 # the start-up check that the workers run at once: give up after this many spins
 PROBE_SPINS = 300_000_000
+# When more than WORKER_STALL_LIMIT of the barrier waits stalled in WORKER_STALLED_WINDOWS
+# windows of WORKER_STALL_WINDOW waits in a row, the threads share the cores with other work
+# and the engine goes on with the parallel kernels: alone, 1 - 5 % of the waits stall here;
+# beside a busy process 5 - 57 %. BENCHMARKS.md "Tuning constants: the figures that chose them".
+WORKER_STALL_LIMIT = 0.08
+WORKER_STALL_WINDOW = 2000
+WORKER_STALLED_WINDOWS = 2
 
 # Lists that outgrow their arrays (neighbour rows, mesh candidates, pair entries) are
 # reallocated at this factor: every reallocation recompiles the kernels that read them (~0.3 -
@@ -36,4 +43,4 @@ LIST_GROWTH = 1.5
 # has at most this many kinds (the kernels unroll a lookup over them); beyond, or with radii
 # from a distribution, each contact integrates (Gauss-Legendre). BENCHMARKS.md "What gas-gap
 # conduction costs" (issue 10 item 8).
-MOST_KINDS = 8
+MOST_SPECIES = 8

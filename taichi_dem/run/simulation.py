@@ -22,7 +22,7 @@ from ..effects import enabled_effects
 from ..effects.base import Effect
 from ..engine import backend
 from ..engine.state import SPHERE_INERTIA
-from ..engine.tuning import MOST_KINDS
+from ..engine.tuning import MOST_SPECIES
 from ..errors import DivergenceError, SceneError, StaleSimulationError
 from ..scene.loader import load_scene, parse_scene
 from ..scene.model import Scene
@@ -50,17 +50,17 @@ def _sizes_to_expect(scene: Scene, placed, names):
             np.concatenate(speeds), np.concatenate(fixed))
 
 
-def _particle_kinds(scene: Scene, placed, names, most: int = MOST_KINDS):
-    """The kinds of particle the scene holds or inserts: ((material index, radius m), ...)
+def _particle_species(scene: Scene, placed, names, most: int = MOST_SPECIES):
+    """The species of particle the scene holds or inserts: ((material index, radius m), ...)
     sorted, or None when there are more than ``most`` or a factory samples its radii from a
-    distribution (engine tables per kind: the gas gap's)."""
-    kinds = set()
+    distribution (engine tables per species: the gas gap's)."""
+    species = set()
     if len(placed.radius):
         rows = np.unique(np.column_stack([np.asarray(placed.material, np.float64),
                                           np.asarray(placed.radius, np.float64)]), axis=0)
         if len(rows) > most:
             return None
-        kinds.update((int(m), float(r)) for m, r in rows)
+        species.update((int(m), float(r)) for m, r in rows)
     for f in scene.factories:
         if f.sizes:
             radii = [r for r, _ in f.sizes]
@@ -70,10 +70,10 @@ def _particle_kinds(scene: Scene, placed, names, most: int = MOST_KINDS):
             radii = [f.radius.mean]
         else:
             radii = [f.sheet.radius]
-        kinds.update((names.index(f.material), float(r)) for r in radii)
-    if len(kinds) > most:
+        species.update((names.index(f.material), float(r)) for r in radii)
+    if len(species) > most:
         return None
-    return tuple(sorted(kinds))
+    return tuple(sorted(species))
 
 
 def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
@@ -180,7 +180,7 @@ class Simulation:
 
         self.engine = Engine(scene, self.tables, max(capacity, 1), self.real, self.skin,
                              float(np.max(radii)), self.dt, parallel_from=parallel_from,
-                             species=_particle_kinds(scene, placed, self.tables.names))
+                             species=_particle_species(scene, placed, self.tables.names))
         small = self.engine.grid.too_small_periodic_axes(
             (2.0 + self.engine.pair_margin) * float(np.max(radii)) + self.skin)
         if small:     # (_fit_skin_to_periodic_axes makes this unreachable; kept as a guard)

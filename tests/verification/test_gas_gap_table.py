@@ -84,7 +84,7 @@ def test_the_step_through_the_tables_matches_the_quadrature(tmp_path, monkeypatc
                                                             model):
     distance = relative * 2 * R
     tabulated, _, _, _ = _heat_flows(tmp_path, (R, R), distance, model=model)
-    monkeypatch.setattr(simulation_module, "_particle_kinds", lambda *a, **k: None)
+    monkeypatch.setattr(simulation_module, "_particle_species", lambda *a, **k: None)
     integrated, _, _, _ = _heat_flows(tmp_path, (R, R), distance, model=model)
     print(f"\n  {model} d/2R = {relative}: table {tabulated:.8e} W, quadrature {integrated:.8e} W")
     assert tabulated == pytest.approx(integrated, rel=1e-4)
@@ -95,7 +95,7 @@ def _kinds(text):
     from taichi_dem.setup.placement import place_fills
     from taichi_dem.setup.pair_tables import build_pair_tables
     placed = place_fills(scene, np.random.default_rng(0))
-    return simulation_module._particle_kinds(scene, placed, build_pair_tables(scene).names)
+    return simulation_module._particle_species(scene, placed, build_pair_tables(scene).names)
 
 
 SCENE = """

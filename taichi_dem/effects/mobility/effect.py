@@ -59,20 +59,13 @@ at any threshold; with the reach, 24 - 39 %). That assumes the body encloses the
 shell): a particle centre in a cell wholly beyond the reach (a frame body that is a paddle
 shaft, say) drops the reach for the rest of the run, with a warning.
 
-Defaults (scene/loader.py): the threshold is 1e-5 g d_max, i.e. fluctuations of 0.3 % of
-sqrt(g d): for the seed's 2.24 mm beads 2.2e-7 (m/s)^2. A frozen cell keeps the contact forces
-of the instant it froze, so the threshold decides how far from equilibrium a bed may be when it
-freezes. Measured on the slot hopper (BENCHMARKS.md, 0.4 s of fill and settle, one run each):
-at 5e-3 g d (1.1e-4, the order of Lethe's default 1e-4) the bed froze while it still compacted
-and the floor carried 37 % of its weight; at 1e-4 g d 118 %; at 1e-5 g d 99.9 %; the discharge
-flow was within 0.1 % at 5e-3 g d already, the settled speed-up 5x at both. A flowing region of a
-hopper fluctuates at ~0.1 sqrt(g d) (T_g ~ 1e-3): decades above any of these. Solid fraction
-0.4: below random loose packing (0.55) by a margin that the noise of a 3 d cell (about 30
-particles) does not reach, above a dilute flow's. Without gravity "auto" has no scale and the
-loader asks for a value. ``acceleration_threshold`` (opt-in, m/s^2): also mobile when the rms
-acceleration of a cell exceeds it (a bed that still rings is quiet in velocity but not in
-equilibrium); at 0.05 g the seed's bed (e = 0.94, little damping) was still ringing above it
-after 0.4 s, so it is not on by default.
+Defaults (settings.py): the threshold is 1e-5 g d_max (fluctuations of 0.3 % of sqrt(g d));
+a frozen cell keeps the contact forces of the instant it froze, so the threshold decides how
+far from equilibrium a bed may be when it freezes, and this one let the slot hopper's settled
+floor carry its bed's weight where 100x higher did not (BENCHMARKS.md "Mobility: skipping the
+contacts of particles that do not move"). Solid fraction 0.4: below random loose packing
+(0.55) by a margin the noise of a 3 d cell does not reach. Without gravity "auto" has no
+scale and the loader asks for a value. ``acceleration_threshold`` is opt-in (same section).
 """
 # (no postponed annotations: Taichi reads the kernels' argument types)
 
