@@ -16,6 +16,7 @@ from taichi_dem.errors import SceneError
 from taichi_dem.scene import air
 from taichi_dem.scene.keys import Key, Section, register, type_name
 from taichi_dem.scene.sections.regions import REGION
+from taichi_dem.sensors.series import Series
 
 DRAG_MODELS = ("di_felice", "schiller_naumann")
 GAS_MODELS = ("fixed", "axial_plug_flow")
@@ -27,6 +28,15 @@ GAS_GAP_KEYS = ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap", "gas_
                 "gas_gap_model", "gas_gap_porosity")
 
 _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
+
+# the series the heat effects write besides the sensors' (taichi_dem/sensors/series.py)
+SERIES = (
+    Series("particles/evaporated_mass", "kg", "drying: water evaporated so far"),
+    Series("gas/temperature", "K", "plug flow: the gas leaving each cell"),
+    Series("gas/outlet_temperature", "K", "plug flow: the gas leaving the stream"),
+    Series("gas/heat_flow", "W", "plug flow: from the gas to the particles"),
+    Series("gas/transferred_heat", "J", "plug flow: from the gas to the particles so far"),
+)
 
 GAS = register(Section("thermal.gas", "The gas the particles exchange heat with by convection: "
                        "uniform (\"fixed\") or an axial plug-flow stream", (

@@ -8,6 +8,14 @@ import h5py
 import numpy as np
 
 from .._version import __version__
+from .units import unit_of
+
+
+def _label(ds, name: str) -> None:
+    """A series dataset's ``units`` attribute (SI; "1" for counts and ratios), when declared."""
+    unit = unit_of(name)
+    if unit is not None:
+        ds.attrs["units"] = unit
 
 
 class HDF5Recorder:
@@ -50,8 +58,9 @@ class HDF5Recorder:
             rec.frame_count = max((int(k) + 1 for k in rec.frames), default=0)
         for name, rows in series.items():
             data = np.asarray(rows, dtype=np.float64)
-            rec.series.create_dataset(name, data=data, maxshape=(None,) + data.shape[1:],
-                                      chunks=(256,) + data.shape[1:])
+            ds = rec.series.create_dataset(name, data=data, maxshape=(None,) + data.shape[1:],
+                                           chunks=(256,) + data.shape[1:])
+            _label(ds, name)
         rec.flush()
         return rec
 
@@ -60,9 +69,10 @@ class HDF5Recorder:
         for name, value in values.items():
             value = np.asarray(value, dtype=np.float64)
             if name not in self.series:
-                self.series.create_dataset(name, shape=(0,) + value.shape,
-                                           maxshape=(None,) + value.shape, dtype=np.float64,
-                                           chunks=(256,) + value.shape)
+                ds = self.series.create_dataset(name, shape=(0,) + value.shape,
+                                                maxshape=(None,) + value.shape, dtype=np.float64,
+                                                chunks=(256,) + value.shape)
+                _label(ds, name)
             ds = self.series[name]
             ds.resize(ds.shape[0] + 1, axis=0)
             ds[-1] = value

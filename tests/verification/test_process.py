@@ -189,6 +189,13 @@ def test_outlet_temperature_and_hdf5(tmp_path):
         assert np.array_equal(f["residence/res/id"][:], rec[:, 0].astype(np.int64))
         assert np.allclose(f["residence/res/t_out"][:], rec[:, 2])
         assert "series/outlets/drain/mass" in f and "series/sensors/mid/mass_flow" in f
+        # every series carries its unit (sensors/series.py and the effects' SERIES)
+        names = []
+        f["series"].visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
+        assert len(names) > 15
+        assert all(f["series"][n].attrs.get("units") for n in names), \
+            [n for n in names if not f["series"][n].attrs.get("units")]
+        assert f["series/outlets/drain/mass_flow"].attrs["units"] == "kg/s"
         ids = f[f"frames/{len(f['frames']) - 1}/id"][:]
         assert len(np.unique(ids)) == len(ids)
 

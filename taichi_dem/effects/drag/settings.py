@@ -24,6 +24,12 @@ SECTION = register(Section("gas", "A gas that drags the particles (one-way coupl
 ), owner=__name__))
 
 
+# the series this effect writes (sensors/series.py)
+from ...sensors.series import Series  # noqa: E402
+
+SERIES = (Series("gas/drag_force", "N", "the gas's pull on all particles in the last step"),)
+
+
 @dataclass(frozen=True)
 class DragSettings:
     """Drag from a gas on the particles (effects/drag/effect.py), one-way coupled: ``model``

@@ -1,0 +1,39 @@
+"""The unit of every /series name: the sensors' declarations (sensors/series.py) and the
+effects' (``SERIES`` in their settings modules, effects/catalog.py). Plain Python."""
+from __future__ import annotations
+
+import fnmatch
+
+from ..effects import catalog
+from ..sensors.series import SERIES, Series
+
+
+def declared() -> tuple[Series, ...]:
+    """The sensors' series and every effect's (their settings modules' SERIES)."""
+    out = list(SERIES)
+    for module in (catalog.thermal_settings, catalog.drag_settings, catalog.mobility_settings,
+                   catalog.viscous_damping_settings):
+        out.extend(getattr(module, "SERIES", ()))
+    return tuple(out)
+
+
+def unit_of(name: str) -> str | None:
+    """The unit of the series ``name`` (relative to /series), or None when undeclared."""
+    parts = name.split("/")
+    for s in declared():
+        pattern = s.name.split("/")
+        if len(pattern) == len(parts) and all(fnmatch.fnmatchcase(p, q)
+                                              for p, q in zip(parts, pattern)):
+            return s.unit
+    return None
+
+
+def describe(name: str) -> str | None:
+    """The description of the series ``name``, or None when undeclared."""
+    parts = name.split("/")
+    for s in declared():
+        pattern = s.name.split("/")
+        if len(pattern) == len(parts) and all(fnmatch.fnmatchcase(p, q)
+                                              for p, q in zip(parts, pattern)):
+            return s.description
+    return None

@@ -1,0 +1,66 @@
+"""Every /series name a run can write, with its unit: declared once, by what writes it.
+
+The sensors' and the run's series are declared here; an effect's own series are declared in
+its settings module (``SERIES`` in effects/drag/settings.py, thermal/settings.py), beside its
+scene keys. The results file gives every series dataset a ``units`` attribute from these
+(recorders/units.py gathers the declarations; a name none matches gets none, and
+tests/unit/test_series_units.py fails on it). Plain Python (no Taichi).
+
+A name is a pattern: ``*`` stands for one name segment (a body's, a wall's, a sensor's).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Series:
+    """One series: its name pattern, its SI unit ("1": a count or a ratio) and what it is."""
+    name: str
+    unit: str
+    description: str
+
+
+SERIES = (
+    Series("time", "s", "simulated time of the sample"),
+    Series("thermal_time", "s", "thermal time, thermal.time_scale x the simulated time"),
+    Series("particles/count", "1", "particles alive"),
+    Series("particles/kinetic_energy", "J", "translational and rotational, of the moving ones"),
+    Series("particles/lost", "1", "particles that left the domain so far"),
+    Series("particles/lost_mass", "kg", "mass that left the domain so far"),
+    Series("particles/mass", "kg", "mass inside"),
+    Series("particles/mean_temperature", "K", "mass- and heat-capacity-weighted mean"),
+    Series("particles/mean_moisture", "1", "kg water per kg dry solid, mean"),
+    Series("bodies/*/force", "N", "on the body from the particles"),
+    Series("bodies/*/torque", "N m", "about the body's rotation axis point"),
+    Series("bodies/*/axial_torque", "N m", "the component along its rotation axis"),
+    Series("bodies/*/angular_speed", "rad/s", "its prescribed angular speed"),
+    Series("bodies/*/power", "W", "drive power, -axial_torque x angular_speed"),
+    Series("bodies/*/heat_flow", "W", "into the body (an isothermal body)"),
+    Series("bodies/*/covered_area", "m^2", "the area of its triangles the particles touch"),
+    Series("bodies/*/heat_transfer_coefficient", "W/(m^2 K)", "wall to bed"),
+    Series("walls/*/force", "N", "on the wall from the particles"),
+    Series("walls/*/heat_flow", "W", "into the wall (an isothermal wall)"),
+    Series("sensors/*/mass_flow", "kg/s", "through the sensor's plane over the interval"),
+    Series("sensors/*/crossings", "1", "particles that crossed the plane in the interval"),
+    Series("sensors/*/contact_count", "1", "particles touching the body"),
+    Series("sensors/*/count", "1", "residence records closed in the interval"),
+    Series("sensors/*/mean", "s", "residence time, mean over the interval's records"),
+    Series("sensors/*/median", "s", "residence time, median"),
+    Series("sensors/*/p10", "s", "residence time, 10th percentile"),
+    Series("sensors/*/p90", "s", "residence time, 90th percentile"),
+    Series("factories/*/mass", "kg", "inserted so far"),
+    Series("factories/*/count", "1", "particles inserted so far"),
+    Series("factories/*/behind", "kg", "mass the factory is behind its schedule"),
+    Series("outlets/*/mass", "kg", "removed so far"),
+    Series("outlets/*/count", "1", "particles removed so far"),
+    Series("outlets/*/mass_flow", "kg/s", "removed over the interval"),
+    Series("outlets/*/mean_temperature", "K", "of the particles removed in the interval"),
+    Series("outlets/*/mean_moisture", "1", "of the particles removed in the interval"),
+    Series("thermal/energy_inside", "J", "sum m c T of the particles inside"),
+    Series("thermal/energy_fed", "J", "brought in by the factories so far"),
+    Series("thermal/energy_removed", "J", "taken out by the outlets so far"),
+    Series("thermal/particle_heat_loss", "J", "heat the particles gave off so far"),
+    Series("thermal/wall_heat", "J", "into walls and bodies so far"),
+    Series("thermal/gas_heat", "J", "into the gas so far"),
+)
