@@ -23,6 +23,7 @@ import numpy as np
 import taichi as ti
 
 from ..contacts.geometry import contact_types
+from ..contacts.history import history_members, make_history_io
 from ..contacts.law import has_effects, margin_fraction
 from ..effects.mesh_contact import closest_point_on_triangle
 from ..engine.tuning import LIST_GROWTH
@@ -502,8 +503,13 @@ class MeshContacts:
         m = self
         e = self.e
         real = e.real
-        _, _, History = contact_types(real)
-        epsd = e.rolling_epsd
+        # the history values the enabled effects keep (contacts/history.py), stored per mesh
+        # contact under the names checkpoints know: mesh_history (the tangential spring),
+        # mesh_rolling_history (EPSD's)
+        members = history_members(e.effect_list)
+        _, _, History = contact_types(real, members)
+        stored = {"tangential": m.mesh_history, "rolling": m.rolling_history}
+        mesh_history = make_history_io(History, members, {k: stored[k] for k in members})
         periodic = any(e.grid.periodic)
         heat_loads = self.particle_load_heat is not None
         s = e.state
@@ -581,17 +587,14 @@ class MeshContacts:
             for k in range(start, end):
                 if m.mesh_status[k] == 1:
                     body = m.tri_body[m.mesh_tri[k]]
-                    history = History(tangential=m.mesh_history[k], rolling=vec0)
-                    if ti.static(epsd):
-                        history.rolling = m.rolling_history[k]
+                    history = mesh_history.load(k)
                     if m.mesh_contact[k] == 0:
                         # a contact moving on to a neighbouring triangle keeps its history
                         for o in range(start, end):
                             if (o != k and m.mesh_contact[o] != 0 and m.mesh_status[o] != 1
                                     and m.tri_body[m.mesh_tri[o]] == body):
-                                history.tangential = m.mesh_history[o]
+                                history = mesh_history.take(k, o)
                                 m.mesh_contact[o] = ti.u8(0)
-                                m.mesh_history[o] = vec0
                                 break
                     normal = m.mesh_normal[k]
                     overlap = m.mesh_overlap[k]
@@ -618,15 +621,11 @@ class MeshContacts:
                     # rolling resistance's reaction
                     m.particle_load_torque[i, body] = (m.particle_load_torque[i, body]
                                                        - lever_body.cross(out.force) + out.torque_j)
-                    m.mesh_history[k] = history.tangential
-                    if ti.static(epsd):
-                        m.rolling_history[k] = history.rolling
+                    mesh_history.store(k, history)
                     m.mesh_contact[k] = ti.u8(1)
                 elif m.mesh_contact[k] != 0:
                     m.mesh_contact[k] = ti.u8(0)
-                    m.mesh_history[k] = vec0
-                    if ti.static(epsd):
-                        m.rolling_history[k] = vec0
+                    mesh_history.clear(k)
             if ti.static(near):
                 # near-contact heat: the law on each body's nearest surface point
                 for bb in ti.static(range(nb)):
@@ -636,7 +635,7 @@ class MeshContacts:
                                            inv_mi, inverse_inertia_i, mi, m.body_material[bb],
                                            vec0, vec0, body_temperature - temperature_i, 1)
                         c.particle = i
-                        out, _ = surface_law(c, History(tangential=vec0, rolling=vec0), dt)
+                        out, _ = surface_law(c, mesh_history.empty(), dt)
                         heat += out.heat
                         conductance += out.conductance
                         m.particle_load_heat[i, bb] = m.particle_load_heat[i, bb] - out.heat

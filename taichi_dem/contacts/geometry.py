@@ -21,17 +21,20 @@ Values an enabled effect does not read are eliminated by the compiler.
 """
 import taichi as ti
 
+from .history import make_history_type
+
 from ..effects import rolling
 
 
-def contact_types(real):
+def contact_types(real, history_members=("tangential", "rolling")):
     """(Contact, Response, History) struct types in the simulation's precision.
 
     ``Response``: force on i (N), torques on i and on the partner about their centres (N m),
     heat into i (W), conductance (W/K), and the normal force (N) and normal stiffness (N/m)
-    that later effects (rolling) read. ``History``: the tangential spring (m) and the rolling
-    spring torque (N m) a contact carries from step to step. ``Contact.particle``: particle
-    i's index where a wall or body contact law needs its state (coarse_grained.py), else -1."""
+    that later effects (rolling) read. ``History``: the values a contact carries from step to
+    step, those the enabled effects keep (contacts/history.py: Hertz-Mindlin's tangential
+    spring, m; EPSD's rolling spring, N m). ``Contact.particle``: particle i's index where a
+    wall or body contact law needs its state (coarse_grained.py), else -1."""
     vec3 = ti.types.vector(3, real)
     contact = ti.types.struct(
         normal=vec3, normal_overlap=real, arm_i=real, arm_j=real, v_rel=vec3, w_rel=vec3,
@@ -40,8 +43,7 @@ def contact_types(real):
         material_j=ti.i32, temperature_difference=real, conducts=ti.i32, particle=ti.i32)
     response = ti.types.struct(force=vec3, torque_i=vec3, torque_j=vec3, heat=real,
                                conductance=real, normal_force=real, normal_stiffness=real)
-    history = ti.types.struct(tangential=vec3, rolling=vec3)
-    return contact, response, history
+    return contact, response, make_history_type(real, tuple(history_members))
 
 
 def make_geometry(real, thermal: bool):

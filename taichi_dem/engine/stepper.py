@@ -42,6 +42,7 @@ from . import backend
 from .broadphase import Broadphase, GridSpec
 from .precision import make_compensated_add
 from ..contacts.geometry import contact_types, make_geometry
+from ..contacts.history import history_members, make_history_io
 from ..contacts.law import make_contact_law, margin_fraction
 from ..effects import enabled_effects
 from ..effects.base import EffectContext
@@ -498,17 +499,22 @@ class Engine:
         # the contact geometry of each kind and the contact law composed from the enabled
         # effects (contacts/): the same law runs on pairs, planes and triangles
         _, sphere_surface, sphere_sphere_gap, with_motion = make_geometry(real, self.thermal)
-        _, _, History = contact_types(real)
+        # the history values the enabled effects keep, and one load/store/clear of them per
+        # storage: the neighbour entries and the (particle, plane wall) slots
+        members = history_members(effects)
+        _, _, History = contact_types(real, members)
+        pair_history = make_history_io(History, members,
+                                       {m: getattr(p, m + "_history") for m in members})
         pair_law = make_contact_law(effects, "pair", real, self.context)
         plane_law = make_contact_law(effects, "plane", real, self.context)
         # a pair is handed to the law while its gap is below the margin an effect asks for
         pair_margin = self.pair_margin
-        epsd = self.rolling_epsd
         pair_heat = self.pair_heat
         walls = [(tuple(w.point), tuple(w.normal), self.tables.index(w.material)) for w in self.walls]
         n_walls = len(walls)
-        wall_rolling = s.wall_rolling_history if epsd and n_walls else None
-        has_wall_rolling = wall_rolling is not None
+        wall_history = (make_history_io(History, members,
+                                        {m: getattr(s, "wall_" + m + "_history") for m in members})
+                        if n_walls else None)
         wall_temperature = [w.temperature if (w.temperature is not None and self.wall_conduction)
                             else -1.0 for w in self.walls]
         wall_force = self.wall_force
@@ -645,11 +651,9 @@ class Engine:
                         touching = distance_sq < (ri + rj) * (ri + rj)
                     c = pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
                                      temperature_i)
-                    history = History(tangential=vec0, rolling=vec0)
+                    history = pair_history.empty()
                     if touching:
-                        history.tangential = p.tangential_history[k]
-                        if ti.static(epsd):
-                            history.rolling = p.rolling_history[k]
+                        history = pair_history.load(k)
                     out, history = pair_law(c, history, dt)
                     if ti.static(pair_heat):
                         owned_heat += out.heat
@@ -671,24 +675,18 @@ class Engine:
                         else:
                             p.partner_force[k] = -out.force
                             p.partner_torque[k] = out.torque_j
-                        p.tangential_history[k] = history.tangential
-                        if ti.static(epsd):
-                            p.rolling_history[k] = history.rolling
+                        pair_history.store(k, history)
                         p.contact[k] = ti.u8(1)
                     else:
                         # near, not touching: no force (the gather reads the partner's share
                         # of touching pairs only) and no spring to carry
                         if p.contact[k] == 1:
-                            p.tangential_history[k] = vec0
-                            if ti.static(epsd):
-                                p.rolling_history[k] = vec0
+                            pair_history.clear(k)
                         p.contact[k] = ti.u8(2)
                 elif p.contact[k] != 0:
                     # the contact opened: its history is discarded
                     p.contact[k] = ti.u8(0)
-                    p.tangential_history[k] = vec0
-                    if ti.static(epsd):
-                        p.rolling_history[k] = vec0
+                    pair_history.clear(k)
             s.owned_force[i] = owned_force
             s.owned_torque[i] = owned_torque
             if ti.static(thermal):
@@ -818,9 +816,7 @@ class Engine:
                             ti.static(wall_temperature[w]) - temperature_i,
                             ti.static(1 if isothermal else 0))
                         c.particle = i
-                        history = History(tangential=s.wall_tangential_history[i, w], rolling=vec0)
-                        if ti.static(has_wall_rolling):
-                            history.rolling = wall_rolling[i, w]
+                        history = wall_history.load(ti.Vector([i, w]))
                         out, history = plane_law(c, history, dt)
                         if ti.static(thermal and isothermal):
                             heat += out.heat
@@ -833,11 +829,8 @@ class Engine:
                             if record != 0:
                                 wall_force[w] -= out.force
                         else:
-                            history.tangential = vec0
-                            history.rolling = vec0
-                        s.wall_tangential_history[i, w] = history.tangential
-                        if ti.static(has_wall_rolling):
-                            wall_rolling[i, w] = history.rolling
+                            history = wall_history.empty()     # no spring to carry
+                        wall_history.store(ti.Vector([i, w]), history)
                 if ti.static(has_mesh):
                     if inv_m > 0.0:
                         mesh_force, mesh_torque, mesh_heat, mesh_conductance = mesh_contacts(
