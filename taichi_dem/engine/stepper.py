@@ -39,7 +39,8 @@ import numpy as np
 import taichi as ti
 
 from . import backend
-from .broadphase import Broadphase, GridSpec
+from .broadphase import Broadphase
+from .grid import GridSpec
 from .precision import make_compensated_add
 from ..contacts.geometry import contact_types, make_geometry
 from ..contacts.history import history_members, make_history_io

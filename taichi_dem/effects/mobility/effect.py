@@ -256,7 +256,7 @@ class Mobility(Effect):
         n_blocks = self.n_blocks
         four_thirds_pi = 4.0 / 3.0 * math.pi
 
-        # cells and mobility cells are numbered and stepped by the grid (GridSpec)
+        # cells and mobility cells are numbered and stepped by the grid (engine/grid.py)
         cell_number, cell_coordinates, _ = g.make_cell_arithmetic()
         _, block_coordinates, neighbour_block = g.make_cell_arithmetic(blocks)
 

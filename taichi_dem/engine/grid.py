@@ -1,0 +1,110 @@
+"""The cell grid over the domain, and the one place cells are numbered and stepped across
+periodic faces (``GridSpec``): the neighbour search (broadphase.py), the drag's voidage
+(effects/drag/) and the mobility cells (effects/mobility/) all use it."""
+import math
+
+import numpy as np
+import taichi as ti
+
+MAX_CELLS_PER_PARTICLE = 8      # a sparse domain gets coarser cells instead of millions of empty ones
+MIN_CELLS = 4096
+
+
+class GridSpec:
+    """Cell layout over the domain: cell size >= the largest pair cutoff (2 R_max + skin);
+    periodic axes are tiled exactly by a whole number of cells."""
+
+    def __init__(self, lo, hi, periodic: tuple[str, ...], cutoff: float, capacity: int):
+        self.lo = np.asarray(lo, float)
+        self.hi = np.asarray(hi, float)
+        span = self.hi - self.lo
+        self.periodic = tuple(int(a in periodic) for a in "xyz")
+        size = cutoff
+        while True:
+            dims = []
+            for k in range(3):
+                n = int(math.floor(span[k] / size)) if self.periodic[k] else int(math.ceil(span[k] / size))
+                dims.append(max(n, 1))
+            if np.prod(dims, dtype=np.int64) <= max(MIN_CELLS, MAX_CELLS_PER_PARTICLE * capacity):
+                break
+            size *= 1.25           # a huge, sparse domain: coarser cells, still correct
+        self.dims = tuple(dims)
+        self.cell_size = tuple(float(span[k] / dims[k]) if self.periodic[k] else size
+                               for k in range(3))
+        self.span = tuple(float(s) for s in span)
+        self.n_cells = int(np.prod(self.dims))
+
+    def make_cell_arithmetic(self, dims=None):
+        """The one place cells are numbered (z fastest) and stepped across periodic faces:
+        ti.funcs ``number(v)`` (integer coordinates -> the cell's number), ``coordinates(c)``
+        (number -> coordinates) and ``neighbour(v, offset)`` (offset 0..26 of the 3 x 3 x 3
+        block around v -> (the neighbour's number, inside: 0 beyond a closed face), wrapped
+        on periodic axes). ``dims``: cells per axis of a coarser grid over the same domain
+        and periodic axes (the mobility cells), default this grid's. (The neighbour search
+        unrolls its own stencil, with thin periodic axes handled: Broadphase.)"""
+        d = tuple(int(x) for x in (self.dims if dims is None else dims))
+        periodic = self.periodic
+
+        @ti.func
+        def number(v):
+            return (v[0] * d[1] + v[1]) * d[2] + v[2]
+
+        @ti.func
+        def coordinates(c):
+            return ti.Vector([c // (d[1] * d[2]), (c // d[2]) % d[1], c % d[2]])
+
+        @ti.func
+        def neighbour(v, offset):
+            nb = v + ti.Vector([offset // 9 - 1, (offset // 3) % 3 - 1, offset % 3 - 1])
+            inside = True
+            for k in ti.static(range(3)):
+                if ti.static(periodic[k]):
+                    # one step at most: the wrap by a compare, as (nb + d) % d
+                    if nb[k] < 0:
+                        nb[k] += d[k]
+                    elif nb[k] >= d[k]:
+                        nb[k] -= d[k]
+                elif nb[k] < 0 or nb[k] >= d[k]:
+                    inside = False
+            return number(nb), inside
+
+        return number, coordinates, neighbour
+
+    def make_cell_of(self):
+        """ti.funcs position (m) -> the cell's integer coordinates (a vector), and position ->
+        the cell's number (z fastest). Positions outside the grid go to its border cells."""
+        lo = ti.Vector(list(self.lo))
+        inv_cell = ti.Vector([1.0 / c for c in self.cell_size])
+        dims = ti.Vector(list(self.dims))
+        number, _, _ = self.make_cell_arithmetic()
+
+        @ti.func
+        def cell_coordinates(p):
+            c = ti.cast(ti.floor((p - lo) * inv_cell), ti.i32)
+            return ti.max(ti.min(c, dims - 1), 0)
+
+        @ti.func
+        def cell_of(p):
+            return number(cell_coordinates(p))
+        return cell_coordinates, cell_of
+
+    def make_minimum_image(self):
+        """ti.func d -> the shortest periodic image of the separation vector d (m)."""
+        periodic, span = self.periodic, self.span
+
+        @ti.func
+        def minimum_image(d):
+            for k in ti.static(range(3)):
+                if ti.static(periodic[k]):
+                    # positions are wrapped into the box, so one period at most separates images
+                    if d[k] > 0.5 * span[k]:
+                        d[k] -= span[k]
+                    elif d[k] < -0.5 * span[k]:
+                        d[k] += span[k]
+            return d
+        return minimum_image
+
+    def too_small_periodic_axes(self, cutoff: float) -> list[str]:
+        """Periodic axes shorter than two pair cutoffs (m): there a particle could meet two
+        images of one partner, and the minimum image is no longer the only one in reach."""
+        return [a for k, a in enumerate("xyz") if self.periodic[k] and self.span[k] < 2.0 * cutoff]
