@@ -33,6 +33,11 @@ template argument of every kernel: ``serial_switch``) and ``run_steps`` does sev
 steps - frames, pairs, cells, gather and the next drift - in one launch, until the drift
 flags a rebuild. The physics is the same ti.funcs (``pair_particle``, ``gather_particle``)
 in all.
+
+Why this module is over 800 lines: the step is still one ``Engine`` written for its three
+drivers (per-stage kernels, ``run_steps``, ``run_worker_steps``) with the workers' probe and
+stall counting beside it; issue 30 item 2 splits it into a frozen model, the state and a
+stepper whose step exists once (docs/architecture.md "Not yet declared by the effects").
 """
 
 import numpy as np
