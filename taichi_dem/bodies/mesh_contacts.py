@@ -6,15 +6,15 @@ The bodies' motion comes from the host (kinematics.py: :class:`BodyKinematics`).
 offset) per body, computed on the device from the schedules each step, so the triangles
 themselves never need rewriting; triangles binned into the cell grid (re-binned when a body has
 moved half the skin); per particle a list of candidate triangles within r + skin (rebuilt with
-the particle neighbour list), carrying the tangential history by triangle id.
+the particle neighbour list), carrying the contact history by triangle id.
 
 De-duplication (PHYSICS.md: one contact per flat or convex surface): a particle's overlapping
 triangles of one body are taken deepest first; a further one is dropped when its normal is
 within 30 degrees of an accepted one or its closest point does not lie in front of the
 accepted contact's plane (a neighbouring triangle of the same flat or convex surface,
 touched at its edge or vertex). A concave corner (a flight meeting the shell) keeps both
-faces. When a contact moves on to a neighbouring triangle, it takes the tangential history
-of the contact it replaces.
+faces. When a contact moves on to a neighbouring triangle, it takes the history (every
+value, contacts/history.py) of the contact it replaces.
 
 Why this module is over 800 lines: the triangle binning, the candidate rows carried across
 rebuilds and the per-particle contact detection share the mesh's device arrays; they move
