@@ -117,7 +117,7 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
         **_P, effect="gas_gap"),
     Key("gas_gap_lens", "quantity", "the fluid lens's thickness, in particle radii",
         unit="dimensionless", default=0.2, minimum=0.0, maximum=1.0, exclusive_minimum=True,
-        why="a lens at most one radius thick", effect="gas_gap"),
+        why="at most 1: a lens one radius thick", effect="gas_gap"),
     Key("gas_gap_min_gap", "quantity", "gaps narrower than this count as it (the roughness "
         "scale)", unit="length", default=1.0e-6, **_P, effect="gas_gap"),
     Key("gas_gap_pairs", "boolean", "the gas gap between particles too (with conduction on)",
