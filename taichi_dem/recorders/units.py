@@ -17,23 +17,24 @@ def declared() -> tuple[Series, ...]:
     return tuple(out)
 
 
-def unit_of(name: str) -> str | None:
-    """The unit of the series ``name`` (relative to /series), or None when undeclared."""
+def declaration(name: str) -> Series | None:
+    """The declared Series the name ``name`` (relative to /series) matches, or None."""
     parts = name.split("/")
     for s in declared():
         pattern = s.name.split("/")
         if len(pattern) == len(parts) and all(fnmatch.fnmatchcase(p, q)
                                               for p, q in zip(parts, pattern)):
-            return s.unit
+            return s
     return None
+
+
+def unit_of(name: str) -> str | None:
+    """The unit of the series ``name``, or None when undeclared."""
+    d = declaration(name)
+    return d.unit if d is not None else None
 
 
 def describe(name: str) -> str | None:
     """The description of the series ``name``, or None when undeclared."""
-    parts = name.split("/")
-    for s in declared():
-        pattern = s.name.split("/")
-        if len(pattern) == len(parts) and all(fnmatch.fnmatchcase(p, q)
-                                              for p, q in zip(parts, pattern)):
-            return s.description
-    return None
+    d = declaration(name)
+    return d.description if d is not None else None
