@@ -308,10 +308,3 @@ def registered() -> dict[str, Section]:
 def effect_sections() -> dict[str, Section]:
     """The registered top-level sections that an effect reads itself (``reader``)."""
     return {p: s for p, s in _REGISTRY.items() if s.reader is not None}
-
-
-def reader_for(file: str) -> Callable[[Key, Any, str], Any]:
-    """``read(key_declaration, value, dotted_key)`` bound to a file name."""
-    def read(decl: Key, value: Any, key: str) -> Any:
-        return decl.read(value, file, key)
-    return read

@@ -22,10 +22,10 @@ HOOKS = {"allocate", "upload", "contact_func", "particle_func", "integrate_func"
          "_compile_cells", "_tabulate", "_allocate_tables", "_ratios", "_upload_volumes"}
 
 
-def _violations(path: Path) -> list[str]:
+def _violations(path: Path, root: Path = ROOT) -> list[str]:
     tree = ast.parse(path.read_text(), str(path))
     out = []
-    rel = path.relative_to(ROOT)
+    rel = path.relative_to(root)
     for node in ast.walk(tree):
         if isinstance(node, ast.arg) and node.arg == "engine":
             out.append(f"{rel}:{node.lineno}: a parameter named 'engine'")
@@ -67,19 +67,10 @@ def test_the_check_catches_each_kind_of_violation(tmp_path):
                    "    def upload(self, ctx):\n"
                    "        ctx.emissivity = ctx.scene.materials\n"
                    "        x = ctx._engine\n")
-    found = "\n".join(_violations_at(bad))
+    found = "\n".join(_violations(bad, tmp_path))
     for what in ("parameter named 'engine'", "the name 'engine'", "reads .scene",
                  "writes ctx.emissivity", "reads ._engine"):
         assert what in found, what
-
-
-def _violations_at(path: Path) -> list[str]:
-    global ROOT
-    saved, ROOT = ROOT, path.parent
-    try:
-        return _violations(path)
-    finally:
-        ROOT = saved
 
 
 class _FakeEngine:

@@ -40,6 +40,16 @@ class Reader:
         Section(key, "", tuple(Key(k, "any", "") for k in allowed)).check(
             tbl, self.source, key, tuple(required or ()))
 
+    def corners(self, t: dict, key: str):
+        """``t["min"]``, ``t["max"]`` (m) of a box or the domain: max above min on every axis."""
+        lo = self.vec3(t["min"], "length", f"{key}.min")
+        hi = self.vec3(t["max"], "length", f"{key}.max")
+        for i, ax in enumerate("xyz"):
+            if not lo[i] < hi[i]:
+                raise self.err(f"{key}.max", f"max must exceed min on every axis; on {ax}: "
+                                             f"min = {lo[i]:g}, max = {hi[i]:g}")
+        return lo, hi
+
     def q(self, value: Any, dimension: str, key: str) -> float:
         return parse_quantity(value, dimension, file=self.source, key=key)
 

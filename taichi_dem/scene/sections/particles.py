@@ -17,7 +17,6 @@ from ..model import ParticleFill, RadiusDistribution, Region
 from ..units import MAX_MAGNITUDE, MIN_MAGNITUDE
 from .common import decode_utf8
 from .regions import BOX, BOX_KEYS, CYLINDER, CYLINDER_KEYS, REGION, REGION_KINDS  # noqa: F401
-from .simulation import AXES
 
 CSV_COLUMNS = ("x", "y", "z", "radius", "vx", "vy", "vz", "wx", "wy", "wz")
 _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
@@ -94,12 +93,7 @@ class ParticleSections:
         sub = self.table(t[kind], k)
         if kind == "box":
             self.check_keys(sub, k, BOX)
-            lo = self.vec3(sub["min"], "length", f"{k}.min")
-            hi = self.vec3(sub["max"], "length", f"{k}.max")
-            for i, ax in enumerate(AXES):
-                if not lo[i] < hi[i]:
-                    raise self.err(f"{k}.max", f"max must exceed min on every axis; on {ax}: "
-                                               f"min = {lo[i]:g}, max = {hi[i]:g}")
+            lo, hi = self.corners(sub, k)
             region = Region(kind="box", box_min=lo, box_max=hi)
             amin, amax = np.array(lo), np.array(hi)
         else:

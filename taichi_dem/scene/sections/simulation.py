@@ -84,12 +84,8 @@ class SimulationSections:
         key = "domain"
         t = self.table(value, key)
         DOMAIN.check(t, self.source, key)
-        lo = self.vec3(t["min"], "length", f"{key}.min")
-        hi = self.vec3(t["max"], "length", f"{key}.max")
+        lo, hi = self.corners(t, key)
         for i, ax in enumerate(AXES):
-            if not lo[i] < hi[i]:
-                raise self.err(f"{key}.max", f"max must exceed min on every axis; on {ax}: "
-                                             f"min = {lo[i]:g}, max = {hi[i]:g}")
             if hi[i] - lo[i] < MIN_DOMAIN_SIZE:
                 raise self.err(f"{key}.max", f"the domain is {hi[i] - lo[i]:.3g} m across on "
                                              f"{ax}: absurd for a DEM scene (wrong units? "
