@@ -20,6 +20,7 @@ from pathlib import Path
 import taichi as ti
 
 from ..errors import BackendError
+from . import frontend
 
 _ARCHES = {
     "cpu": lambda: ti.cpu,
@@ -99,6 +100,7 @@ def acquire(owner, arch: str = "cpu", precision: str = "f32", threads: int | Non
             other._mark_stale(f"the Taichi runtime was re-initialised for arch={arch}, "
                               f"precision={precision} by another simulation")
         clear_stale_cache_lock()
+        frontend.apply()
         kwargs = dict(arch=_ARCHES[arch](), default_fp=real_type(precision), default_ip=ti.i32,
                       log_level=ti.WARN, offline_cache=True)
         if threads:

@@ -31,3 +31,48 @@ def test_the_cache_directory_follows_taichis_variable(monkeypatch, tmp_path):
     assert backend.kernel_cache_dir() == tmp_path
     monkeypatch.delenv("TI_OFFLINE_CACHE_FILE_PATH")
     assert backend.kernel_cache_dir().parts[-3:] == (".cache", "taichi", "ticache")
+
+
+KERNEL_WITH_A_TYPO = '''
+import taichi as ti
+from taichi_dem.engine import frontend
+print("applied", frontend.apply())
+ti.init(arch=ti.cpu, log_level=ti.WARN, offline_cache=False)
+x = ti.field(float, 4)
+
+@ti.kernel
+def fill():
+    for i in x:
+        x[i] = undefined_name + 1.0
+
+@ti.kernel
+def double():
+    for i in x:
+        x[i] = 2.0 * i
+
+double()
+double()
+print("values", x.to_numpy().tolist())
+try:
+    fill()
+except Exception as err:
+    print(type(err).__name__)
+    print(err)
+'''
+
+
+def test_the_front_end_savings_keep_taichis_kernels_and_error_positions(tmp_path):
+    """engine/frontend.py: with the savings a kernel compiles and runs as before, and a compile
+    error still names the file, the line and the expression (in a child process: ti.init
+    here would invalidate the fields of this worker's other simulations)."""
+    import subprocess
+    import sys
+    script = tmp_path / "typo.py"
+    script.write_text(KERNEL_WITH_A_TYPO)
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=120).stdout
+    assert "applied True" in out
+    assert "values [0.0, 2.0, 4.0, 6.0]" in out
+    assert "TaichiNameError" in out
+    assert f'File "{script}", line 11, in fill:' in out
+    assert "        x[i] = undefined_name + 1.0\n               ^^^^^^^^^^^^^^\n" in out

@@ -1,0 +1,130 @@
+"""Two savings in Taichi 1.7's Python front end, which turns every kernel and ``ti.func`` into
+Taichi IR each time a simulation is built (Taichi's compiled-kernel cache cannot be used for
+that step: its key is computed from the IR).
+
+A simulation compiles ~35-60 kernels, and its build time (BENCHMARKS.md, "The kernel front
+end") went, per small scene, ~40 % to two things that do not depend on the simulation:
+
+1. **The source of each function**, read again and re-indented for every instantiation
+   (``inspect.getsourcelines`` tokenises the whole file): here kept per code object, so each
+   function's source is read once per process. ``ast.parse`` still runs every time (Taichi
+   writes into the tree it transforms).
+2. **The position text of each statement** (``ASTTransformerContext.get_pos_info``): the file,
+   line and function, the source line and a ``^^^`` marker under the expression, for the
+   message of a compile error. Taichi wraps the line and the marker at 80 columns with
+   ``textwrap`` for every statement of every kernel (~13,000 calls per build); here the same
+   text is written unwrapped: a compile error names the same file, line and expression.
+
+Both keep Taichi's behaviour otherwise; they are applied only to the Taichi versions they were
+written against (1.7.x) and not at all with ``TAICHI_DEM_PLAIN_TAICHI=1`` in the environment.
+"""
+from __future__ import annotations
+
+import ast
+import os
+import textwrap
+
+import taichi as ti
+
+_applied: list = []
+
+
+def applies() -> bool:
+    """Whether the savings are (to be) applied: Taichi 1.7.x and not switched off."""
+    return tuple(ti.__version__[:2]) == (1, 7) and os.environ.get("TAICHI_DEM_PLAIN_TAICHI", "") in ("", "0")
+
+
+def apply() -> bool:
+    """Install both savings once per process; returns whether they are installed."""
+    if _applied:
+        return _applied[0]
+    ok = applies()
+    if ok:
+        try:
+            _cache_sources()
+            _plain_positions()
+        except (ImportError, AttributeError):     # a 1.7.x whose internals differ: leave it
+            ok = False
+    _applied.append(ok)
+    return ok
+
+
+def _cache_sources() -> None:
+    from taichi.lang import kernel_impl as k
+    from taichi.lang.ast import ASTTransformerContext
+
+    original = k._get_tree_and_ctx
+    sources: dict = {}
+
+    def source_of(func):
+        """(file, re-indented lines, first line number, dedented text) of ``func``, read
+        once per code object (Taichi's reading, unchanged)."""
+        code = getattr(func, "__code__", None)
+        if code is None:
+            return None
+        found = sources.get(code)
+        if found is None:
+            file = k.getsourcefile(func)
+            src, start_lineno = k.getsourcelines(func)
+            src = [textwrap.fill(line, tabsize=4, width=9999) for line in src]
+            found = (file, src, start_lineno, textwrap.dedent("\n".join(src)))
+            sources[code] = found
+        return found
+
+    def get_tree_and_ctx(self, excluded_parameters=(), is_kernel=True, arg_features=None,
+                         args=None, ast_builder=None, is_real_function=False):
+        found = source_of(self.func)
+        if found is None:
+            return original(self, excluded_parameters, is_kernel, arg_features, args,
+                            ast_builder, is_real_function)
+        file, src, start_lineno, text = found
+        tree = ast.parse(text)          # a new tree each time: the transform writes into it
+        tree.body[0].decorator_list = []
+        global_vars = k._get_global_vars(self.func)
+        if is_kernel or is_real_function:
+            for i in self.template_slot_locations:
+                global_vars[self.arguments[i].name] = args[i]
+        return tree, ASTTransformerContext(
+            excluded_parameters=excluded_parameters, is_kernel=is_kernel, func=self,
+            arg_features=arg_features, global_vars=global_vars, argument_data=args,
+            src=src, start_lineno=start_lineno, file=file, ast_builder=ast_builder,
+            is_real_function=is_real_function)
+
+    k._get_tree_and_ctx = get_tree_and_ctx
+
+
+def _plain_positions() -> None:
+    from taichi.lang.ast.ast_transformer_utils import ASTTransformerContext
+
+    def get_pos_info(self, node):
+        """Taichi's position text (file, line, function, the source lines with ^^^ under
+        the expression), without wrapping at 80 columns."""
+        msg = (f'File "{self.file}", line {node.lineno + self.lineno_offset}, '
+               f'in {self.func.func.__name__}:\n')
+        col_offset = self.indent + node.col_offset
+        end_col_offset = self.indent + node.end_col_offset
+        src = self.src
+        if node.lineno == node.end_lineno:
+            line = src[node.lineno - 1]
+            return msg + line + "\n" + " " * col_offset + "^" * (end_col_offset - col_offset) + "\n"
+        if node.__class__.__name__ in ("For", "While", "FunctionDef", "If"):
+            end_lineno = max(node.body[0].lineno - 1, node.lineno)
+        else:
+            end_lineno = node.end_lineno
+        for i in range(node.lineno - 1, end_lineno):
+            line = src[i]
+            body = line.rstrip()
+            first = len(line) - len(line.lstrip())
+            last = len(body)
+            if i == node.lineno - 1:
+                hint = " " * col_offset + "^" * (last - col_offset)
+            elif i == node.end_lineno - 1:
+                hint = " " * first + "^" * (end_col_offset - first)
+            elif first < last:
+                hint = " " * first + "^" * (last - first)
+            else:
+                hint = ""
+            msg += line + "\n" + hint + "\n"
+        return msg
+
+    ASTTransformerContext.get_pos_info = get_pos_info
