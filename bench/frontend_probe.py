@@ -15,7 +15,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 CHILD = """
 import sys, time
-sys.path.insert(0, %r)
+sys.path.insert(0, TESTS)
 from conftest import SMALL_SCENE
 import taichi_dem as td
 text = SMALL_SCENE.format(precision="f64", rolling=0.05, count=200)
@@ -25,7 +25,7 @@ for k in range(3):
         t1 = time.perf_counter()
         sim.step(10)
     print(f"build {k}: {t1 - t0:.2f} s", flush=True)
-""" % str(ROOT / "tests")
+""".replace("TESTS", repr(str(ROOT / "tests")))
 
 
 def main() -> None:
