@@ -2,8 +2,9 @@
 Taichi IR each time a simulation is built (Taichi's compiled-kernel cache cannot be used for
 that step: its key is computed from the IR).
 
-A simulation compiles ~35-60 kernels, and its build time (BENCHMARKS.md, "The kernel front
-end") went, per small scene, ~40 % to two things that do not depend on the simulation:
+A simulation compiles ~35-60 kernels, and its build time (BENCHMARKS.md, "Stop 22 ...: where the
+suite's time goes") went, on a 200-particle scene (cProfile), about 2.0 s of 5.4 s to two things that do not
+depend on the simulation:
 
 1. **The source of each function**, read again and re-indented for every instantiation
    (``inspect.getsourcelines`` tokenises the whole file): here kept per code object, so each
