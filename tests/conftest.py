@@ -269,6 +269,7 @@ def pytest_runtest_protocol(item, nextitem):
     gate = _core_gate()
     if gate is None:
         yield
+        _forget_last_exception()
         return
     exclusive = item.get_closest_marker("two_cores") is not None
     gate.acquire(exclusive)
@@ -276,3 +277,15 @@ def pytest_runtest_protocol(item, nextitem):
         yield
     finally:
         gate.release(exclusive)
+        _forget_last_exception()
+
+
+def _forget_last_exception() -> None:
+    """pytest keeps a failed (or xfailed) test's exception in sys.last_value/last_traceback;
+    its frames hold that test's simulations alive, so the next simulation of this worker
+    shares the old Taichi runtime and compiles every kernel again instead of reading them
+    from the cache (engine/backend.py acquire)."""
+    import sys
+    for name in ("last_type", "last_value", "last_traceback", "last_exc"):
+        if hasattr(sys, name):
+            delattr(sys, name)

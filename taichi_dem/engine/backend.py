@@ -106,10 +106,24 @@ def acquire(owner, arch: str = "cpu", precision: str = "f32", threads: int | Non
         if threads:
             kwargs["cpu_max_num_threads"] = threads
         ti.init(**kwargs)
+        _settle_field_numbering()
         _current.update(arch=arch, precision=precision, generation=_current["generation"] + 1,
                         threads=threads)
     _live.add(owner)
     return _current["generation"]
+
+
+def _settle_field_numbering() -> None:
+    """Launch an empty kernel on the fresh runtime. Taichi's first kernel launch before any
+    field takes a SNode number for an empty root; whether that launch comes before the first
+    simulation's fields (the once-per-process workers' probe) or not would otherwise shift
+    all their numbers, and Taichi's kernel-cache keys name them: the first simulation of a
+    process would share no cached kernel with the later ones (or with other processes')."""
+    @ti.kernel
+    def nothing():
+        pass
+
+    nothing()
 
 
 def release(owner) -> None:

@@ -90,11 +90,15 @@ def _workers_run_together(workers: int) -> bool:
     runtime for a simulation when no other lives)."""
     key = workers
     if key not in _probe_result:
-        arrivals = ti.field(ti.i32, 2)
-        met = ti.field(ti.i32, 1)
+        # ndarrays, not fields: a field here would take SNode numbers before the first
+        # simulation's own fields, and Taichi's kernel-cache keys name those numbers, so the
+        # first simulation of a process would never share cached kernels with later ones
+        arrivals = ti.ndarray(ti.i32, 2)
+        met = ti.ndarray(ti.i32, 1)
 
         @ti.kernel
-        def probe():
+        def probe(arrivals: ti.types.ndarray(dtype=ti.i32, ndim=1),
+                  met: ti.types.ndarray(dtype=ti.i32, ndim=1)):
             arrivals[0] = 0
             arrivals[1] = 0
             met[0] = 0
@@ -107,7 +111,7 @@ def _workers_run_together(workers: int) -> bool:
                     if spins < PROBE_SPINS:
                         ti.atomic_add(met[0], 1)
 
-        probe()
+        probe(arrivals, met)
         _probe_result[key] = int(met[0]) == workers
     return _probe_result[key]
 

@@ -55,43 +55,66 @@ def test_two_simulations_in_one_process_do_not_interfere(small_scene_text):
         b.close()
 
 
-def _first_field_number(sim) -> int:
+FRESH_RUNTIME_SCRIPT = r'''
+import sys
+import numpy as np
+import taichi_dem as td
+from taichi_dem.engine import backend
+
+text = open(sys.argv[1]).read()
+
+
+def first_field_number(sim):
     """The number Taichi gave the simulation's first field (its kernels' cache keys name it)."""
     return next(iter(sim.engine.trees[0].fields.values())).snode._id
 
 
-def test_a_simulation_alone_gets_a_fresh_runtime_and_its_cached_kernels(small_scene_text):
+with td.Simulation.from_text(text) as first:
+    first.step(50)
+    reference = first.particles()["position"]
+    number = first_field_number(first)
+    generation = backend.generation()
+closed = first
+with td.Simulation.from_text(text) as second:
+    assert backend.generation() == generation + 1, "a fresh runtime"
+    assert first_field_number(second) == number, "the same kernel-cache keys"
+    with td.Simulation.from_text(text) as third:            # shares the live runtime
+        assert backend.generation() == generation + 1
+        assert first_field_number(third) != number
+        third.step(50)
+        assert np.array_equal(third.particles()["position"], reference)
+    second.step(50)
+    assert np.array_equal(second.particles()["position"], reference)
+try:
+    closed.step(1)
+    raise AssertionError("a closed simulation stepped")
+except td.StaleSimulationError as err:
+    assert "closed" in str(err)
+# a simulation dropped without close() is garbage, not alive: the next one starts afresh
+dropped = td.Simulation.from_text(text)
+generation = backend.generation()
+del dropped
+with td.Simulation.from_text(text) as after:
+    assert backend.generation() == generation + 1, "a fresh runtime after a dropped one"
+    after.step(50)
+    assert np.array_equal(after.particles()["position"], reference)
+print("fresh runtime: ok")
+'''
+
+
+def test_a_simulation_alone_gets_a_fresh_runtime_and_its_cached_kernels(tmp_path, small_scene_text):
     """With no other simulation alive, a new one starts a fresh Taichi runtime: its fields get
     the numbers an identical scene got before, so its kernels are found in Taichi's cache
-    instead of compiled again. While another lives, the runtime is shared and both work."""
-    from taichi_dem.engine import backend
-    text = small_scene_text()
-    with td.Simulation.from_text(text) as first:
-        first.step(50)
-        reference = first.particles()["position"]
-        number = _first_field_number(first)
-        generation = backend.generation()
-    closed = first
-    with td.Simulation.from_text(text) as second:
-        assert backend.generation() == generation + 1          # a fresh runtime
-        assert _first_field_number(second) == number           # the same kernel-cache keys
-        with td.Simulation.from_text(text) as third:            # shares the live runtime
-            assert backend.generation() == generation + 1
-            assert _first_field_number(third) != number
-            third.step(50)
-            assert np.array_equal(third.particles()["position"], reference)
-        second.step(50)
-        assert np.array_equal(second.particles()["position"], reference)
-    with pytest.raises(td.StaleSimulationError, match="closed"):
-        closed.step(1)
-    # a simulation dropped without close() is garbage, not alive: the next one starts afresh
-    dropped = td.Simulation.from_text(text)
-    generation = backend.generation()
-    del dropped
-    with td.Simulation.from_text(text) as after:
-        assert backend.generation() == generation + 1
-        after.step(50)
-        assert np.array_equal(after.particles()["position"], reference)
+    instead of compiled again. While another lives, the runtime is shared and both work.
+    In a child process: in this worker a simulation of another test may still be alive (held
+    by a traceback, a fixture), which rightly keeps the runtime shared."""
+    scene = tmp_path / "small.toml"
+    scene.write_text(small_scene_text())
+    script = tmp_path / "fresh.py"
+    script.write_text(FRESH_RUNTIME_SCRIPT)
+    out = subprocess.run([sys.executable, str(script), str(scene)], capture_output=True,
+                         text=True, timeout=300, check=False, cwd=ROOT)
+    assert "fresh runtime: ok" in out.stdout, out.stdout + out.stderr
 
 
 def test_hdf5_results_follow_the_contract(tmp_path, small_scene_text):
