@@ -392,7 +392,7 @@ class MeshContacts:
         self._count_bins = self.e.serial_switch(count_bins)
         self._fill_bins = self.e.serial_switch(fill_bins)
         self.bodies.update(count_bins=count_bins_body, fill_bins=fill_bins_body)
-        self.e.broadphase.fused = None
+        self.e.broadphase.drop_fused_rebuild()
 
     def _compile_rows(self):
         m = self
@@ -454,7 +454,7 @@ class MeshContacts:
         self._save_rows = self.e.serial_switch(save_rows)
         self._find_candidates = self.e.serial_switch(find_candidates)
         self.bodies.update(save_rows=save_rows_body, find_candidates=find_candidates_body)
-        self.e.broadphase.fused = None
+        self.e.broadphase.drop_fused_rebuild()
         self._compile_compact()
 
     def _compile_compact(self):
@@ -493,7 +493,7 @@ class MeshContacts:
 
         self._compact_and_carry = self.e.serial_switch(compact_and_carry)
         self.bodies["compact_and_carry"] = compact_and_carry_body
-        self.e.broadphase.fused = None
+        self.e.broadphase.drop_fused_rebuild()
 
     # --------------------------------------------------------------- contact law
     def make_particle_contacts(self, triangle_law, surface_law, sphere_surface):

@@ -21,7 +21,7 @@ import taichi as ti
 
 from .grid import GridSpec  # noqa: F401 (re-exported)
 from .state import PairState, grown_capacity
-from .tuning import LIST_GROWTH
+from .tuning import FUSED_AFTER_QUIET_REBUILDS, LIST_GROWTH, SETTLED_ENTRIES_PER_PARTICLE
 from .workers import WORKER_TASK, make_barrier, worker_range
 
 
@@ -98,6 +98,10 @@ class Broadphase:
         self.row_funcs = {}
         self.fused = None
         self.on_workers = None
+        # rebuilds in a row since an array was reallocated (fused_rebuild waits for
+        # FUSED_AFTER_QUIET_REBUILDS of them), and those run as separate kernels while waiting
+        self.quiet_rebuilds = 0
+        self.fused_waits = 0
         self.worker_stages = [0, 0]     # rebuilds on the workers that stopped SEARCHED, LISTED
         self.fused_stages = [0, 0, 0]     # fused rebuilds that stopped SEARCHED, LISTED, DONE
         self._compile_particle_kernels()
@@ -550,8 +554,14 @@ class Broadphase:
     def drop_one_launch_rebuilds(self):
         """Forget the one-launch rebuilds (fused_rebuild, rebuild_on_workers): a body they
         inline was recompiled (a field reallocated); they compile again on their next use."""
-        self.fused = None
+        self.drop_fused_rebuild()
         self.on_workers = None
+
+    def drop_fused_rebuild(self):
+        """Forget fused_rebuild (a body it inlines was recompiled), and wait again for
+        FUSED_AFTER_QUIET_REBUILDS rebuilds without a reallocation before compiling it."""
+        self.fused = None
+        self.quiet_rebuilds = 0
 
     # the barrier's stall threshold for the rebuild's waits, whose stall flags are not used
     # (a rebuild is one launch between runs of steps; those runs judge the stalls)
@@ -659,7 +669,9 @@ class Broadphase:
         """Re-sort particles and rebuild the neighbour list; returns the alive count. In the
         serial mode one launch (fused_rebuild) unless an array must grow."""
         e = self.e
-        if e.pairs is not None and e.serial and e.fused_rebuilds:
+        self.quiet_rebuilds += 1
+        if e.pairs is not None and e.serial and e.fused_rebuilds and (
+                self.fused is not None or self.quiet_rebuilds > FUSED_AFTER_QUIET_REBUILDS):
             if self.fused is None:
                 self._compile_fused()
             alive, stage = (int(v) for v in self.fused(n, e.time))
@@ -675,6 +687,8 @@ class Broadphase:
             return alive
         if e.pairs is not None and e.workers and not e.serial and e.rebuilds_on_workers:
             return self._rebuild_on_workers(n)
+        if e.pairs is not None and e.serial and e.fused_rebuilds:
+            self.fused_waits += 1
         if e.pairs is not None:
             self._save_rows(n)
             self._save_pairs(n)
@@ -721,7 +735,8 @@ class Broadphase:
             longest = int(self._find_candidates(alive))
         entries = int(self.total[0])
         if e.pairs is None or entries > e.pairs.capacity:
-            e.grow_pairs(grown_capacity(entries, alive, e.state.capacity, 1024))
+            e.grow_pairs(grown_capacity(entries, alive, e.state.capacity, 1024,
+                                        settled_per_particle=SETTLED_ENTRIES_PER_PARTICLE))
         self._compact(alive)
         self._link_and_carry(alive)
         if e.mesh is not None and e.mesh.rebuild_rows(alive, e.time):

@@ -80,14 +80,18 @@ def fit_rows(a: np.ndarray, n: int) -> np.ndarray:
     return out
 
 
-def grown_capacity(entries: int, alive: int, particle_capacity: int, floor: int = 16) -> int:
+def grown_capacity(entries: int, alive: int, particle_capacity: int, floor: int = 16,
+                   settled_per_particle: float = 0.0) -> int:
     """Room for list entries (pairs, mesh candidates) once ``entries`` no longer fit: 1.5x
-    today's (LIST_GROWTH), and at least what the particle capacity would need at today's entries per
-    particle. Every reallocation recompiles the kernels that read the list (~0.3-1 s of
-    Python-side compilation each time, even from the kernel cache), so a scene filling from a
-    factory should reallocate a few times, not at every half-again of its hold-up."""
+    today's (LIST_GROWTH), at least what the particle capacity would need at today's entries per
+    particle, and at least ``settled_per_particle`` per alive particle (what the list will hold
+    once a loose fill has settled: SETTLED_ENTRIES_PER_PARTICLE). Every reallocation recompiles
+    the kernels that read the list (~0.3-1 s of Python-side compilation each time, even from
+    the kernel cache; the runs of steps 2-3 s cold), so a scene filling from a factory or a
+    bed settling should reallocate a few times, not at every half-again of its entries."""
     per_particle = entries / max(alive, 1)
-    return int(max(LIST_GROWTH * entries, 1.2 * per_particle * particle_capacity, floor))
+    return int(max(LIST_GROWTH * entries, 1.2 * per_particle * particle_capacity,
+                   settled_per_particle * alive, floor))
 
 
 class ParticleState:

@@ -38,9 +38,26 @@ WORKER_STALLED_WINDOWS = 2
 # reallocated at this factor: every reallocation recompiles the kernels that read them (~0.3 -
 # 1 s), so a filling scene should reallocate a few times, not at every step of its hold-up.
 LIST_GROWTH = 1.5
+# The neighbour list of a settled bed of equal spheres holds ~12 entries per particle (both
+# directions, within the cutoff 2 r + skin: a 500-bead drum settled at 12.1); a fill poured
+# loose starts at ~3 and grew 1644 -> 2508 -> 3933 -> 6045, each growth recompiling the pair
+# kernels and the runs of steps. The pair arrays are therefore allocated for at least this
+# many entries per alive particle (~100 B each in f64, ~1.5 kB per particle), so such a bed
+# allocates once. BENCHMARKS.md "Stop 23".
+SETTLED_ENTRIES_PER_PARTICLE = 14
 
 # The gas-gap conduction is tabulated per pair of particle kinds (material, radius) when a scene
 # has at most this many kinds (the kernels unroll a lookup over them); beyond, or with radii
 # from a distribution, each contact integrates (Gauss-Legendre). BENCHMARKS.md "What gas-gap
 # conduction costs" (issue 10 item 8).
 MOST_SPECIES = 8
+
+# The serial mode's one-launch rebuild (Broadphase.fused_rebuild) inlines every stage of the
+# rebuild into one kernel, which takes 4 - 6 s to compile cold here (1 - 2 s from the kernel
+# cache) and is compiled again whenever a list outgrows its array. Each rebuild it then runs
+# saves ~1 ms of launches. So it is compiled only once the lists have gone this many
+# rebuilds in a row without a reallocation (the bed has settled, the hold-up stopped
+# growing); until then rebuilds run as separate kernels, which are compiled anyway (they grow
+# the arrays). The wait costs < 0.1 s per growth; a compile thrown away by the next growth
+# cost 4 - 6 s (a settling 500-bead drum recompiled it five times). BENCHMARKS.md "Stop 23".
+FUSED_AFTER_QUIET_REBUILDS = 50

@@ -69,6 +69,7 @@ def run(text, parallel_from, steps, fused=True, workers=False, rebuilds_on_worke
                     temperature=p.get("temperature"), serial=e.serial, runs=e.runs,
                     worker_runs=e.worker_runs, copies=e.worker_copies,
                     rebuilds=e.broadphase.rebuilds, fused=list(e.broadphase.fused_stages),
+                    fused_waits=e.broadphase.fused_waits,
                     on_workers=list(e.broadphase.worker_stages),
                     time=e.time, steps=sim.step_count,
                     series={k: np.asarray(v) for k, v in sim.series.items()})
@@ -258,11 +259,14 @@ def test_runs_of_steps_follow_a_turning_paddle():
     assert np.max(np.abs(serial["series"][torque] - parallel["series"][torque])) < 1e-6 * scale
 
 
-def test_one_launch_rebuild_equals_the_separate_kernels():
+def test_one_launch_rebuild_equals_the_separate_kernels(monkeypatch):
     """The serial mode's rebuild in one launch (Broadphase.fused_rebuild) runs the separate
     kernels' bodies in their order: the same state bit for bit, with a turning paddle (the
     mesh rows too); the first rebuilds stop early where an array must grow, the host
-    finishing them with the separate kernels."""
+    finishing them with the separate kernels. (From the first rebuild on: no wait for
+    quiet lists, FUSED_AFTER_QUIET_REBUILDS.)"""
+    from taichi_dem.engine import broadphase
+    monkeypatch.setattr(broadphase, "FUSED_AFTER_QUIET_REBUILDS", 0)
     text = scene_text("f64", count=300)
     fused = run(text, None, 3000)
     separate = run(text, None, 3000, fused=False)
@@ -274,6 +278,26 @@ def test_one_launch_rebuild_equals_the_separate_kernels():
         assert np.array_equal(fused[key], separate[key]), key
     torque = "bodies/paddle/torque"
     assert np.array_equal(fused["series"][torque], separate["series"][torque])
+
+
+def test_one_launch_rebuild_waits_until_the_lists_stop_growing(monkeypatch):
+    """fused_rebuild is compiled only after FUSED_AFTER_QUIET_REBUILDS rebuilds in a row
+    without a reallocation (each reallocation would compile it again, 4 - 6 s); until then
+    and after each growth the rebuilds run as separate kernels, with the same lists: the
+    state equals a run that never fuses, bit for bit."""
+    from taichi_dem.engine import broadphase
+    monkeypatch.setattr(broadphase, "FUSED_AFTER_QUIET_REBUILDS", 10)
+    text = scene_text("f64", count=300)
+    waiting = run(text, None, 3000)
+    separate = run(text, None, 3000, fused=False)
+    fused_rebuilds = sum(waiting["fused"])
+    # every rebuild with a list (all but the first) ran one way or the other
+    assert waiting["fused_waits"] + fused_rebuilds == waiting["rebuilds"] - 1
+    assert waiting["fused_waits"] >= 10 and fused_rebuilds >= 10
+    # once fused, every later rebuild found its arrays large enough
+    assert waiting["fused"][0] == 0
+    for key in ("position", "velocity", "temperature"):
+        assert np.array_equal(waiting[key], separate[key]), key
 
 
 class _Stub:
