@@ -43,7 +43,7 @@ stepper whose step exists once (docs/architecture.md "Not yet declared by the ef
 import numpy as np
 import taichi as ti
 
-from . import backend
+from . import backend, transfer
 from .broadphase import Broadphase
 from .grid import GridSpec
 from .precision import make_compensated_add
@@ -269,9 +269,9 @@ class Engine:
         self.rebuilds_on_workers = True
         npf = np.float64 if real == ti.f64 else np.float32
         self.max_radius = max_radius          # (the uploads below may read it)
-        for name, values in table_values.items():
-            field = self.table[name]
-            field.from_numpy(values.astype(np.int32 if field.dtype == ti.i32 else npf))
+        transfer.write((self.table[name], values.astype(np.int32 if self.table[name].dtype == ti.i32
+                                                       else npf))
+                       for name, values in table_values.items())
         for e in self.effect_list:
             if hasattr(e, "upload"):
                 e.upload(self.context)
@@ -1223,12 +1223,12 @@ class Engine:
 
     def measure(self) -> dict:
         self._measure(self.count)
-        r = self.reduction.to_numpy()
+        r, h = transfer.read([self.reduction, self.thermal_sums]) if self.thermal else (
+            self.reduction.to_numpy(), None)
         out = {"kinetic_energy": float(r[Reduction.KINETIC_ENERGY]),
                "max_speed": float(r[Reduction.MAX_SPEED]),
                "non_finite": bool(r[Reduction.NON_FINITE] > 0)}
         if self.thermal:
-            h = self.thermal_sums.to_numpy()
             energy, thermal_mass = h[ThermalSum.THERMAL_ENERGY], h[ThermalSum.THERMAL_MASS]
             out.update(thermal_energy=float(energy),
                        mean_temperature=float(energy / thermal_mass) if thermal_mass else 0.0,

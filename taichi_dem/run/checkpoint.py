@@ -42,6 +42,7 @@ import h5py
 import numpy as np
 
 from .._version import __version__
+from ..engine import transfer
 from ..errors import CheckpointError
 
 # 2: f32 scenes with heat keep f64 residuals of temperature and moisture (engine/precision.py);
@@ -154,7 +155,7 @@ def _generators(sim) -> dict:
 def capture(sim) -> Snapshot:
     """The simulation's whole state now, copied to host memory."""
     e = sim.engine
-    fields = {label: {name: f.to_numpy() for name, f in tree.fields.items()}
+    fields = {label: dict(zip(tree.fields, transfer.read(tree.fields.values())))
               for label, tree in field_trees(e).items()}
     host_attrs = {}
     for owner_name, attr in HOST_ATTRIBUTES:
@@ -293,6 +294,7 @@ def restore(sim, snap: Snapshot) -> None:
     e = sim.engine
     reallocate(e, json.loads(a["capacities"]))
     missing = []
+    writes = []
     zero_between_steps = e.state.ZERO_BETWEEN_STEPS
     for label, tree in field_trees(e).items():
         saved = snap.fields.get(label, {})
@@ -304,11 +306,12 @@ def restore(sim, snap: Snapshot) -> None:
                     missing.append(f"{label}/{name}")
                 continue
             arr = saved[name]
-            shape = f.to_numpy().shape
+            shape = transfer.host_shape(f)
             if arr.shape != shape:
                 raise CheckpointError(f"field {label}/{name}: saved shape {arr.shape}, "
                                       f"allocated {shape}")
-            f.from_numpy(arr)
+            writes.append((f, arr))
+    transfer.write(writes)
     if missing:
         print(f"taichi-dem: warning: the checkpoint has no values for {', '.join(missing)}; "
               f"they keep their freshly built values", file=sys.stderr)

@@ -28,6 +28,7 @@ import time as _time
 import numpy as np
 import taichi as ti
 
+from ..engine import transfer
 from ..errors import DivergenceError
 
 OVERLAP_LIMIT = 0.6          # of the smaller radius
@@ -134,8 +135,8 @@ class DivergenceGuard:
             self._compile()
             self._key = key
         self._scan(e.count)
-        idx = self.index.to_numpy()
-        big = self.largest.to_numpy().astype(np.float64)
+        idx, big = transfer.read([self.index, self.largest])
+        big = big.astype(np.float64)
         self.seconds += _time.perf_counter() - t0
         self.checks += 1
         if idx[0] != _NONE:

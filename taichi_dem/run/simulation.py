@@ -20,7 +20,7 @@ import numpy as np
 from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
 from ..effects.base import Effect
-from ..engine import backend
+from ..engine import backend, transfer
 from ..engine.state import SPHERE_INERTIA
 from ..engine.tuning import MOST_SPECIES
 from ..errors import DivergenceError, SceneError, StaleSimulationError
@@ -285,32 +285,34 @@ class Simulation:
             out[:n] = a
             return out
 
+        writes = []          # (field, host array): one copy kernel for them all
+        put = lambda field, values: writes.append((field, values))  # noqa: E731
         density = self.tables.density[placed.material]
         mass = 4.0 / 3.0 * math.pi * placed.radius ** 3 * density
         movable = ~placed.fixed
-        s.position.from_numpy(vec(placed.position))
-        s.velocity.from_numpy(vec(placed.velocity * movable[:, None]))
-        s.angular_velocity.from_numpy(vec(placed.angular_velocity * movable[:, None]))
-        s.reference_position.from_numpy(vec(placed.position))
-        s.radius.from_numpy(scal(placed.radius))
-        s.mass.from_numpy(scal(mass))
-        s.inverse_mass.from_numpy(scal(np.where(movable, 1.0 / mass, 0.0)))
-        s.inverse_inertia.from_numpy(scal(np.where(movable, 1.0 / (SPHERE_INERTIA * mass * placed.radius ** 2), 0.0)))
-        s.material.from_numpy(scal(placed.material, np.int32))
-        s.particle_id.from_numpy(scal(np.arange(n), np.int32))
-        s.alive.from_numpy(scal(np.ones(n), np.int32))
+        put(s.position, vec(placed.position))
+        put(s.velocity, vec(placed.velocity * movable[:, None]))
+        put(s.angular_velocity, vec(placed.angular_velocity * movable[:, None]))
+        put(s.reference_position, vec(placed.position))
+        put(s.radius, scal(placed.radius))
+        put(s.mass, scal(mass))
+        put(s.inverse_mass, scal(np.where(movable, 1.0 / mass, 0.0)))
+        put(s.inverse_inertia, scal(np.where(movable, 1.0 / (SPHERE_INERTIA * mass * placed.radius ** 2), 0.0)))
+        put(s.material, scal(placed.material, np.int32))
+        put(s.particle_id, scal(np.arange(n), np.int32))
+        put(s.alive, scal(np.ones(n), np.int32))
         if s.process:
-            s.serial.from_numpy(scal(np.arange(n), np.int32))
-            s.origin.from_numpy(scal(np.full(n, -1), np.int32))
-            s.birth_time.from_numpy(scal(np.zeros(n)))
+            put(s.serial, scal(np.arange(n), np.int32))
+            put(s.origin, scal(np.full(n, -1), np.int32))
+            put(s.birth_time, scal(np.zeros(n)))
         if self.scene.thermal is not None:
             heat_capacity = np.array([self.scene.materials[name].heat_capacity or 0.0
                                       for name in self.tables.names])[placed.material]
-            s.temperature.from_numpy(scal(placed.temperature))
+            put(s.temperature, scal(placed.temperature))
             if s.compensated:
                 # what f32 cannot hold of the temperature (engine/precision.py)
                 exact = np.asarray(placed.temperature, np.float64)
-                s.temperature_residual.from_numpy(
+                put(s.temperature_residual,
                     scal(exact - exact.astype(np.float32).astype(np.float64), np.float64))
             thermal_mass = mass * heat_capacity
             if self.engine.moisture:
@@ -318,13 +320,14 @@ class Simulation:
                 # capacity counts in the thermal mass m (c + X c_w)
                 x = np.array([f.moisture or 0.0 for f in self.scene.fills])[placed.fill] \
                     if len(self.scene.fills) else np.zeros(n)
-                s.moisture.from_numpy(scal(x))
+                put(s.moisture, scal(x))
                 if s.compensated:
                     x = np.asarray(x, np.float64)
-                    s.moisture_residual.from_numpy(
+                    put(s.moisture_residual,
                         scal(x - x.astype(np.float32).astype(np.float64), np.float64))
                 thermal_mass = mass * (heat_capacity + x * self.scene.thermal.water_heat_capacity)
-            s.inverse_thermal_mass.from_numpy(scal(1.0 / thermal_mass))
+            put(s.inverse_thermal_mass, scal(1.0 / thermal_mass))
+        transfer.write(writes)
 
     def _mark_stale(self, why: str):
         self._stale = why
@@ -529,23 +532,25 @@ class Simulation:
         self._check_alive()
         s = self.engine.state
         n = self.engine.count
-        alive = np.nonzero(s.alive.to_numpy()[:n] != 0)[0]
-        ids = (s.serial if s.process else s.particle_id).to_numpy()[alive]
+        names = ["alive", "serial" if s.process else "particle_id", "position", "velocity",
+                 "angular_velocity", "radius", "mass", "inverse_mass"]
+        if self.engine.thermal:
+            names += ["temperature"] + (["temperature_residual"] if s.compensated else [])
+        if self.engine.moisture:
+            names += ["moisture"] + (["moisture_residual"] if s.compensated else [])
+        host = dict(zip(names, transfer.read(getattr(s, name) for name in names)))
+        alive = np.nonzero(host["alive"][:n] != 0)[0]
+        ids = host[names[1]][alive]
         order = alive[np.argsort(ids, kind="stable")]
         out = {"id": np.sort(ids, kind="stable")}
-        for name in ("position", "velocity", "angular_velocity"):
-            out[name] = getattr(s, name).to_numpy()[:n][order].astype(np.float64)
-        for name in ("radius", "mass"):
-            out[name] = getattr(s, name).to_numpy()[:n][order].astype(np.float64)
-        out["fixed"] = s.inverse_mass.to_numpy()[:n][order] == 0.0
-        if self.engine.thermal:
-            out["temperature"] = s.temperature.to_numpy()[:n][order].astype(np.float64)
-            if s.compensated:
-                out["temperature"] += s.temperature_residual.to_numpy()[:n][order]
-        if self.engine.moisture:
-            out["moisture"] = s.moisture.to_numpy()[:n][order].astype(np.float64)
-            if s.compensated:
-                out["moisture"] += s.moisture_residual.to_numpy()[:n][order]
+        for name in ("position", "velocity", "angular_velocity", "radius", "mass"):
+            out[name] = host[name][:n][order].astype(np.float64)
+        out["fixed"] = host["inverse_mass"][:n][order] == 0.0
+        for name in ("temperature", "moisture"):
+            if name in host:
+                out[name] = host[name][:n][order].astype(np.float64)
+                if name + "_residual" in host:
+                    out[name] += host[name + "_residual"][:n][order]
         return out
 
     def kinetic_energy(self) -> float:

@@ -1,0 +1,133 @@
+"""Bulk copies between fields and host arrays: one kernel for a whole set of fields.
+
+``field.to_numpy()`` and ``field.from_numpy()`` compile one Taichi kernel per field (the field
+is a template argument), ~20-50 ms each even from the kernel cache; a simulation reads and
+writes ~100 fields once (tables, the first particles, a checkpoint, the particles' readout),
+which made these copies 20-37 % of a small test's compilation (BENCHMARKS.md "Stop 23").
+Here one kernel copies every field of a set through one flat f64 array: f32, f64, i32 and u8
+values are all exact in f64, so the copies are bit for bit those of to_numpy/from_numpy.
+"""
+# (no postponed annotations: Taichi reads the kernels' annotations)
+
+import math
+
+import numpy as np
+import taichi as ti
+
+from . import backend
+
+# field dtypes whose every value an f64 holds exactly, with the numpy dtype to_numpy gives
+_NUMPY_DTYPE = {ti.f32: np.float32, ti.f64: np.float64, ti.i32: np.int32, ti.u8: np.uint8,
+                ti.i8: np.int8, ti.i16: np.int16, ti.u16: np.uint16, ti.u32: np.uint32}
+_kernels: dict = {}      # (direction, runtime generation, field ids) -> (kernel, layout, fields)
+
+
+class _Layout:
+    """Where each field's values sit in the flat f64 array: offset, shape (the field's shape,
+    then its components for a vector field), numpy dtype."""
+
+    def __init__(self, fields):
+        self.entries = []
+        offset = 0
+        for f in fields:
+            components = getattr(f, "n", None) if hasattr(f, "m") else None
+            shape = tuple(f.shape) + ((components,) if components else ())
+            self.entries.append((offset, shape, _NUMPY_DTYPE[f.dtype]))
+            offset += math.prod(shape)
+        self.size = max(offset, 1)
+
+
+def host_shape(field) -> tuple:
+    """The shape of ``field.to_numpy()`` (the field's shape, then its components if a
+    vector), without copying."""
+    return _Layout([field]).entries[0][1]
+
+
+def _supported(fields) -> bool:
+    return all(f.dtype in _NUMPY_DTYPE and (not hasattr(f, "m") or f.m == 1) for f in fields)
+
+
+def _compile(direction: str, fields):
+    """The copy kernel of ``fields`` and its layout: one loop per distinct field shape (an
+    offloaded task each: the compile time grows with their number), copying every field of
+    that shape at each index."""
+    layout = _Layout(fields)
+    offsets = [o for o, _, _ in layout.entries]
+    components = [getattr(f, "n", 0) if hasattr(f, "m") else 0 for f in fields]
+    dtypes = [f.dtype for f in fields]
+    by_shape: dict = {}
+    for k, f in enumerate(fields):
+        by_shape.setdefault(tuple(f.shape), []).append(k)
+    groups = [(shape, tuple(ks)) for shape, ks in by_shape.items()]
+    # the flat index of element I of a field of this shape, before its components
+    strides = [tuple(math.prod(shape[d + 1:]) for d in range(len(shape))) for shape, _ in groups]
+    reading = direction == "read"
+
+    @ti.kernel
+    def copy(flat: ti.types.ndarray(dtype=ti.f64, ndim=1)):
+        for g in ti.static(range(len(groups))):
+            for I in ti.grouped(fields[groups[g][1][0]]):
+                element = 0
+                for d in ti.static(range(len(strides[g]))):
+                    element += I[d] * strides[g][d]
+                for k in ti.static(groups[g][1]):
+                    if ti.static(components[k]):
+                        for c in ti.static(range(components[k])):
+                            at = offsets[k] + element * components[k] + c
+                            if ti.static(reading):
+                                flat[at] = ti.cast(fields[k][I][c], ti.f64)
+                            else:
+                                fields[k][I][c] = ti.cast(flat[at], dtypes[k])
+                    else:
+                        if ti.static(reading):
+                            flat[offsets[k] + element] = ti.cast(fields[k][I], ti.f64)
+                        else:
+                            fields[k][I] = ti.cast(flat[offsets[k] + element], dtypes[k])
+    return copy, layout
+
+
+def _kernel(direction: str, fields):
+    key = (direction, backend.generation(), tuple(id(f) for f in fields))
+    if key not in _kernels:
+        if len(_kernels) > 256:        # (kernels of destroyed fields: forget them all)
+            _kernels.clear()
+        _kernels[key] = (*_compile(direction, fields), list(fields))
+    kernel, layout, _ = _kernels[key]
+    return kernel, layout
+
+
+def read(fields) -> list[np.ndarray]:
+    """Host copies of ``fields``, each as ``field.to_numpy()`` gives it (same shape, dtype
+    and values), by one kernel for the whole set."""
+    fields = list(fields)
+    if not fields:
+        return []
+    if not _supported(fields):
+        return [f.to_numpy() for f in fields]
+    kernel, layout = _kernel("read", fields)
+    flat = np.zeros(layout.size, np.float64)
+    kernel(flat)
+    return [flat[o:o + math.prod(shape)].reshape(shape).astype(dtype)
+            for o, shape, dtype in layout.entries]
+
+
+def write(pairs) -> None:
+    """``field.from_numpy(array)`` for each (field, array) of ``pairs``, by one kernel for the
+    whole set: the array is cast to the field's dtype on the host first, as from_numpy does.
+    An array of another shape than the field's raises ValueError."""
+    pairs = list(pairs)
+    if not pairs:
+        return
+    fields = [f for f, _ in pairs]
+    if not _supported(fields):
+        for f, a in pairs:
+            f.from_numpy(a)
+        return
+    kernel, layout = _kernel("write", fields)
+    flat = np.zeros(layout.size, np.float64)
+    for (o, shape, dtype), (f, a) in zip(layout.entries, pairs):
+        a = np.asarray(a)
+        if a.shape != shape:
+            raise ValueError(f"array of shape {a.shape} for a field of shape {shape}")
+        flat[o:o + a.size] = a.astype(dtype).reshape(-1)
+    kernel(flat)

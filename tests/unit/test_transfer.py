@@ -1,0 +1,36 @@
+"""engine/transfer.py: one kernel copies a set of fields to and from the host, with the values,
+shapes and dtypes of to_numpy/from_numpy bit for bit."""
+import numpy as np
+import pytest
+import taichi as ti
+
+import taichi_dem as td
+from taichi_dem.engine import transfer
+from taichi_dem.engine.state import FieldTree
+
+
+def test_bulk_copies_equal_the_per_field_copies(small_scene_text):
+    rng = np.random.default_rng(7)
+    with td.Simulation.from_text(small_scene_text()):       # (a live runtime)
+        tree = FieldTree()
+        fields = [tree.add("a", ti.f32, 11), tree.add("b", ti.f64, 11, vector=True),
+                  tree.add("c", ti.i32, (4, 5)), tree.add("d", ti.u8, 7),
+                  tree.add("e", ti.f32, (11, 2), vector=True), tree.add("f", ti.f64, 11)]
+        tree.finalize()
+        try:
+            values = [rng.normal(size=11), rng.normal(size=(11, 3)),
+                      rng.integers(-2**31, 2**31 - 1, (4, 5)), rng.integers(0, 256, 7),
+                      rng.normal(size=(11, 2, 3)), rng.normal(size=11) * 1e300]
+            transfer.write(zip(fields, values))
+            bulk = transfer.read(fields)
+            for f, v, got in zip(fields, values, bulk):
+                expected = f.to_numpy()
+                assert got.dtype == expected.dtype and got.shape == expected.shape
+                assert np.array_equal(got, expected)
+                # as from_numpy would have stored them (f64 -> f32 rounded to nearest)
+                assert np.array_equal(expected, np.asarray(v).astype(expected.dtype))
+                assert transfer.host_shape(f) == expected.shape
+            with pytest.raises(ValueError, match="shape"):
+                transfer.write([(fields[0], np.zeros(10))])
+        finally:
+            tree.destroy()
