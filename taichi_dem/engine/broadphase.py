@@ -327,16 +327,17 @@ class Broadphase:
                                            cell_start[column + z_last + 1]):
                                 count = candidate(i, j, xi, ri, movable_i, count)
             else:
-                for step_x in ti.static((-1, 0, 1)):
-                    nx, inside_x = neighbour_cell(0, cx, step_x)
-                    for step_y in ti.static((-1, 0, 1)):
-                        ny, inside_y = neighbour_cell(1, cy, step_y)
-                        for step_z in ti.static((-1, 0, 1)):
-                            nz, inside_z = neighbour_cell(2, cz, step_z)
-                            if inside_x and inside_y and inside_z:
-                                nc = (nx * dims[1] + ny) * dims[2] + nz
-                                for j in range(cell_start[nc], cell_start[nc + 1]):
-                                    count = candidate(i, j, xi, ri, movable_i, count)
+                # z periodic: the 27 cells in a loop, in the same order (x outer, z inner);
+                # unrolled, the 27 copies of the search took 2.4 s to compile (against 0.7 s
+                # for the 9 runs above), and the search runs only at rebuilds
+                for offset in range(27):
+                    nx, inside_x = neighbour_cell(0, cx, offset // 9 - 1)
+                    ny, inside_y = neighbour_cell(1, cy, (offset // 3) % 3 - 1)
+                    nz, inside_z = neighbour_cell(2, cz, offset % 3 - 1)
+                    if inside_x and inside_y and inside_z:
+                        nc = (nx * dims[1] + ny) * dims[2] + nz
+                        for j in range(cell_start[nc], cell_start[nc + 1]):
+                            count = candidate(i, j, xi, ri, movable_i, count)
             s.row_count[i] = count
             return count
 

@@ -42,7 +42,6 @@ import h5py
 import numpy as np
 
 from .._version import __version__
-from ..engine import transfer
 from ..errors import CheckpointError
 
 # 2: f32 scenes with heat keep f64 residuals of temperature and moisture (engine/precision.py);
@@ -154,6 +153,7 @@ def _generators(sim) -> dict:
 # ------------------------------------------------------------------------------ capture/write
 def capture(sim) -> Snapshot:
     """The simulation's whole state now, copied to host memory."""
+    from ..engine import transfer      # (here: the CLI imports this module without Taichi)
     e = sim.engine
     fields = {label: dict(zip(tree.fields, transfer.read(tree.fields.values())))
               for label, tree in field_trees(e).items()}
@@ -293,6 +293,7 @@ def restore(sim, snap: Snapshot) -> None:
         raise CheckpointError(f"the checkpoint is {a['precision']}, the simulation {sim.precision}")
     e = sim.engine
     reallocate(e, json.loads(a["capacities"]))
+    from ..engine import transfer
     missing = []
     writes = []
     zero_between_steps = e.state.ZERO_BETWEEN_STEPS
