@@ -87,9 +87,12 @@ def _compile(direction: str, fields):
 
 
 def _kernel(direction: str, fields):
-    key = (direction, backend.generation(), tuple(id(f) for f in fields))
+    generation = backend.generation()
+    key = (direction, generation, tuple(id(f) for f in fields))
     if key not in _kernels:
-        if len(_kernels) > 256:        # (kernels of destroyed fields: forget them all)
+        # kernels of an earlier runtime, or many of destroyed fields (grown arrays, closed
+        # simulations): forget them (the field objects held here keep their ids from reuse)
+        if len(_kernels) > 256 or any(k[1] != generation for k in _kernels):
             _kernels.clear()
         _kernels[key] = (*_compile(direction, fields), list(fields))
     kernel, layout, _ = _kernels[key]

@@ -55,9 +55,9 @@ MOST_SPECIES = 8
 # The serial mode's one-launch rebuild (Broadphase.fused_rebuild) inlines every stage of the
 # rebuild into one kernel, which takes 4 - 14 s to compile cold here (1 - 3 s from the kernel
 # cache) and is compiled again whenever a list outgrows its array; each rebuild it runs then
-# saves ~1 ms of launches (0 - 1.4 ms measured on a 200-bead heap). It pays for itself only
-# after thousands of rebuilds, so it is compiled once the lists have gone this many rebuilds
+# saves a few launches: 0.17 ms median on a 200-bead heap (bench/fused_rebuild_cost.py, five
+# rounds, scatter larger than the saving). It pays for itself only after thousands of rebuilds, so it is compiled once the lists have gone this many rebuilds
 # in a row without a reallocation; until then rebuilds run as the separate kernels (compiled
-# anyway: they grow the arrays). Waiting costs ~0.5 s per growth in a long run; a short run
+# anyway: they grow the arrays). Waiting costs < 0.1 s per growth in a long run; a short run
 # (a test, a check) never pays the compile. BENCHMARKS.md "Stop 23".
 FUSED_AFTER_QUIET_REBUILDS = 500
