@@ -32,7 +32,7 @@ def main(argv) -> int:
     sims, times, rates = {}, {}, {}
     for name in ("runs", "cells"):
         sim = td.Simulation.from_toml(str(scene), precision="f32", h5="")
-        sim.engine.worker_stall_limit = None      # keep the workers, whatever the host does
+        sim.engine.worker_pool.stall_limit = None      # keep the workers, whatever the host does
         bp = sim.engine.broadphase
         if name == "cells":
             # the 27-cell stencil, as compiled for a periodic z (the chute's z faces are far

@@ -9,11 +9,11 @@ noisy machine (runs minutes apart differ by 20 % and more).
   launches  two parallel launches per step (one simulation, the workers switched off and on;
             the modes differ by round-off, so the windows go on along nearly one trajectory)
   claims    workers that claim chunks in the pair stage too and store the partners' shares
-            at the entries (stepper.WORKER_COPIES = False, as under [mobility]): a second
+            at the entries (tuning.WORKER_COPIES = False, as under [mobility]): a second
             simulation of the same scene, windows alternating between the two
   serial    the serial mode on one thread, runs of steps (one simulation, modes switched)
   chunks128 workers claiming 128 particles at a time in the particle stage (the chunks of
-            stop 17; stepper.WORKER_CHUNKS huge): a second simulation, windows alternating
+            stop 17; tuning.WORKER_CHUNKS huge): a second simulation, windows alternating
   kernel-rebuilds  the workers with the rebuild as separate parallel kernels instead of on
             the workers (Engine.rebuilds_on_workers off and on in one simulation: the lists
             are the same, so the windows go on along one trajectory); each rebuild is timed
@@ -47,17 +47,17 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     import taichi as ti
     import taichi_dem as td
-    from taichi_dem.engine import stepper
+    from taichi_dem.engine import tuning
     scene = write_chute_scene(Path(tempfile.mkdtemp()) / a.size, **SIZES[a.size])
 
-    def make(copies: bool, chunks=stepper.WORKER_CHUNKS):
-        chunks_before = stepper.WORKER_CHUNKS
-        stepper.WORKER_COPIES, stepper.WORKER_CHUNKS = copies, chunks
+    def make(copies: bool, chunks=tuning.WORKER_CHUNKS):
+        chunks_before = tuning.WORKER_CHUNKS
+        tuning.WORKER_COPIES, tuning.WORKER_CHUNKS = copies, chunks
         try:
             sim = td.Simulation.from_toml(str(scene), precision="f32", h5="", parallel_from=0)
         finally:
-            stepper.WORKER_COPIES, stepper.WORKER_CHUNKS = True, chunks_before
-        sim.engine.worker_stall_limit = None      # measure them, whatever the machine does
+            tuning.WORKER_COPIES, tuning.WORKER_CHUNKS = True, chunks_before
+        sim.engine.worker_pool.stall_limit = None      # measure them, whatever the machine does
         return sim
 
     sim = make(True)
@@ -122,7 +122,7 @@ def main(argv=None) -> int:
         paired = [w / o for w, o in zip(rates["workers"], rates[a.against])]
         print(f"workers / {a.against}: median of the rounds' ratios {statistics.median(paired):.3f} "
               f"({', '.join(f'{r:.2f}' for r in paired)}); barrier waits that stalled: "
-              f"{e.worker_stalls} of {e.worker_barriers}")
+              f"{e.worker_pool.stalls} of {e.worker_pool.barriers}")
         if a.against == "kernel-rebuilds":
             for on_workers, v in rebuild_times.items():
                 if v:

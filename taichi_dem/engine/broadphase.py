@@ -586,7 +586,7 @@ class Broadphase:
         search_row, start_rows, compact_row, link_row = (
             f[k] for k in ("search_row", "start_rows", "compact_row", "link_row"))
         workers = e.workers
-        arrivals = e.worker_arrivals
+        arrivals = e.worker_pool.arrivals
         barrier = make_barrier(arrivals, workers)
         n_cells = self.grid.n_cells
         total = self.total

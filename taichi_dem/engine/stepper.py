@@ -46,7 +46,7 @@ import taichi as ti
 from . import backend, transfer
 from .broadphase import Broadphase
 from .grid import GridSpec
-from .precision import make_compensated_add
+from .insertion import Insertion
 from ..contacts.geometry import contact_types, make_geometry
 from ..contacts.history import history_members, make_history_io
 from ..contacts.law import make_contact_law, margin_fraction
@@ -55,72 +55,9 @@ from ..effects.base import EffectContext
 from ..setup.pair_tables import PairTables
 from .state import (SPHERE_INERTIA, FieldTree, Flag, PairState, ParticleState, Reduction,
                     ThermalSum, fit_rows)
-from .workers import WORKER_TASK, make_barrier
-
-
-# the loop modes' and workers' tuning constants (chosen in BENCHMARKS.md; see tuning.py)
-from .tuning import (PARALLEL_FROM, PROBE_SPINS, STALL_SPINS, STALL_SPINS_PER_PARTICLE,  # noqa: E402
-                     WORKER_CHUNK, WORKER_CHUNKS, WORKER_COPIES, WORKER_STALL_LIMIT,
-                     WORKER_STALL_WINDOW, WORKER_STALLED_WINDOWS)
-_probe_result: dict = {}     # per worker count; "gave way": see _count_stalls
-
-
-def persistent_workers(threads) -> int:
-    """Workers of the runs of steps on every thread (0: not used): the CPU threads when there
-    are two or more, no more than the cores this process may run on (a worker waiting for a
-    core would spin), unless an engine of this process found its workers stalling (the cores
-    are shared: later simulations start with the launches) or $TAICHI_DEM_WORKERS is 0, and
-    once per runtime a check that they really run at once."""
-    import os
-    if not threads or threads < 2 or os.environ.get("TAICHI_DEM_WORKERS", "1") == "0":
-        return 0
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:          # (not on Linux)
-        cores = os.cpu_count() or 1
-    if threads > cores or _probe_result.get("gave way") or not _workers_run_together(threads):
-        return 0
-    return threads
-
-
-def _workers_run_together(workers: int) -> bool:
-    """Whether ``workers`` iterations WORKER_TASK apart of one CPU range-for run on as many
-    threads at once: each arrives at a barrier and waits (PROBE_SPINS at most) for the
-    others. Once per process: a property of the machine (backend.acquire starts a fresh
-    runtime for a simulation when no other lives)."""
-    key = workers
-    if key not in _probe_result:
-        # ndarrays, not fields: a field here would take SNode numbers before the first
-        # simulation's own fields, and Taichi's kernel-cache keys name those numbers, so the
-        # first simulation of a process would never share cached kernels with later ones
-        arrivals = ti.ndarray(ti.i32, 2)
-        met = ti.ndarray(ti.i32, 1)
-
-        @ti.kernel
-        def probe(arrivals: ti.types.ndarray(dtype=ti.i32, ndim=1),
-                  met: ti.types.ndarray(dtype=ti.i32, ndim=1)):
-            arrivals[0] = 0
-            arrivals[1] = 0
-            met[0] = 0
-            for task in range(workers * WORKER_TASK):
-                if task % WORKER_TASK == 0:
-                    ti.atomic_add(arrivals[0], 1)
-                    spins = 0
-                    while ti.atomic_add(arrivals[0], arrivals[1]) < workers and spins < PROBE_SPINS:
-                        spins += 1
-                    if spins < PROBE_SPINS:
-                        ti.atomic_add(met[0], 1)
-
-        probe(arrivals, met)
-        _probe_result[key] = int(met[0]) == workers
-    return _probe_result[key]
-
-
-class InsertColumn:
-    """Columns of the f64 array Engine.insert hands its kernel."""
-    POSITION, VELOCITY, RADIUS, MASS, BIRTH_TIME = 0, 3, 6, 7, 8
-    TEMPERATURE, INVERSE_THERMAL_MASS, MOISTURE = 9, 10, 11
-    SIZE = 12
+from . import drivers, tuning
+from .tuning import PARALLEL_FROM
+from .workers import WorkerPool, persistent_workers
 
 
 class Engine:
@@ -177,40 +114,9 @@ class Engine:
         self.trees: list[FieldTree] = []
         # runs of steps on every thread above parallel_from (persistent_workers; off again,
         # for good, if its barrier waits show the threads sharing the cores with other work)
-        self.workers = persistent_workers(self.threads) if self.runs else 0
-        self.worker_runs = 0             # runs of steps done on the workers
-        self.workers_give_way = False
-        self.worker_barriers = 0
-        self.worker_stalls = 0
-        self.window_barriers = 0          # (_count_stalls)
-        self.window_stalls = 0
-        self.stalled_windows = 0
-        self.worker_tree = None
-        self.worker_copies = 0
-        if self.workers:
-            # (kept out of engine.trees: a checkpoint neither holds nor needs it)
-            wt = self.worker_tree = FieldTree()
-            # [arrivals at barriers, 0 (read to keep the spin-wait an atomic)]
-            self.worker_arrivals = wt.add("worker_arrivals", ti.i32, 2)
-            self.worker_claims = wt.add("worker_claims", ti.i32, 3)   # chunk counters
-            self.worker_outcome = wt.add("worker_outcome", ti.i32, 2)
-            # the workers' partner shares (Engine.worker_copies): worker w adds the shares of
-            # the pairs it computes to copy w - copy 0 is the serial mode's scattered_* sums
-            # (ParticleState), these are copies 1 .. T-1 - and the particle stage adds a
-            # particle's copies in order and clears them; zero between steps, so a
-            # checkpoint neither holds nor needs them
-            self.worker_copies = self.workers if (self.scatter_ok and WORKER_COPIES) else 0
-            extra = max(self.worker_copies - 1, 0)
-            if self.worker_copies:
-                # where each worker's range of the pair stage starts (cut_ranges), and n
-                self.worker_first = wt.add("worker_first", ti.i32, self.workers + 1)
-            if extra:
-                self.copy_force = wt.add("copy_force", real, (extra, capacity), vector=True)
-                self.copy_torque = wt.add("copy_torque", real, (extra, capacity), vector=True)
-                if self.thermal:
-                    self.copy_heat = wt.add("copy_heat", real, (extra, capacity))
-                    self.copy_conductance = wt.add("copy_conductance", real, (extra, capacity))
-            wt.finalize()
+        self.worker_pool = WorkerPool(persistent_workers(self.threads) if self.runs else 0,
+                                      capacity, real, self.thermal,
+                                      copies=self.scatter_ok and tuning.WORKER_COPIES)
         self.walls = scene.walls
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
         particle_fields = {}
@@ -290,9 +196,8 @@ class Engine:
         if self.mobility is not None:
             self.mobility.compile(self.context)
         self._compile_particle_kernels()
-        if scene.factories:
-            self._compile_insert()
-            self._compile_occupied()
+        self.count = 0                     # slots in use
+        self.insertion = Insertion(self)
 
     # what enabled effects hold, for the sensors and the measure kernel (None when absent)
     @property
@@ -310,6 +215,16 @@ class Engine:
     def evaporated(self):
         """The drying effect's evaporated water, kg since the start (a 1-entry f64 field)."""
         return self.drying_effect.evaporated
+
+    @property
+    def workers(self) -> int:
+        """The persistent worker threads the runs of steps use now (0: none, or they gave
+        way; workers.WorkerPool)."""
+        return self.worker_pool.workers
+
+    @workers.setter
+    def workers(self, count: int):
+        self.worker_pool.workers = count      # (0: the parallel kernels from now on)
 
     def choose_loop_mode(self, n: int) -> bool:
         """Serial loops for ``n`` particles? On a GPU never; on one CPU thread always; else
@@ -364,9 +279,7 @@ class Engine:
         for t in self.trees:
             t.destroy()
         self.trees.clear()
-        if getattr(self, "worker_tree", None) is not None:
-            self.worker_tree.destroy()
-            self.worker_tree = None
+        self.worker_pool.destroy()
 
     # ------------------------------------------------------------------ kernels
     def _compile_particle_kernels(self):
@@ -581,11 +494,10 @@ class Engine:
                                 s.inverse_inertia[j])
             return c
 
-        extra_copies = max(self.worker_copies - 1, 0)
-        copy_force = self.copy_force if extra_copies else None
-        copy_torque = self.copy_torque if extra_copies else None
-        copy_heat = self.copy_heat if (extra_copies and self.thermal) else None
-        copy_conductance = self.copy_conductance if (extra_copies and self.thermal) else None
+        pool = self.worker_pool
+        extra_copies = max(pool.copies - 1, 0)
+        copy_force, copy_torque = pool.copy_force, pool.copy_torque
+        copy_heat, copy_conductance = pool.copy_heat, pool.copy_conductance
 
         def share_adder(first, second, copies_of_first, copies_of_second):
             """A ti.func (copy, j, a, b) adding a pair's partner share - a to ``first``, b to
@@ -915,166 +827,13 @@ class Engine:
                 full = full_first
             return record, full
 
-        @ti.kernel
-        def run_steps(n: ti.i32, dt: real, t_first: ti.f64, dt_time: ti.f64, steps: ti.i32,
-                      full_first: ti.i32, record_last: ti.i32, drift_last: ti.i32) -> ti.i32:
-            """Up to ``steps`` whole steps in one launch, every loop on one thread: the serial
-            mode's answer to launch costs (~15 us a launch, against the ~100 us a parallel
-            loop costs to dispatch). Step j is at t_first + j dt_time (s): the bodies' frames,
-            the pair stage, the cell stage, the particle stage, then the next drift (not after
-            the last step unless ``drift_last``). It stops before a step whose neighbour lists
-            the previous drift invalidated (Flag.REBUILD): the host rebuilds and goes on.
-            ``full_first``: the first step follows a rebuild ([mobility]); ``record_last``: the
-            last step books the wall loads. Returns the steps done."""
-            done = 0
-            ti.loop_config(serialize=True)
-            for j in range(steps):
-                if j > 0 and flags[Flag.REBUILD] != 0:
-                    break
-                t = t_first + j * dt_time
-                last = j == steps - 1
-                record, full = begin_step(j, t, last, record_last, full_first, True)
-                for i in range(n):
-                    pair_particle(i, dt, full, ti.static(scatter_ok), 0)
-                for cell_stage in ti.static(cell_funcs):
-                    cell_stage(n, dt)
-                then_drift = 1
-                if last:
-                    then_drift = drift_last
-                for i in range(n):
-                    gather_particle(i, dt, record, then_drift, t + dt_time,
-                                    ti.static(1 if scatter_ok else 0))
-                done += 1
-            return done
-
-        self._run_steps = run_steps
-        self._run_worker_steps = None
-        workers = self.workers
-        if not workers:
-            return
-        arrivals, claims, outcome = self.worker_arrivals, self.worker_claims, self.worker_outcome
-        has_cells = len(cell_funcs) > 0
-
-        barrier = make_barrier(arrivals, workers)
-
-        copies = self.worker_copies
-        worker_first = self.worker_first if copies else None
-
-        @ti.func
-        def cut_ranges(n):
-            """The workers' fixed ranges of the pair stage when they add the partner shares to
-            copies of their own (``copies``): fixed, so that the sums' order, and so the
-            results, do not depend on the threads' timing; contiguous (cell-sorted: a worker's
-            partners are mostly its own particles); cut at equal shares of the pair stage's
-            work, one per owned entry and one per particle. Worker w's range starts at
-            worker_first[w]. One serial pass (~0.5 ns a particle), at the start of a run."""
-            work = ti.i64(0)
-            for i in range(n):
-                work += s.row_owned[i] + 1
-            total_work = work
-            worker_first[0] = 0
-            for w in range(1, workers):
-                worker_first[w] = n
-            worker_first[workers] = n
-            work = ti.i64(0)
-            w = 1
-            for i in range(n):
-                # the first particle whose work starts at or past w / T of the total
-                while w < workers and work * workers >= total_work * w:
-                    worker_first[w] = i
-                    w += 1
-                work += s.row_owned[i] + 1
-
-        @ti.func
-        def claim(stage):
-            """The next chunk of particles of ``stage`` (the counter stage % 3, which worker 0
-            zeroes one stage ahead: its last use ended two barriers ago)."""
-            return ti.atomic_add(claims[stage % 3], 1)
-
-        @ti.kernel
-        def run_worker_steps(n: ti.i32, dt: real, t_first: ti.f64, dt_time: ti.f64, steps: ti.i32,
-                             full_first: ti.i32, record_last: ti.i32,
-                             drift_last: ti.i32) -> ti.types.vector(2, ti.i32):
-            """run_steps on ``workers`` threads at once (WORKER_TASK): per step the pair
-            stage (each worker its fixed range, cut_ranges, with copies of the sums of its
-            own; else over chunks the workers claim), the cell stage (worker 0) and the
-            particle stage with the next drift (over claimed chunks), with a barrier after
-            each. Returns (steps done, barrier waits that stalled)."""
-            arrivals[0] = 0
-            arrivals[1] = 0
-            for k in ti.static(range(3)):
-                claims[k] = 0
-            outcome[0] = 0
-            outcome[1] = 0
-            chunk = ti.max(WORKER_CHUNK, n // (WORKER_CHUNKS * workers))
-            chunks = (n + chunk - 1) // chunk
-            stall_spins = STALL_SPINS + ti.cast(STALL_SPINS_PER_PARTICLE * n, ti.i32)
-            for task in range(workers * WORKER_TASK):
-                if task % WORKER_TASK == 0:
-                    w = task // WORKER_TASK
-                    arrived = 0
-                    stalls = 0
-                    mine_from = 0
-                    mine_to = 0
-                    if ti.static(copies > 0):
-                        if w == 0:
-                            cut_ranges(n)
-                        arrived += 1
-                        stalls += barrier(arrived, stall_spins)
-                        mine_from = worker_first[w]
-                        mine_to = worker_first[w + 1]
-                    done = 0
-                    for j in range(steps):
-                        # (read by all after the last barrier; only a drift sets it)
-                        if j > 0 and flags[Flag.REBUILD] != 0:
-                            break
-                        t = t_first + j * dt_time
-                        last = j == steps - 1
-                        # (worker 0 zeroes and sets what the particle stage reads after a barrier)
-                        record, full = begin_step(j, t, last, record_last, full_first, w == 0)
-                        if w == 0:
-                            claims[(arrived + 1) % 3] = 0
-                        if ti.static(copies > 0):
-                            # the worker's own range, shares into its own copy
-                            for i in range(mine_from, mine_to):
-                                pair_particle(i, dt, full, True, w)
-                        else:
-                            c = claim(arrived)
-                            while c < chunks:
-                                for i in range(c * chunk, ti.min(n, (c + 1) * chunk)):
-                                    pair_particle(i, dt, full, False, 0)
-                                c = claim(arrived)
-                        arrived += 1
-                        stalls += barrier(arrived, stall_spins)
-                        if ti.static(has_cells):
-                            if w == 0:
-                                claims[(arrived + 1) % 3] = 0
-                                for cell_stage in ti.static(cell_funcs):
-                                    cell_stage(n, dt)
-                            arrived += 1
-                            stalls += barrier(arrived, stall_spins)
-                        then_drift = 1
-                        if last:
-                            then_drift = drift_last
-                        if w == 0:
-                            claims[(arrived + 1) % 3] = 0
-                        # (claimed chunks: no race here, and fixed ranges measured no faster
-                        # - 1.00x, in-process A/B at 32k - with twice the stalled waits)
-                        c = claim(arrived)
-                        while c < chunks:
-                            for i in range(c * chunk, ti.min(n, (c + 1) * chunk)):
-                                gather_particle(i, dt, record, then_drift, t + dt_time,
-                                                ti.static(copies))
-                            c = claim(arrived)
-                        arrived += 1
-                        stalls += barrier(arrived, stall_spins)
-                        done += 1
-                    if w == 0:
-                        outcome[0] = done
-                    ti.atomic_add(outcome[1], stalls)
-            return ti.Vector([outcome[0], outcome[1]])
-
-        self._run_worker_steps = run_worker_steps
+        # the step's functions, which every driver runs (drivers.py)
+        step = drivers.StepFunctions(
+            pair_particle=pair_particle, gather_particle=gather_particle, begin_step=begin_step,
+            cell_funcs=cell_funcs, flags=flags, state=s, real=real, scatter_ok=scatter_ok)
+        self._run_steps = drivers.compile_run_steps(step)
+        self._run_worker_steps = (drivers.compile_run_worker_steps(step, pool) if pool.workers
+                                  else None)
 
     # ------------------------------------------------------------------ driver
     def start(self, n: int) -> int:
@@ -1082,6 +841,7 @@ class Engine:
         if self.mesh is not None:
             self.mesh.update_frames(self.time)
         self.choose_loop_mode(n)
+        self.flags[Flag.REBUILD] = 0          # (set by the insertion of the initial fill)
         self.count = self.broadphase.rebuild(n)
         if self.mobility is not None:
             self.mobility.update(self.context, self.count, self.time)
@@ -1117,109 +877,15 @@ class Engine:
         """Advance ``steps`` time steps of ``self.dt``: in runs of steps per launch in the
         serial mode (``runs``), else two parallel launches per step."""
         if self.serial and self.runs:
-            self._advance_in_runs(steps, record_last)
+            drivers.advance_in_runs(self, steps, record_last)
             return
-        if self.workers_give_way:
-            self.workers = 0
-        if self.workers and self._run_worker_steps is not None:
-            self._advance_in_runs(steps, record_last, on_workers=True)
+        pool = self.worker_pool
+        if pool.give_way:
+            pool.workers = 0
+        if pool.workers and self._run_worker_steps is not None:
+            drivers.advance_in_runs(self, steps, record_last, on_workers=True)
             return
-        dt = self.dt
-        for k in range(steps):
-            n = self.count
-            if k == 0:
-                # later steps drifted at the end of the previous gather
-                self._drift(n, dt, self.time + dt)
-            self.time += dt
-            rebuild = self.flags[Flag.REBUILD] != 0
-            if self.mesh is not None:
-                self.mesh.update_frames(self.time)
-                self.mesh.interval_steps += 1
-                rebuild = rebuild or self.mesh.needs_rebinning(self.time)
-            if rebuild:
-                self.rebuild(n)
-            last = k == steps - 1
-            record = 1 if (record_last and last) else 0
-            if record:
-                self.wall_force.fill(0.0)
-                if self.thermal:
-                    self.wall_heat.fill(0.0)
-            self._pair_forces(self.count, dt, 1 if rebuild else 0)
-            for e in self.cell_effects:
-                e.after_pairs(self.context, self.count, dt)     # the gas sees this step's particles
-            # the state is left at a whole step (no pending drift) when advance returns
-            self._gather(self.count, dt, record, 0 if last else 1, self.time + dt)
-
-    # the stalled share of barrier waits, judged over windows of WORKER_STALL_WINDOW waits, at
-    # which the workers give way to the parallel kernels (None: never, for tests; tuning.py)
-    worker_stall_limit: "float | None" = WORKER_STALL_LIMIT
-    WORKER_STALL_WINDOW = WORKER_STALL_WINDOW
-    WORKER_STALLED_WINDOWS = WORKER_STALLED_WINDOWS
-
-    def _count_stalls(self, stalls: int, barriers: int):
-        """Book a run on the workers: ``barriers`` waits of which ``stalls`` stalled. When more
-        than ``worker_stall_limit`` of the waits stalled in WORKER_STALLED_WINDOWS windows in
-        a row, the threads are sharing the
-        cores with other work (two test processes, a sweep's workers) and each spin-wait costs
-        a scheduler slice: this engine goes on with the parallel kernels (the same physics;
-        the partners' shares are then gathered, an order of sums that differs by round-off)."""
-        self.worker_stalls += stalls
-        self.worker_barriers += barriers
-        self.window_stalls += stalls
-        self.window_barriers += barriers
-        if self.window_barriers < self.WORKER_STALL_WINDOW:
-            return
-        window_stalls, window_barriers = self.window_stalls, self.window_barriers
-        self.window_stalls = self.window_barriers = 0
-        limit = self.worker_stall_limit
-        if limit is None or window_stalls <= limit * window_barriers:
-            self.stalled_windows = 0
-            return
-        # (two windows in a row: a slow phase of a shared host passes, other work stays)
-        self.stalled_windows += 1
-        if not self.workers_give_way and self.stalled_windows >= self.WORKER_STALLED_WINDOWS:
-            import sys
-            print(f"taichi-dem: note: {window_stalls} of {window_barriers} barrier "
-                  f"waits of the {self.workers} worker threads stalled (the cores are shared "
-                  f"with other work); going on with one parallel launch per stage, in this "
-                  f"process's later simulations too",
-                  file=sys.stderr)
-            self.workers_give_way = True      # from the next advance on (a run is under way)
-            _probe_result["gave way"] = True  # and later engines of this process start so
-
-    def _advance_in_runs(self, steps: int, record_last: bool, on_workers: bool = False):
-        """``advance`` with run_steps (``on_workers``: run_worker_steps): the host only
-        rebuilds, between runs. A run ends at a rebuild the drift flags, at the last step the
-        current binning of the bodies' triangles serves, or at ``steps``."""
-        dt = self.dt
-        k = 0
-        while k < steps:
-            n = self.count
-            if k == 0:
-                self._drift(n, dt, self.time + dt)   # later runs end with their drift done
-            self.time += dt                          # the time of the drifted positions
-            rebuild = self.flags[Flag.REBUILD] != 0
-            if self.mesh is not None:
-                rebuild = rebuild or self.mesh.needs_rebinning(self.time)
-            if rebuild:
-                self.rebuild(n)
-            run = steps - k
-            if self.mesh is not None:
-                run = self.mesh.steps_before_rebinning(self.time, dt, run)
-            final = k + run == steps
-            args = (self.count, dt, self.time, dt, run, 1 if rebuild else 0,
-                    1 if (record_last and final) else 0, 0 if final else 1)
-            if on_workers:
-                done, stalls = (int(v) for v in self._run_worker_steps(*args))
-                self.worker_runs += 1
-                self._count_stalls(stalls, done * (3 if self.cell_effects else 2)
-                                   + (1 if self.worker_copies else 0))
-            else:
-                done = int(self._run_steps(*args))
-            if self.mesh is not None:
-                self.mesh.interval_steps += done
-            k += done
-            self.time += (done - 1) * dt
+        drivers.advance_per_stage(self, steps, record_last)
 
     def measure(self) -> dict:
         self._measure(self.count)
@@ -1250,156 +916,10 @@ class Engine:
         return self.count - int(self.flags[Flag.DEAD_IN_SLOTS])
 
     def insert(self, arrays: dict):
-        """Put new particles into the slots after the last one in use and flag a rebuild.
-        ``arrays``: position, velocity (n,3) m, m/s; radius m, mass kg, key (slot keys not in
-        use), serial, origin (n,), birth_time s; temperature K and inverse_thermal_mass 1/(J/K)
-        when thermal; moisture kg/kg when drying. The state must be at a whole step (between
-        ``advance`` calls), or mid-step before a rebuild (drifted, forces pending: the
-        ``before_rebuild`` hook) with velocities at t - dt/2 like the other particles'."""
-        k = len(arrays["radius"])
-        if k == 0:
-            return
-        if self.count + k > self.state.capacity:
-            raise RuntimeError("particle capacity exceeded")
-        # two arrays (each ndarray argument costs a launch ~25 us: an insertion every few
-        # dozen steps paid ~0.3 ms for thirteen); f64 columns, rounded to the device's
-        # precision in the kernel (the temperature and moisture keep f64 where an f64
-        # residual holds what f32 cannot, thermal/precision.py)
-        reals = np.zeros((k, InsertColumn.SIZE), np.float64)
-        reals[:, InsertColumn.POSITION:InsertColumn.POSITION + 3] = arrays["position"]
-        reals[:, InsertColumn.VELOCITY:InsertColumn.VELOCITY + 3] = arrays["velocity"]
-        for name, column in (("radius", InsertColumn.RADIUS), ("mass", InsertColumn.MASS),
-                             ("birth_time", InsertColumn.BIRTH_TIME),
-                             ("temperature", InsertColumn.TEMPERATURE),
-                             ("inverse_thermal_mass", InsertColumn.INVERSE_THERMAL_MASS),
-                             ("moisture", InsertColumn.MOISTURE)):
-            if name in arrays:
-                reals[:, column] = arrays[name]
-        ints = np.stack([np.asarray(arrays[name], np.int64) for name in
-                         ("material", "key", "serial", "origin")], axis=1).astype(np.int32)
-        self._insert(self.count, k, reals, ints)
-        self.count += k
+        """Put new particles into the slots after the last one in use and flag a rebuild
+        (insertion.py: the one way particles are created, the initial fill's too)."""
+        self.count = self.insertion.insert(self.count, arrays)
 
     def occupied(self) -> dict:
-        """What the slots in use hold, for placing new particles among them: ``alive`` (n,)
-        bool, ``position`` (n, 3) m, ``radius`` (n,) m, ``particle_id`` (n,) int, in slot
-        order. One serial launch (four to_numpy calls would be four parallel launches, each
-        copying the whole capacity)."""
-        n = self.count
-        table = np.zeros((n, 6), np.float64)
-        if n:
-            self._occupied(n, table)
-        return {"alive": table[:, 4] != 0.0, "position": table[:, :3], "radius": table[:, 3],
-                "particle_id": table[:, 5].astype(np.int64)}
-
-    def _compile_occupied(self):
-        s = self.state
-
-        @ti.kernel
-        def occupied(n: ti.i32, out: ti.types.ndarray(), serial_loops: ti.template()):
-            ti.loop_config(serialize=serial_loops)
-            for i in range(n):
-                for k in ti.static(range(3)):
-                    out[i, k] = ti.cast(s.position[i][k], ti.f64)
-                out[i, 3] = ti.cast(s.radius[i], ti.f64)
-                out[i, 4] = ti.cast(s.alive[i], ti.f64)
-                out[i, 5] = ti.cast(s.particle_id[i], ti.f64)
-
-        self._occupied = self.serial_switch(occupied)
-
-    def _compile_insert(self):
-        s = self.state
-        gravity = ti.Vector(list(self.scene.simulation.gravity))
-        thermal = self.thermal
-        process = s.process
-        n_walls = s.n_walls
-        wall_fields = [getattr(s, n) for n in s.wall_fields]
-        mesh = self.mesh
-        has_mesh = mesh is not None
-        n_bodies = mesh.n_bodies if has_mesh else 0
-        heat_loads = has_mesh and mesh.particle_load_heat is not None
-        flags = self.flags
-        drying = self.moisture
-        compensated = s.compensated
-        real = self.real
-        compensated_add, split_f64 = make_compensated_add(real)
-        mobility = self.mobility is not None
-        active = self.mobility.particle_active if mobility else None
-        C = InsertColumn
-        # what effects keep per particle beyond what is inserted (a coarse-grained particle's
-        # wall-contact clock): zero, not what a removed particle left in the slot
-        inserted = {"temperature", "temperature_residual", "inverse_thermal_mass", "moisture",
-                    "moisture_residual"}
-        fresh = {}
-        for e in self.effect_list:
-            fresh.update({n: v for n, (v, _) in e.particle_fields.items() if n not in inserted})
-        fresh_scalars = [getattr(s, n) for n, vec in fresh.items() if not vec]
-        fresh_vectors = [getattr(s, n) for n, vec in fresh.items() if vec]
-
-        @ti.kernel
-        def insert(start: ti.i32, k: ti.i32, reals: ti.types.ndarray(dtype=ti.f64, ndim=2),
-                   ints: ti.types.ndarray(dtype=ti.i32, ndim=2), serial_loops: ti.template()):
-            """Particles ``start`` .. ``start + k - 1`` from the rows of ``reals`` (columns:
-            InsertColumn) and ``ints`` (material, key, serial, origin)."""
-            ti.loop_config(serialize=serial_loops)
-            for q in range(k):
-                i = start + q
-                x = ti.Vector([ti.cast(reals[q, C.POSITION + a], real) for a in ti.static(range(3))])
-                s.position[i] = x
-                s.reference_position[i] = x
-                s.velocity[i] = ti.Vector([ti.cast(reals[q, C.VELOCITY + a], real)
-                                           for a in ti.static(range(3))])
-                s.angular_velocity[i] = ti.Vector([0.0, 0.0, 0.0])
-                # inserted clear of every contact: free flight is the first step's acceleration
-                s.acceleration[i] = gravity
-                s.angular_acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
-                r = ti.cast(reals[q, C.RADIUS], real)
-                m = ti.cast(reals[q, C.MASS], real)
-                s.radius[i] = r
-                s.mass[i] = m
-                s.inverse_mass[i] = 1.0 / m
-                s.inverse_inertia[i] = 1.0 / (SPHERE_INERTIA * m * r * r)
-                s.material[i] = ints[q, 0]
-                s.particle_id[i] = ints[q, 1]
-                s.alive[i] = 1
-                if ti.static(mobility):
-                    active[i] = 1     # until the rebuild this insertion flags judges it
-                if ti.static(process):
-                    s.serial[i] = ints[q, 2]
-                    s.origin[i] = ints[q, 3]
-                    s.birth_time[i] = ti.cast(reals[q, C.BIRTH_TIME], real)
-                if ti.static(thermal and compensated):
-                    t_part, t_rest = split_f64(reals[q, C.TEMPERATURE])
-                    s.temperature[i] = t_part
-                    s.temperature_residual[i] = t_rest
-                    s.inverse_thermal_mass[i] = ti.cast(reals[q, C.INVERSE_THERMAL_MASS], real)
-                elif ti.static(thermal):
-                    s.temperature[i] = ti.cast(reals[q, C.TEMPERATURE], real)
-                    s.inverse_thermal_mass[i] = ti.cast(reals[q, C.INVERSE_THERMAL_MASS], real)
-                if ti.static(drying and compensated):
-                    x_part, x_rest = split_f64(reals[q, C.MOISTURE])
-                    s.moisture[i] = x_part
-                    s.moisture_residual[i] = x_rest
-                elif ti.static(drying):
-                    s.moisture[i] = ti.cast(reals[q, C.MOISTURE], real)
-                # the slot may hold what a removed particle left: no rows, no history, no loads
-                s.row_owned[i] = 0
-                s.row_count[i] = 0
-                for f in ti.static(fresh_scalars):
-                    f[i] = 0
-                for f in ti.static(fresh_vectors):
-                    f[i] = ti.Vector([0.0, 0.0, 0.0])
-                for f in ti.static(wall_fields):
-                    for w in ti.static(range(n_walls)):
-                        f[i, w] = ti.Vector([0.0, 0.0, 0.0])
-                if ti.static(has_mesh):
-                    mesh.mesh_count[i] = 0
-                    for b in ti.static(range(n_bodies)):
-                        mesh.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
-                        mesh.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
-                        if ti.static(heat_loads):
-                            mesh.particle_load_heat[i, b] = 0.0
-            flags[Flag.REBUILD] = 1
-
-        self._insert = self.serial_switch(insert)
-
+        """What the slots in use hold (insertion.Insertion.occupied)."""
+        return self.insertion.occupied(self.count)

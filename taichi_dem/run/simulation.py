@@ -21,7 +21,6 @@ from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
 from ..effects.base import Effect
 from ..engine import backend, transfer
-from ..engine.state import SPHERE_INERTIA
 from ..engine.tuning import MOST_SPECIES
 from ..errors import DivergenceError, SceneError, StaleSimulationError
 from ..scene.loader import load_scene, parse_scene
@@ -270,64 +269,30 @@ class Simulation:
         return resume(path, build=cls, **kwargs)
 
     def _upload(self, placed):
-        s = self.engine.state
+        """The initial fill into the engine, by the same insertion as the factories'
+        (engine/insertion.py)."""
         n = self.n_initial
-        cap = s.capacity
-        npf = np.float64 if self.precision == "f64" else np.float32
-
-        def vec(a):
-            out = np.zeros((cap, 3), npf)
-            out[:n] = a
-            return out
-
-        def scal(a, dtype=npf):
-            out = np.zeros(cap, dtype)
-            out[:n] = a
-            return out
-
-        writes = []          # (field, host array): one copy kernel for them all
-        put = lambda field, values: writes.append((field, values))  # noqa: E731
         density = self.tables.density[placed.material]
         mass = 4.0 / 3.0 * math.pi * placed.radius ** 3 * density
-        movable = ~placed.fixed
-        put(s.position, vec(placed.position))
-        put(s.velocity, vec(placed.velocity * movable[:, None]))
-        put(s.angular_velocity, vec(placed.angular_velocity * movable[:, None]))
-        put(s.reference_position, vec(placed.position))
-        put(s.radius, scal(placed.radius))
-        put(s.mass, scal(mass))
-        put(s.inverse_mass, scal(np.where(movable, 1.0 / mass, 0.0)))
-        put(s.inverse_inertia, scal(np.where(movable, 1.0 / (SPHERE_INERTIA * mass * placed.radius ** 2), 0.0)))
-        put(s.material, scal(placed.material, np.int32))
-        put(s.particle_id, scal(np.arange(n), np.int32))
-        put(s.alive, scal(np.ones(n), np.int32))
-        if s.process:
-            put(s.serial, scal(np.arange(n), np.int32))
-            put(s.origin, scal(np.full(n, -1), np.int32))
-            put(s.birth_time, scal(np.zeros(n)))
+        arrays = {"position": placed.position, "velocity": placed.velocity,
+                  "angular_velocity": placed.angular_velocity, "fixed": placed.fixed,
+                  "radius": placed.radius, "mass": mass, "material": placed.material,
+                  "key": np.arange(n), "serial": np.arange(n), "origin": np.full(n, -1),
+                  "birth_time": np.zeros(n)}
         if self.scene.thermal is not None:
             heat_capacity = np.array([self.scene.materials[name].heat_capacity or 0.0
                                       for name in self.tables.names])[placed.material]
-            put(s.temperature, scal(placed.temperature))
-            if s.compensated:
-                # what f32 cannot hold of the temperature (engine/precision.py)
-                exact = np.asarray(placed.temperature, np.float64)
-                put(s.temperature_residual,
-                    scal(exact - exact.astype(np.float32).astype(np.float64), np.float64))
+            arrays["temperature"] = placed.temperature
             thermal_mass = mass * heat_capacity
             if self.engine.moisture:
                 # X per particle from its fill (dry where the fill gives none); the water's heat
                 # capacity counts in the thermal mass m (c + X c_w)
                 x = np.array([f.moisture or 0.0 for f in self.scene.fills])[placed.fill] \
                     if len(self.scene.fills) else np.zeros(n)
-                put(s.moisture, scal(x))
-                if s.compensated:
-                    x = np.asarray(x, np.float64)
-                    put(s.moisture_residual,
-                        scal(x - x.astype(np.float32).astype(np.float64), np.float64))
+                arrays["moisture"] = x
                 thermal_mass = mass * (heat_capacity + x * self.scene.thermal.water_heat_capacity)
-            put(s.inverse_thermal_mass, scal(1.0 / thermal_mass))
-        transfer.write(writes)
+            arrays["inverse_thermal_mass"] = 1.0 / thermal_mass
+        self.engine.insert(arrays)
 
     def _mark_stale(self, why: str):
         self._stale = why

@@ -17,6 +17,7 @@ import pytest
 
 import taichi_dem as td
 from taichi_dem.engine.stepper import Engine
+from taichi_dem.engine.workers import WorkerPool
 
 sys.path.insert(0, str(Path(__file__).parent))
 from resume_scene import scene_text  # noqa: E402
@@ -58,7 +59,7 @@ def run(text, parallel_from, steps, fused=True, workers=False, rebuilds_on_worke
     if setup is not None:
         setup(sim)
     if workers:
-        sim.engine.worker_stall_limit = None     # (two test processes may share the cores)
+        sim.engine.worker_pool.stall_limit = None     # (two test processes may share the cores)
     else:
         sim.engine.workers = 0
     try:
@@ -67,7 +68,7 @@ def run(text, parallel_from, steps, fused=True, workers=False, rebuilds_on_worke
         e = sim.engine
         return dict(position=p["position"], velocity=p["velocity"],
                     temperature=p.get("temperature"), serial=e.serial, runs=e.runs,
-                    worker_runs=e.worker_runs, copies=e.worker_copies,
+                    worker_runs=e.worker_pool.runs, copies=e.worker_pool.copies,
                     rebuilds=e.broadphase.rebuilds, fused=list(e.broadphase.fused_stages),
                     fused_waits=e.broadphase.fused_waits,
                     on_workers=list(e.broadphase.worker_stages),
@@ -111,11 +112,11 @@ def workers_allowed(monkeypatch):
     """The worker threads here even where the suite turns them off (tasks.py test: two
     pytest processes fill the cores), and even if another module's simulation in this test
     process found them stalling and sent later ones to the launches."""
-    from taichi_dem.engine import stepper
+    from taichi_dem.engine import workers
     monkeypatch.setenv("TAICHI_DEM_WORKERS", "1")
-    stepper._probe_result.pop("gave way", None)
+    workers._probe_result.pop("gave way", None)
     yield
-    stepper._probe_result.pop("gave way", None)
+    workers._probe_result.pop("gave way", None)
 
 
 @needs_two_cores
@@ -126,8 +127,8 @@ def test_claiming_workers_equal_the_parallel_kernels_bit_for_bit(monkeypatch):
     parallel kernels do: each particle's sums are added in the same order whichever worker
     takes it, so in the heap (many particles receive two or more partners' shares) the state
     is the parallel kernels' bit for bit, through pouring, impacts and rebuilds."""
-    from taichi_dem.engine import stepper
-    monkeypatch.setattr(stepper, "WORKER_COPIES", False)
+    from taichi_dem.engine import tuning
+    monkeypatch.setattr(tuning, "WORKER_COPIES", False)
     text = heap_text()
     workers = run(text, 0, 3000, workers=True)
     launches = run(text, 0, 3000)
@@ -148,7 +149,7 @@ def test_claiming_workers_equal_the_parallel_kernels_bit_for_bit(monkeypatch):
 @needs_two_cores
 def test_workers_with_their_own_copies_repeat_bit_for_bit():
     """The workers' pair stage over fixed ranges, each adding its partners' shares to a copy
-    of its own (Engine.worker_copies): the order of every sum is fixed, so two runs through
+    of its own (WorkerPool.copies): the order of every sum is fixed, so two runs through
     pouring, impacts and rebuilds give the same state bit for bit, whatever the threads'
     timing."""
     text = heap_text()
@@ -211,32 +212,31 @@ def test_stalled_workers_give_way_to_the_parallel_kernels(capsys):
     """Barrier waits that stall (the threads share the cores with other work) send the engine
     to the parallel launches from its next advance on - with a note, and the same results;
     a stall now and then (a noisy machine) does not."""
-    from taichi_dem.engine import stepper
     text = heap_text()
     sim = td.Simulation.from_text(text, parallel_from=0)
     try:
         e = sim.engine
-        e.worker_stall_limit = None             # (another test process may share the cores)
+        e.worker_pool.stall_limit = None             # (another test process may share the cores)
         sim.step(100)
-        assert e.worker_runs > 0 and e.workers
-        e.worker_stall_limit = Engine.worker_stall_limit
-        e.window_barriers = e.window_stalls = 0
-        window = Engine.WORKER_STALL_WINDOW
-        e._count_stalls(170, window - 10)       # 8.5 % of a window not yet full: not judged
-        assert e.window_barriers == window - 10 and e.stalled_windows == 0
+        assert e.worker_pool.runs > 0 and e.workers
+        e.worker_pool.stall_limit = WorkerPool.stall_limit
+        e.worker_pool.window_barriers = e.worker_pool.window_stalls = 0
+        window = WorkerPool.STALL_WINDOW
+        e.worker_pool.count_stalls(170, window - 10)       # 8.5 % of a window not yet full: not judged
+        assert e.worker_pool.window_barriers == window - 10 and e.worker_pool.stalled_windows == 0
         sim.step(10)                            # (20 more barriers: judged, 8.4 % at least)
-        assert e.window_barriers == 0 and e.stalled_windows == 1
-        assert e.workers and not e.workers_give_way      # one window: a slow phase, perhaps
-        e._count_stalls(30, window - 20)        # 1.5 - 2.5 %: a noisy machine
+        assert e.worker_pool.window_barriers == 0 and e.worker_pool.stalled_windows == 1
+        assert e.workers and not e.worker_pool.give_way      # one window: a slow phase, perhaps
+        e.worker_pool.count_stalls(30, window - 20)        # 1.5 - 2.5 %: a noisy machine
         sim.step(10)
-        assert e.stalled_windows == 0 and not e.workers_give_way
-        e._count_stalls(window // 5, window)    # 20 %: the cores are shared
-        assert e.stalled_windows == 1 and not e.workers_give_way
-        e._count_stalls(window // 5, window)    # and still
-        assert e.workers_give_way and "stalled" in capsys.readouterr().err
-        runs = e.worker_runs
+        assert e.worker_pool.stalled_windows == 0 and not e.worker_pool.give_way
+        e.worker_pool.count_stalls(window // 5, window)    # 20 %: the cores are shared
+        assert e.worker_pool.stalled_windows == 1 and not e.worker_pool.give_way
+        e.worker_pool.count_stalls(window // 5, window)    # and still
+        assert e.worker_pool.give_way and "stalled" in capsys.readouterr().err
+        runs = e.worker_pool.runs
         sim.step(100)
-        assert e.workers == 0 and e.worker_runs == runs
+        assert e.workers == 0 and e.worker_pool.runs == runs
         # and this process's next simulations start with the launches
         with td.Simulation.from_text(text, parallel_from=0) as later:
             assert later.engine.workers == 0
@@ -350,17 +350,18 @@ def test_direct_partner_shares_equal_the_gather_to_round_off():
             if name == "parallel":
                 e.workers = 0
             else:
-                e.worker_stall_limit = None
+                e.worker_pool.stall_limit = None
             checkpoint.restore(sim, snap)
             sim.step(1)
             assert e.serial == (name == "serial")
-            assert (e.worker_runs == 1) == (name == "workers"), name
+            assert (e.worker_pool.runs == 1) == (name == "workers"), name
             states[name] = sim.particles()
             sums = [e.state.scattered_force, e.state.scattered_torque,
                     e.state.scattered_heat, e.state.scattered_conductance]
             if name == "workers":
-                assert e.worker_copies == 2
-                sums += [e.copy_force, e.copy_torque, e.copy_heat, e.copy_conductance]
+                assert e.worker_pool.copies == 2
+                pool = e.worker_pool
+                sums += [pool.copy_force, pool.copy_torque, pool.copy_heat, pool.copy_conductance]
                 # both workers' ranges own pairs whose partners are in the other's
                 n, rs = e.count, e.state.row_start.to_numpy()
                 assert 0 < np.searchsorted(rs[:n + 1], rs[n] // 2) < n
