@@ -33,7 +33,7 @@ import time
 import tomllib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Optional
+from typing import Optional
 
 from ..errors import SceneError
 from . import overrides as ov
@@ -192,7 +192,6 @@ def _run_here(run_dir: str) -> int:
     run to ``until``, checkpoint, read the key outputs back from the results file, write
     ``done.json``. Exit 2 on bad input, 3 on divergence (message on stderr)."""
     from ..errors import DivergenceError
-    from ..run import checkpoint as ckmod
     from ..run.simulation import Simulation
     from ..scene.loader import parse_scene
     from .outputs import key_outputs, run_facts

@@ -26,6 +26,7 @@ import math
 import numpy as np
 import taichi as ti
 
+from .surface_survey import SurfaceSurvey
 from ..contacts.geometry import contact_types
 from ..contacts.history import history_members, make_history_io
 from ..contacts.law import has_effects, margin_fraction
@@ -91,6 +92,8 @@ class MeshContacts:
     def __init__(self, engine, kinematics: BodyKinematics):
         self.e = engine
         self.kin = kinematics
+        # what touches the bodies now, for the sensors and the checks (surface_survey.py)
+        self.survey = SurfaceSurvey(self)
         bodies = kinematics.bodies
         real = engine.real
         s = engine.state
@@ -516,7 +519,6 @@ class MeshContacts:
         mesh_history = make_history_io(History, members, {k: stored[k] for k in members})
         periodic = any(e.grid.periodic)
         heat_loads = self.particle_load_heat is not None
-        s = e.state
         same_surface_cos = SAME_SURFACE_COS
         # near-contact heat effects (the gas gap) see each body's nearest surface point within
         # the margin they ask for (one lens per body: the plane closed form stands for the
@@ -536,7 +538,6 @@ class MeshContacts:
             start = m.mesh_start[i]
             end = start + m.mesh_count[i]
             nearest = ti.Vector([ri * ti.static(2.0 + lens)] * max(nb, 1))
-            nearest_normal = ti.Matrix([[0.0, 0.0, 1.0]] * max(nb, 1))
             # geometry of every candidate triangle, in its body's reference frame: the particle
             # is moved into that frame (one rotation) instead of the triangle out of it (three)
             for k in range(start, end):
@@ -701,102 +702,6 @@ class MeshContacts:
             else:
                 good = mid
         return good
-
-    def contact_counts(self, n: int) -> np.ndarray:
-        """Number of alive particles touching each body now (the heat-exchange surface's
-        contacts of the seed study), (B,) int."""
-        if getattr(self, "_count_for", None) is not self.mesh_contact:
-            # (re)compiled when the entry arrays were reallocated
-            self._count_for = self.mesh_contact
-            m = self
-            s = self.e.state
-            nb = self.n_bodies
-            if not hasattr(self, "touching"):
-                counts = self.e.new_tree()
-                self.touching = counts.add("touching", ti.i32, max(nb, 1))
-                counts.finalize()
-
-            @ti.kernel
-            def count_contacts(n: ti.i32, serial_loops: ti.template()):
-                ti.loop_config(serialize=serial_loops)
-                for b in range(nb):
-                    m.touching[b] = 0
-                ti.loop_config(serialize=serial_loops)
-                for i in range(n):
-                    if s.alive[i] != 0:
-                        for b in ti.static(range(nb)):
-                            touches = 0
-                            for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
-                                if m.mesh_contact[k] != 0 and m.tri_body[m.mesh_tri[k]] == b:
-                                    touches = 1
-                            if touches != 0:
-                                ti.atomic_add(m.touching[b], 1)
-            self._count_contacts = self.e.serial_switch(count_contacts)
-        self._count_contacts(n)
-        return self.touching.to_numpy()[: self.n_bodies].astype(np.int64)
-
-    def covered_areas(self, n: int) -> np.ndarray:
-        """Per body, the area (m^2) of its triangles that at least one particle touches now,
-        (B,): the surface the bed covers, for the wall-to-bed heat transfer coefficient. A
-        triangle counts whole, so the figure is as fine as the mesh (a drum shell's triangles
-        run the drum's length: right for a bed along the whole drum)."""
-        if getattr(self, "_covered_for", None) is not self.mesh_contact:
-            self._covered_for = self.mesh_contact
-            m = self
-            s = self.e.state
-            if not hasattr(self, "touched"):
-                tree = self.e.new_tree()
-                self.touched = tree.add("touched_triangle", ti.i32, max(self.n_triangles, 1))
-                tree.finalize()
-
-            @ti.kernel
-            def mark_touched(n: ti.i32, serial_loops: ti.template()):
-                ti.loop_config(serialize=serial_loops)
-                for t in range(m.n_triangles):
-                    m.touched[t] = 0
-                ti.loop_config(serialize=serial_loops)
-                for i in range(n):
-                    if s.alive[i] != 0:
-                        for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
-                            if m.mesh_contact[k] != 0:
-                                m.touched[m.mesh_tri[k]] = 1      # benign race: all write 1
-            self._mark_touched = self.e.serial_switch(mark_touched)
-        if self.n_triangles == 0:
-            return np.zeros(self.n_bodies)
-        self._mark_touched(n)
-        touched = self.touched.to_numpy()[: self.n_triangles] != 0
-        return np.bincount(self.triangle_owner[touched], weights=self.triangle_area[touched],
-                           minlength=self.n_bodies)[: self.n_bodies]
-
-    def deepest_overlaps(self, n: int) -> np.ndarray:
-        """Per body, the largest overlap of a touching particle now, as a fraction of that
-        particle's radius, (B,). A large one means particles are pinched (a gap narrower than
-        the particles, e.g. paddle tips and the shell)."""
-        if getattr(self, "_deepest_for", None) is not self.mesh_overlap:
-            self._deepest_for = self.mesh_overlap
-            m = self
-            s = self.e.state
-            nb = self.n_bodies
-            if not hasattr(self, "deepest"):
-                tree = self.e.new_tree()
-                self.deepest = tree.add("deepest", self.e.real, max(nb, 1))
-                tree.finalize()
-
-            @ti.kernel
-            def deepest_overlap(n: ti.i32, serial_loops: ti.template()):
-                ti.loop_config(serialize=serial_loops)
-                for b in range(nb):
-                    m.deepest[b] = 0.0
-                ti.loop_config(serialize=serial_loops)
-                for i in range(n):
-                    if s.alive[i] != 0:
-                        for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
-                            if m.mesh_contact[k] != 0:
-                                ti.atomic_max(m.deepest[m.tri_body[m.mesh_tri[k]]],
-                                              m.mesh_overlap[k] / s.radius[i])
-            self._deepest_overlap = self.e.serial_switch(deepest_overlap)
-        self._deepest_overlap(n)
-        return self.deepest.to_numpy()[: self.n_bodies].astype(np.float64)
 
     def take_loads(self, n: int):
         """Mean force (N) and torque about the axis point (N m) per body over the steps since

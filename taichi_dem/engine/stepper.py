@@ -20,24 +20,14 @@ One step (velocity Verlet):
 The effects (effects/, thermal/effects.py) declare their stage, fields and tables; those not
 enabled are neither allocated nor compiled (``ti.static``). The engine never imports thermal/.
 
-Loop modes (``serial``, chosen by the particle count at each rebuild): from ``parallel_from``
-particles on, the pair and gather stages run in parallel - on a CPU with two cores or more as
-runs of whole steps in one launch on worker threads that meet at spin barriers
-(``run_worker_steps``, WORKER_TASK): each computes the pairs of a fixed range of particles
-and adds the partners' shares to a copy of the sums of its own, then they claim chunks of
-the particle stage; else (a GPU, one core, workers that stall) as the pair and gather
-kernels above, one launch each per step. The modes add a particle's partners' shares in
-different orders - the same physics to round-off; each is deterministic (the workers' for
-a given number of threads). Below it every loop runs on one thread (``ti.loop_config(serialize=...)``, a
-template argument of every kernel: ``serial_switch``) and ``run_steps`` does several whole
-steps - frames, pairs, cells, gather and the next drift - in one launch, until the drift
-flags a rebuild. The physics is the same ti.funcs (``pair_particle``, ``gather_particle``)
-in all.
-
-Why this module is over 800 lines: the step is still one ``Engine`` written for its three
-drivers (per-stage kernels, ``run_steps``, ``run_worker_steps``) with the workers' probe and
-stall counting beside it; issue 30 item 2 splits it into a frozen model, the state and a
-stepper whose step exists once (docs/architecture.md "Not yet declared by the effects").
+The step exists once, as the ti.funcs ``drift_particle``, ``pair_particle``,
+``gather_particle`` and ``begin_step``; its drivers (drivers.py) run them one launch per stage,
+as runs of steps on one thread (the serial mode, below ``parallel_from`` particles), or as runs
+on the persistent worker threads (workers.py). The modes add a particle's partners' shares in
+different orders - the same physics to round-off; each is deterministic (the workers' for a
+given number of threads). The model the engine is built from is model.py; the particles are
+created by insertion.py; the neighbour lists are broadphase.py's; the sums at a sample are
+measure.py's.
 """
 
 import numpy as np
@@ -45,16 +35,15 @@ import taichi as ti
 
 from . import backend, transfer
 from .broadphase import Broadphase
-from .grid import GridSpec
+from .model import Model
 from .insertion import Insertion
+from .measure import Measure
 from ..contacts.geometry import contact_types, make_geometry
 from ..contacts.history import history_members, make_history_io
-from ..contacts.law import make_contact_law, margin_fraction
-from ..effects import enabled_effects
+from ..contacts.law import make_contact_law
+from ..contacts.planes import make_plane_contacts
 from ..effects.base import EffectContext
-from ..setup.pair_tables import PairTables
-from .state import (SPHERE_INERTIA, FieldTree, Flag, PairState, ParticleState, Reduction,
-                    ThermalSum, fit_rows)
+from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 from . import drivers, tuning
 from .tuning import PARALLEL_FROM
 from .workers import WorkerPool, persistent_workers
@@ -63,48 +52,48 @@ from .workers import WorkerPool, persistent_workers
 class Engine:
     """Owns the device state of one simulation and the kernels that advance it."""
 
-    def __init__(self, scene, tables: PairTables, capacity: int, real, skin: float,
-                 max_radius: float, dt: float, parallel_from: "int | None" = None,
-                 species: "tuple | None" = None):
-        self.scene = scene
-        # the species of particle, ((material index, radius m), ...) or None (radii from a
-        # distribution): what per-species tables (the gas gap's) are built for
-        self.species = species
+    def __init__(self, model: Model, parallel_from: "int | None" = None):
+        """``model``: what the simulation is (model.py, frozen); ``parallel_from``: particles
+        from which a CPU runs the step's loops on all threads."""
+        self.model = model
+        scene = model.scene
+        tables = model.tables
+        real = model.real
+        capacity = model.capacity
         # the loop mode of every kernel (serial_switch); updated with the particle count
         self.threads = backend.cpu_threads()
         self.parallel_from = PARALLEL_FROM if parallel_from is None else int(parallel_from)
         self.serial = False
         self.choose_loop_mode(0)
 
-        self.tables = tables
-        self.real = real
-        self.skin = skin
-        self.dt = dt
+        # (the model's, under the names the step's kernels read)
+        self.scene, self.tables, self.real, self.species = scene, tables, real, model.species
+        self.skin, self.dt, self.max_radius = model.skin, model.dt, model.max_radius
+        self.grid, self.pair_margin, self.walls = model.grid, model.pair_margin, scene.walls
         # the step is composed of these (effects/base.py): what they declare is allocated,
         # what they do is unrolled into the kernels; nothing else is compiled
-        self.effect_list = enabled_effects(scene)
-        self.effects = {e.name for e in self.effect_list}
+        self.effect_list = model.effect_list
+        self.effects = model.effect_names
+        self.contact_effects = model.contact_effects
+        self.particle_effects = model.particle_effects
+        self.cell_effects = model.cell_effects
+        self.contact_fields, self.pair_fields = model.contact_fields, model.pair_fields
+        self.thermal, self.moisture, self.pair_heat = model.thermal, model.moisture, model.pair_heat
         # what the effects see of this engine: the model and the state, read-only
         self.context = EffectContext(self)
         self.material_names = tables.names
-        by_name = {e.name: e for e in self.effect_list}
-        self.contact_effects = tuple(e for e in self.effect_list if e.stage == "contact")
-        self.particle_effects = tuple(e for e in self.effect_list if e.stage == "particle")
-        self.cell_effects = tuple(e for e in self.effect_list if hasattr(e, "after_pairs"))
-        # several steps per launch in the serial mode (Engine.run_steps), unless some effect's
-        # cell stage has no ti.func form
+        # several steps per launch in the serial mode (drivers.run_steps), unless some
+        # effect's cell stage has no ti.func form
         self.runs = self.threads is not None and all(hasattr(e, "cell_func")
                                                      for e in self.cell_effects)
-        self.temperature_effect = by_name.get("temperature")
-        self.drying_effect = by_name.get("drying")
-        self.rolling_epsd = "rolling_epsd" in self.effects
-        self.thermal = scene.thermal is not None
+        self.temperature_effect = model.effect("temperature")
+        self.drying_effect = model.effect("drying")
         self.wall_conduction = "wall_conduction" in self.effects
         self.gas_gap = "gas_gap_wall" in self.effects
-        self.moisture = "drying" in self.effects
-        # [mobility] (effects/mobility.py): inactive particles skip mutual contacts and their
+        self.rolling_epsd = "rolling_epsd" in self.effects
+        # [mobility] (effects/mobility/): inactive particles skip mutual contacts and their
         # integration; "body_frame" carries them with that body (its index, else -1)
-        self.mobility = by_name.get("mobility")
+        self.mobility = model.effect("mobility")
         self.mobility_frame = self.mobility.frame if self.mobility is not None else -1
         # the serial mode's pair stage adds partner shares to the partner directly, with no
         # gather through the mirror index (one thread: no race); [mobility] keeps the entries
@@ -117,38 +106,16 @@ class Engine:
         self.worker_pool = WorkerPool(persistent_workers(self.threads) if self.runs else 0,
                                       capacity, real, self.thermal,
                                       copies=self.scatter_ok and tuning.WORKER_COPIES)
-        self.walls = scene.walls
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
-        particle_fields = {}
-        for e in self.effect_list:
-            particle_fields.update(e.particle_fields)
-        self.contact_fields = {}
-        self.pair_fields = {}
-        for e in self.contact_effects:
-            self.contact_fields.update(e.contact_fields)
-            self.pair_fields.update(e.pair_fields)
-        self.state = ParticleState(capacity, real, len(scene.walls), particle_fields,
+        self.state = ParticleState(capacity, real, len(scene.walls), model.particle_fields,
                                    self.contact_fields, thermal=self.thermal,
                                    process=bool(scene.factories or scene.outlets))
         self.trees.append(self.state.tree)
-        # pairs within a contact margin (a fraction of the larger radius) an effect asks for
-        # are listed and handed to the contact law too (the gas gap near a contact)
-        self.pair_margin = margin_fraction(self.contact_effects, "pair")
-        self.pair_heat = "partner_heat" in self.pair_fields
-        self.grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
-                             (2.0 + self.pair_margin) * max_radius + skin, capacity)
         t = self.new_tree()
         m = len(tables.names)
         # the material-pair tables the enabled effects read, under their physics names
-        self.table = {}
-        table_values = {}
-        for e in self.effect_list:
-            for name, values in e.table_values(scene, tables).items():
-                if name not in self.table:
-                    dtype = ti.i32 if values.dtype.kind in "iu" else real
-                    self.table[name] = t.add(name, dtype, (m, m))
-                    setattr(self, name, self.table[name])
-                    table_values[name] = values
+        self.table = {name: t.add(name, ti.i32 if values.dtype.kind in "iu" else real, (m, m))
+                      for name, values in model.table_values.items()}
         # named slots: Flag (engine/state.py)
         self.flags = t.add("flags", ti.i32, Flag.SIZE)
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
@@ -174,16 +141,14 @@ class Engine:
         # (Broadphase.rebuild_on_workers); False: the separate kernels (tests compare the two)
         self.rebuilds_on_workers = True
         npf = np.float64 if real == ti.f64 else np.float32
-        self.max_radius = max_radius          # (the uploads below may read it)
-        transfer.write((self.table[name], values.astype(np.int32 if self.table[name].dtype == ti.i32
+        transfer.write((self.table[name], values.astype(np.int32 if values.dtype.kind in "iu"
                                                        else npf))
-                       for name, values in table_values.items())
+                       for name, values in model.table_values.items())
         for e in self.effect_list:
             if hasattr(e, "upload"):
                 e.upload(self.context)
         if self.gas_stream is not None:
             self.gas_stream.compile()
-        self.max_radius = max_radius
         self.time = 0.0
         self.pairs: "PairState | None" = None
         self.broadphase = Broadphase(self)
@@ -197,6 +162,7 @@ class Engine:
             self.mobility.compile(self.context)
         self._compile_particle_kernels()
         self.count = 0                     # slots in use
+        self._measure = None               # (measure.py, compiled on first use)
         self.insertion = Insertion(self)
 
     # what enabled effects hold, for the sensors and the measure kernel (None when absent)
@@ -291,7 +257,6 @@ class Engine:
         half_skin_sq = (0.5 * self.skin) ** 2
         real = self.real
         flags = self.flags
-        red = self.reduction
 
         minimum_image = self.minimum_image = g.make_minimum_image()
 
@@ -364,55 +329,7 @@ class Engine:
             for i in range(n):
                 drift_particle(i, dt, t_new)
 
-        thermal = self.thermal
-        moisture = self.moisture
-        compensated = s.compensated
-        sums = self.thermal_sums if thermal else None
-        # the thermal step: S dt with heat capacities divided by S ([thermal] time_scale)
-        dt_step = self.dt * (self.scene.thermal.time_scale if thermal else 1.0)
-
-        @ti.kernel
-        def measure(n: ti.i32, serial_loops: ti.template()):
-            # kinetic energy (translational + rotational, J), largest speed, non-finite flag,
-            # alive count; thermal: sum m c T (J), sum m c (J/K), largest dt sum(h)/(m c)
-            for k in ti.static(range(Reduction.SIZE)):
-                red[k] = 0.0
-            ti.loop_config(serialize=serial_loops)
-            for i in range(n):
-                if s.inverse_mass[i] > 0.0 and s.alive[i] != 0:
-                    m = s.mass[i]
-                    inertia = SPHERE_INERTIA * m * s.radius[i] ** 2
-                    v2 = s.velocity[i].dot(s.velocity[i])
-                    red[Reduction.KINETIC_ENERGY] += (0.5 * m * v2 + 0.5 * inertia
-                                                      * s.angular_velocity[i].dot(s.angular_velocity[i]))
-                    ti.atomic_max(red[Reduction.MAX_SPEED], ti.sqrt(v2))
-                    if not (v2 >= 0.0 and v2 < 1e300):
-                        red[Reduction.NON_FINITE] = 1.0      # NaN or overflow
-                    red[Reduction.MOVING_COUNT] += 1.0
-            if ti.static(thermal):
-                for k in ti.static(range(ThermalSum.SIZE)):
-                    sums[k] = 0.0
-                ti.loop_config(serialize=serial_loops)
-                for i in range(n):
-                    if s.alive[i] != 0:
-                        thermal_mass = 1.0 / ti.cast(s.inverse_thermal_mass[i], ti.f64)
-                        temperature = ti.cast(s.temperature[i], ti.f64)
-                        if ti.static(compensated):
-                            temperature += s.temperature_residual[i]
-                        sums[ThermalSum.THERMAL_ENERGY] += thermal_mass * temperature
-                        sums[ThermalSum.THERMAL_MASS] += thermal_mass
-                        ti.atomic_max(red[Reduction.THERMAL_STEP_RATIO],
-                                      dt_step * s.conductance[i] * s.inverse_thermal_mass[i])
-                        if not (s.temperature[i] > 0.0 and s.temperature[i] < 1e30):
-                            red[Reduction.NON_FINITE] = 1.0
-                        if ti.static(moisture):
-                            water = ti.cast(s.moisture[i], ti.f64)
-                            if ti.static(compensated):
-                                water += s.moisture_residual[i]
-                            sums[ThermalSum.WATER_MASS] += ti.cast(s.mass[i], ti.f64) * water
-                            sums[ThermalSum.DRY_MASS] += ti.cast(s.mass[i], ti.f64)
-
-        self._drift, self._measure = self.serial_switch(drift), self.serial_switch(measure)
+        self._drift = self.serial_switch(drift)
 
     def _compile_pair_kernels(self, p: PairState):
         s = self.state
@@ -463,6 +380,11 @@ class Engine:
             if ti.static(thermal):
                 t = s.temperature[i]
             return t
+
+        plane_contacts = (make_plane_contacts(s, walls, wall_temperature, sphere_surface,
+                                              plane_law, wall_history, wall_force, wall_heat,
+                                              thermal, temperature_of)
+                          if n_walls else None)
 
         mobility = self.mobility is not None
         active = self.mobility.particle_active if mobility else None
@@ -622,24 +544,8 @@ class Engine:
             for i in range(n):
                 pair_particle(i, dt, full, ti.static(serial_loops and scatter_ok), 0)
 
-        frame = self.mobility_frame
-        loads = self.mesh if core_internal else None
-
-        @ti.func
-        def book_carried_load(i, force, torque, acceleration):
-            """[mobility] "body_frame": inactive particle i is carried rigidly by the frame's
-            body, which must supply C = m a_rigid - (F + m g) and the torque -T that keep it on
-            its path (a_rigid = w x (w x r), the body's spin constant between schedule steps);
-            the reaction, F + m g - m a_rigid at the lever r from the body's axis point and T,
-            is a load on the body like a contact's. ``force``, ``torque``: the contacts from
-            outside the inactive core (N, N m); ``acceleration``: the particle effects' (m/s^2).
-            Booked in the body's per-particle load sums, every step as the contacts are."""
-            w = loads.angular_velocity[frame]
-            lever = s.position[i] - (loads.axis_point[frame] + loads.offset[frame])
-            residual = force + s.mass[i] * (acceleration - w.cross(w.cross(lever)))
-            loads.particle_load_force[i, frame] = loads.particle_load_force[i, frame] + residual
-            loads.particle_load_torque[i, frame] = (loads.particle_load_torque[i, frame]
-                                                    + lever.cross(residual) + torque)
+        # [mobility] "body_frame": what the frame's body supplies to carry an inactive particle
+        book_carried_load = self.mobility.make_carried_load(self.context) if core_internal else None
 
         @ti.func
         def gather_particle(i, dt, record, then_drift, t_next, scatter: ti.template()):
@@ -725,34 +631,8 @@ class Engine:
                 inv_m = s.inverse_mass[i]
                 if ti.static(n_walls > 0):
                     # plane walls: the contact law on each particle-plane contact
-                    xi, vi, wi, ri, mi = s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i], s.material[i]
-                    temperature_i = temperature_of(i)
-                    for w in ti.static(range(n_walls)):
-                        wall_point = ti.Vector(walls[w][0])
-                        wall_normal = ti.Vector(walls[w][1])
-                        isothermal = ti.static(wall_temperature[w] >= 0.0)
-                        c = sphere_surface(
-                            wall_normal, ri - (xi - wall_point).dot(wall_normal), ri, vi, wi,
-                            s.acceleration[i], s.mass[i], inv_m, s.inverse_inertia[i], mi,
-                            ti.static(walls[w][2]), vec0, vec0,
-                            ti.static(wall_temperature[w]) - temperature_i,
-                            ti.static(1 if isothermal else 0))
-                        c.particle = i
-                        history = wall_history.load(ti.Vector([i, w]))
-                        out, history = plane_law(c, history, dt)
-                        if ti.static(thermal and isothermal):
-                            heat += out.heat
-                            conductance += out.conductance
-                            if record != 0:
-                                wall_heat[w] -= out.heat
-                        if c.normal_overlap > 0.0 and inv_m > 0.0:
-                            force += out.force
-                            torque += out.torque_i
-                            if record != 0:
-                                wall_force[w] -= out.force
-                        else:
-                            history = wall_history.empty()     # no spring to carry
-                        wall_history.store(ti.Vector([i, w]), history)
+                    force, torque, heat, conductance = plane_contacts(
+                        i, dt, record, force, torque, heat, conductance)
                 if ti.static(has_mesh):
                     if inv_m > 0.0:
                         mesh_force, mesh_torque, mesh_heat, mesh_conductance = mesh_contacts(
@@ -888,22 +768,12 @@ class Engine:
         drivers.advance_per_stage(self, steps, record_last)
 
     def measure(self) -> dict:
-        self._measure(self.count)
-        r, h = transfer.read([self.reduction, self.thermal_sums]) if self.thermal else (
-            self.reduction.to_numpy(), None)
-        out = {"kinetic_energy": float(r[Reduction.KINETIC_ENERGY]),
-               "max_speed": float(r[Reduction.MAX_SPEED]),
-               "non_finite": bool(r[Reduction.NON_FINITE] > 0)}
-        if self.thermal:
-            energy, thermal_mass = h[ThermalSum.THERMAL_ENERGY], h[ThermalSum.THERMAL_MASS]
-            out.update(thermal_energy=float(energy),
-                       mean_temperature=float(energy / thermal_mass) if thermal_mass else 0.0,
-                       thermal_step_ratio=float(r[Reduction.THERMAL_STEP_RATIO]))
-        if self.moisture:
-            water, dry = h[ThermalSum.WATER_MASS], h[ThermalSum.DRY_MASS]
-            out.update(mean_moisture=float(water / dry) if dry else 0.0,
-                       evaporated_mass=float(self.evaporated[0]))
-        return out
+        """The state's sums at this instant (measure.py): kinetic_energy J, max_speed m/s,
+        non_finite; thermal: thermal_energy J, mean_temperature K, thermal_step_ratio;
+        drying: mean_moisture kg/kg, evaporated_mass kg."""
+        if self._measure is None:
+            self._measure = Measure(self)
+        return self._measure(self.count)
 
     @property
     def lost(self) -> int:

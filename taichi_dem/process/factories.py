@@ -24,7 +24,6 @@ factory index and its birth time (for the residence time).
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import sys
 import time as time_module

@@ -76,7 +76,7 @@ def _particle_species(scene: Scene, placed, names, most: int = MOST_SPECIES):
 
 
 def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
-                               notes: list, say: bool = True) -> float:
+                               notes: list, say: bool = True, effects=None) -> float:
     """The Verlet skin (m), shrunk where a periodic axis is thin.
 
     A pair is unambiguous (one image of each partner within reach) while the period exceeds
@@ -87,7 +87,9 @@ def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
     span = np.asarray(scene.domain.max, float) - np.asarray(scene.domain.min, float)
     contact = 2.0 * max_radius
     # pairs within a contact margin are listed too (the gas gap near contacts)
-    margin = margin_fraction(enabled_effects(scene), "pair") * max_radius
+    if effects is None:
+        effects = enabled_effects(scene)
+    margin = margin_fraction(effects, "pair") * max_radius
     for k, axis in enumerate("xyz"):
         if axis not in scene.domain.periodic:
             continue
@@ -149,6 +151,7 @@ class Simulation:
         """``parallel_from``: particles from which a CPU runs the step's loops on all
         threads (below it: one thread, several steps per launch; engine/stepper.py
         PARALLEL_FROM; 0: always parallel)."""
+        from ..engine.model import Model
         from ..engine.stepper import Engine
 
         self.scene = scene
@@ -172,14 +175,18 @@ class Simulation:
         radii, materials, speeds, fixed = _sizes_to_expect(scene, placed, self.tables.names)
         self.timestep, self.skin = choose_step_and_skin(scene, radii, materials,
                                                         self.tables.names, speeds, fixed)
+        # the enabled effects, built once (effects/registry.py)
+        self._effects = enabled_effects(scene)
         self.skin = _fit_skin_to_periodic_axes(scene, float(np.max(radii)), self.skin,
-                                               self.timestep.notes)
+                                               self.timestep.notes, effects=self._effects)
         self.dt = self.timestep.dt
         capacity = self.n_initial + _factory_capacity(scene)
 
-        self.engine = Engine(scene, self.tables, max(capacity, 1), self.real, self.skin,
-                             float(np.max(radii)), self.dt, parallel_from=parallel_from,
-                             species=_particle_species(scene, placed, self.tables.names))
+        model = Model.build(scene, self.tables, self.real, self.dt, self.skin,
+                            float(np.max(radii)), max(capacity, 1),
+                            species=_particle_species(scene, placed, self.tables.names),
+                            effects=self._effects)
+        self.engine = Engine(model, parallel_from=parallel_from)
         small = self.engine.grid.too_small_periodic_axes(
             (2.0 + self.engine.pair_margin) * float(np.max(radii)) + self.skin)
         if small:     # (_fit_skin_to_periodic_axes makes this unreachable; kept as a guard)
@@ -406,7 +413,7 @@ class Simulation:
                 f"simulation.dt or rayleigh_fraction")
         self._check_contact_resolution(measured["max_speed"])
         if self.engine.mesh is not None:
-            self._check_pinching(self.engine.mesh.deepest_overlaps(self.engine.count))
+            self._check_pinching(self.engine.mesh.survey.deepest_overlaps(self.engine.count))
 
     def _check_pinching(self, deepest: np.ndarray):
         """Say once per body when particles are pinched against it: an overlap beyond
@@ -553,7 +560,8 @@ class Simulation:
 
     @property
     def effects(self):
-        return enabled_effects(self.scene)
+        """The enabled effects, in step order (effects/registry.py)."""
+        return self.engine.model.effect_list
 
     def add_observer(self, observe, *, now: bool = True):
         """Call ``observe(sim, values)`` at every output sample (and at once if ``now``) with

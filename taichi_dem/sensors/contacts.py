@@ -12,6 +12,6 @@ class ContactCounts:
 
     def sample(self, values: dict, now) -> None:
         e = self.engine
-        counts = e.mesh.contact_counts(e.count)
+        counts = e.mesh.survey.contact_counts(e.count)
         for x in self.sensors:
             values[f"sensors/{x.name}/contact_count"] = float(counts[self.body_names.index(x.body)])

@@ -24,7 +24,7 @@ class BodyLoads:
         e = self.engine
         forces, torques, heats = e.mesh.take_loads(e.count)
         hot = [b.temperature is not None for b in self.scene.bodies]
-        areas = e.mesh.covered_areas(e.count) if (e.wall_conduction and any(hot)) else None
+        areas = e.mesh.survey.covered_areas(e.count) if (e.wall_conduction and any(hot)) else None
         for k, body in enumerate(self.scene.bodies):
             axis = np.asarray(body.motion.axis_direction, float)
             speed = e.kinematics.speed(k, now.time)

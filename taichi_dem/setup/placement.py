@@ -232,7 +232,6 @@ def _closest_sq_dist(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray)
     va = d3 * d6 - d5 * d4
     vb = d5 * d2 - d1 * d6
     vc = d1 * d4 - d3 * d2
-    tiny = 1e-300
     with np.errstate(divide="ignore", invalid="ignore"):
         # face interior (the fallback); then overwrite with edge and vertex regions
         denom = va + vb + vc

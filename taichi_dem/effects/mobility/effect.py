@@ -442,6 +442,29 @@ class Mobility(Effect):
             return centre + r_new + velocity * dt
         return rigid_drift
 
+    def make_carried_load(self, ctx):
+        """ti.func book_carried_load(i, force, torque, acceleration) for "body_frame":
+        inactive particle i is carried rigidly by the frame's body, which must supply
+        C = m a_rigid - (F + m g) and the torque -T that keep it on its path (a_rigid =
+        w x (w x r), the body's spin constant between schedule steps); the reaction,
+        F + m g - m a_rigid at the lever r from the body's axis point and T, is a load on the
+        body like a contact's. ``force``, ``torque``: the contacts from outside the inactive
+        core (N, N m); ``acceleration``: the particle effects' (m/s^2). Booked in the body's
+        per-particle load sums, every step as the contacts are."""
+        frame = self.frame
+        loads = ctx.mesh
+        s = ctx.state
+
+        @ti.func
+        def book_carried_load(i, force, torque, acceleration):
+            w = loads.angular_velocity[frame]
+            lever = s.position[i] - (loads.axis_point[frame] + loads.offset[frame])
+            residual = force + s.mass[i] * (acceleration - w.cross(w.cross(lever)))
+            loads.particle_load_force[i, frame] = loads.particle_load_force[i, frame] + residual
+            loads.particle_load_torque[i, frame] = (loads.particle_load_torque[i, frame]
+                                                    + lever.cross(residual) + torque)
+        return book_carried_load
+
     # ------------------------------------------------------------------ driver
     def update(self, ctx, n: int, time: float):
         self._update(n, time)

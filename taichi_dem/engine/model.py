@@ -1,0 +1,100 @@
+"""What a simulation *is*, built once from the scene before anything is allocated: the
+``Model``. Frozen: the state (state.py) is allocated from it, the step (stepper.py) and its
+drivers (drivers.py) are compiled from it, and nothing changes it afterwards.
+
+The scene (scene/model.py) says what the user asked for; the model adds what the engine
+derives from it once: the enabled effects in step order grouped by stage, the fields they
+declare, the material-pair tables, the contact margins, the cell grid, the species, the time
+step and the skin."""
+
+from dataclasses import dataclass
+
+from ..contacts.law import margin_fraction
+from ..effects import enabled_effects
+from ..setup.pair_tables import PairTables
+from .grid import GridSpec
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """The frozen model of one simulation (see the module docstring). Lengths m, times s."""
+
+    scene: object                 # the validated Scene (scene/model.py): plain data
+    tables: PairTables            # material-pair tables (setup/pair_tables.py)
+    real: object                  # ti.f32 or ti.f64
+    dt: float                     # time step, s
+    skin: float                   # Verlet skin, m
+    max_radius: float             # the largest radius the particles (and factories) have, m
+    capacity: int                 # particle slots
+    # ((material index, radius m), ...) of every kind of particle, or None (a distribution):
+    # what per-species tables (the gas gap's) are built for
+    species: "tuple | None"
+    effect_list: tuple            # the enabled effects, in step order (effects/registry.py)
+    contact_effects: tuple        # ... of stage "contact" (the contact law)
+    particle_effects: tuple       # ... of stage "particle" (the gather)
+    cell_effects: tuple           # ... with a cell stage between pairs and particles
+    particle_fields: dict         # {name: (is_vector, kind)} every effect declares
+    contact_fields: dict          # the contact history the contact effects keep
+    pair_fields: dict             # per neighbour entry: the partner's shares of pair effects
+    # pairs within this fraction of the larger radius are listed and handed to the contact
+    # law too (the gas gap near a contact); 0: touching pairs only
+    pair_margin: float
+    grid: GridSpec                # the cells of the neighbour search over the domain
+    # {name: (M, M) numpy array}: the material-pair tables the enabled effects read, under
+    # their physics names (the one place an effect meets the scene: Effect.table_values)
+    table_values: dict
+
+    @classmethod
+    def build(cls, scene, tables: PairTables, real, dt: float, skin: float,
+              max_radius: float, capacity: int, species=None, effects=None) -> "Model":
+        """The model of ``scene`` (``effects``: its enabled effects when already built,
+        enabled_effects(scene) otherwise; they are built once per simulation)."""
+        effect_list = tuple(effects) if effects is not None else enabled_effects(scene)
+        contact = tuple(e for e in effect_list if e.stage == "contact")
+        particle_fields, contact_fields, pair_fields = {}, {}, {}
+        for e in effect_list:
+            particle_fields.update(e.particle_fields)
+        for e in contact:
+            contact_fields.update(e.contact_fields)
+            pair_fields.update(e.pair_fields)
+        pair_margin = margin_fraction(contact, "pair")
+        table_values = {}
+        for e in effect_list:
+            for name, values in e.table_values(scene, tables).items():
+                table_values.setdefault(name, values)
+        grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
+                        (2.0 + pair_margin) * max_radius + skin, capacity)
+        return cls(scene=scene, tables=tables, real=real, dt=dt, skin=skin,
+                   max_radius=max_radius, capacity=capacity, species=species,
+                   effect_list=effect_list, contact_effects=contact,
+                   particle_effects=tuple(e for e in effect_list if e.stage == "particle"),
+                   cell_effects=tuple(e for e in effect_list if hasattr(e, "after_pairs")),
+                   particle_fields=particle_fields, contact_fields=contact_fields,
+                   pair_fields=pair_fields, pair_margin=pair_margin, grid=grid,
+                   table_values=table_values)
+
+    # what the step's kernels branch on at compile time (ti.static)
+    @property
+    def effect_names(self) -> frozenset:
+        return frozenset(e.name for e in self.effect_list)
+
+    def effect(self, name: str):
+        """The enabled effect called ``name``, or None."""
+        for e in self.effect_list:
+            if e.name == name:
+                return e
+        return None
+
+    @property
+    def thermal(self) -> bool:
+        return self.scene.thermal is not None
+
+    @property
+    def moisture(self) -> bool:
+        """Drying: particles carry moisture."""
+        return "drying" in self.effect_names
+
+    @property
+    def pair_heat(self) -> bool:
+        """A pair effect conducts heat (partner heat shares at the entries)."""
+        return "partner_heat" in self.pair_fields
