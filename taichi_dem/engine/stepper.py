@@ -41,7 +41,7 @@ from .measure import Measure
 from ..contacts.geometry import contact_types, make_geometry
 from ..contacts.history import history_members, make_history_io
 from ..contacts.law import make_contact_law
-from ..contacts.planes import make_plane_contacts
+from ..contacts.planes import PlaneWalls, make_plane_contacts
 from ..effects.base import EffectContext
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 from . import drivers, tuning
@@ -119,6 +119,9 @@ class Engine:
         # named slots: Flag (engine/state.py)
         self.flags = t.add("flags", ti.i32, Flag.SIZE)
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
+        # the plane walls as fields, read in a loop (contacts/planes.py)
+        self.plane_walls = PlaneWalls(scene.walls, tables.index, "wall_conduction" in self.effects,
+                                      real, t)
         self.reduction = t.add("reduction", real, Reduction.SIZE)   # named slots: Reduction
         if self.thermal:
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
@@ -141,9 +144,10 @@ class Engine:
         # (Broadphase.rebuild_on_workers); False: the separate kernels (tests compare the two)
         self.rebuilds_on_workers = True
         npf = np.float64 if real == ti.f64 else np.float32
-        transfer.write((self.table[name], values.astype(np.int32 if values.dtype.kind in "iu"
-                                                       else npf))
-                       for name, values in model.table_values.items())
+        transfer.write([(self.table[name], values.astype(np.int32 if values.dtype.kind in "iu"
+                                                        else npf))
+                        for name, values in model.table_values.items()]
+                       + self.plane_walls.writes())
         for e in self.effect_list:
             if hasattr(e, "upload"):
                 e.upload(self.context)
@@ -230,10 +234,11 @@ class Engine:
         old = self.pairs
         new = PairState(capacity, self.real, self.contact_fields, self.pair_fields)
         if old is not None:
-            new.old_partner_id.from_numpy(fit_rows(old.old_partner_id.to_numpy(), capacity))
-            new.old_tangential_history.from_numpy(fit_rows(old.old_tangential_history.to_numpy(), capacity))
-            if old.old_rolling_history is not None:
-                new.old_rolling_history.from_numpy(fit_rows(old.old_rolling_history.to_numpy(), capacity))
+            # the partner ids and every history value the enabled effects keep, by name
+            names = ["old_partner_id"] + ["old_" + name for name in self.contact_fields]
+            saved = transfer.read([getattr(old, name) for name in names])
+            transfer.write([(getattr(new, name), fit_rows(values, capacity))
+                            for name, values in zip(names, saved)])
             old.destroy()
         self.pairs = new
         self.broadphase.compile_pair_kernels(new)
@@ -350,13 +355,10 @@ class Engine:
         # a pair is handed to the law while its gap is below the margin an effect asks for
         pair_margin = self.pair_margin
         pair_heat = self.pair_heat
-        walls = [(tuple(w.point), tuple(w.normal), self.tables.index(w.material)) for w in self.walls]
-        n_walls = len(walls)
+        n_walls = len(self.walls)
         wall_history = (make_history_io(History, members,
                                         {m: getattr(s, "wall_" + m + "_history") for m in members})
                         if n_walls else None)
-        wall_temperature = [w.temperature if (w.temperature is not None and self.wall_conduction)
-                            else -1.0 for w in self.walls]
         wall_force = self.wall_force
         drift_particle = self.drift_particle
         thermal = self.thermal
@@ -381,9 +383,9 @@ class Engine:
                 t = s.temperature[i]
             return t
 
-        plane_contacts = (make_plane_contacts(s, walls, wall_temperature, sphere_surface,
-                                              plane_law, wall_history, wall_force, wall_heat,
-                                              thermal, temperature_of)
+        plane_contacts = (make_plane_contacts(s, self.plane_walls, sphere_surface, plane_law,
+                                              wall_history, wall_force, wall_heat, thermal,
+                                              temperature_of)
                           if n_walls else None)
 
         mobility = self.mobility is not None
