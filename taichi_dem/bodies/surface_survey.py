@@ -60,19 +60,19 @@ class SurfaceSurvey:
                 tree = self.m.e.new_tree()
                 self.touched = tree.add("touched_triangle", ti.i32, max(self.m.n_triangles, 1))
                 tree.finalize()
-            touched = self.touched
+            touched_triangle = self.touched
 
             @ti.kernel
             def mark_touched(n: ti.i32, serial_loops: ti.template()):
                 ti.loop_config(serialize=serial_loops)
                 for t in range(m.n_triangles):
-                    touched[t] = 0
+                    touched_triangle[t] = 0
                 ti.loop_config(serialize=serial_loops)
                 for i in range(n):
                     if s.alive[i] != 0:
                         for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
                             if m.mesh_contact[k] != 0:
-                                touched[m.mesh_tri[k]] = 1      # benign race: all write 1
+                                touched_triangle[m.mesh_tri[k]] = 1      # benign race: all write 1
             self._mark_touched = self.m.e.serial_switch(mark_touched)
         if self.m.n_triangles == 0:
             return np.zeros(self.m.n_bodies)
