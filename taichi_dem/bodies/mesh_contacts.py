@@ -33,10 +33,14 @@ from ..contacts.law import has_effects, margin_fraction
 from ..effects.mesh_contact import closest_point_on_triangle
 from ..engine.tuning import LIST_GROWTH
 from ..engine.broadphase import exclusive_scan, previous_entry
+from ..engine import transfer
 from ..engine.state import fit_rows, grown_capacity
 from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
 
 SAME_SURFACE_COS = math.cos(math.radians(30.0))
+# the stored names of the history values per mesh contact (checkpoints know them)
+MESH_HISTORY_NAMES = {"tangential_history": "mesh_history",
+                      "rolling_history": "mesh_rolling_history"}
 
 
 def make_triangle_image(grid, reach: float):
@@ -214,35 +218,49 @@ class MeshContacts:
         t.finalize()
 
     def _alloc_entries(self, capacity, keep_old=None):
-        old = None
+        saved = None
         if self.entries_tree is not None:
-            old = (self.old_tri.to_numpy(), self.old_history.to_numpy(), self.old_contact.to_numpy(),
-                   self.old_rolling_history.to_numpy() if self.old_rolling_history is not None else None)
+            # the previous list, by triangle id, and every history value it carries
+            names = ["old_tri", "old_contact"] + [f"old_{n}" for n in self.history_names]
+            saved = dict(zip(names, transfer.read([self.old_fields()[n] for n in names])))
             self.entries_tree.destroy()
         self.entries_capacity = capacity
         real = self.e.real
         t = self.entries_tree = self.e.new_tree()
         self.mesh_tri = t.add("mesh_tri", ti.i32, capacity)
-        self.mesh_history = t.add("mesh_history", real, capacity, vector=True)
         self.mesh_contact = t.add("mesh_contact", ti.u8, capacity)
         self.mesh_status = t.add("mesh_status", ti.u8, capacity)
         self.mesh_overlap = t.add("mesh_overlap", real, capacity)
         self.mesh_normal = t.add("mesh_normal", real, capacity, vector=True)
         self.mesh_point = t.add("mesh_point", real, capacity, vector=True)
         self.old_tri = t.add("old_mesh_tri", ti.i32, capacity)
-        self.old_history = t.add("old_mesh_history", real, capacity, vector=True)
         self.old_contact = t.add("old_mesh_contact", ti.u8, capacity)
-        self.rolling_history = self.old_rolling_history = None
-        if self.e.rolling_epsd:
-            self.rolling_history = t.add("mesh_rolling_history", real, capacity, vector=True)
-            self.old_rolling_history = t.add("old_mesh_rolling_history", real, capacity, vector=True)
+        # the history values the enabled effects keep (contact_fields), per mesh contact and
+        # for the previous list, under the names checkpoints know (mesh_history: the
+        # tangential spring; mesh_rolling_history: EPSD's)
+        self.history, self.old_history_by_name = {}, {}
+        for name, (vec, kind) in self.e.contact_fields.items():
+            stored = MESH_HISTORY_NAMES.get(name, "mesh_" + name)
+            self.history[name] = t.add(stored, real, capacity, vector=vec)
+            self.old_history_by_name[name] = t.add("old_" + stored, real, capacity, vector=vec)
+        self.mesh_history = self.history.get("tangential_history")
+        self.old_history = self.old_history_by_name.get("tangential_history")
+        self.rolling_history = self.history.get("rolling_history")
+        self.old_rolling_history = self.old_history_by_name.get("rolling_history")
         t.finalize()
-        if old is not None:
-            self.old_tri.from_numpy(fit_rows(old[0], capacity))
-            self.old_history.from_numpy(fit_rows(old[1], capacity))
-            self.old_contact.from_numpy(fit_rows(old[2], capacity))
-            if old[3] is not None:
-                self.old_rolling_history.from_numpy(fit_rows(old[3], capacity))
+        if saved is not None:
+            fields = self.old_fields()
+            transfer.write([(fields[n], fit_rows(v, capacity)) for n, v in saved.items()])
+
+    @property
+    def history_names(self) -> list:
+        return list(self.history)
+
+    def old_fields(self) -> dict:
+        """The previous list's fields by name: old_tri, old_contact, old_<history value>."""
+        out = {"old_tri": self.old_tri, "old_contact": self.old_contact}
+        out.update({f"old_{n}": f for n, f in self.old_history_by_name.items()})
+        return out
 
     # --------------------------------------------------------------- kernels
     def _compile_static_kernels(self):
@@ -400,7 +418,7 @@ class MeshContacts:
     def _compile_rows(self):
         m = self
         s = self.e.state
-        epsd = self.rolling_history is not None
+        carried = [(self.history[n], self.old_history_by_name[n]) for n in self.history]
         skin = self.e.skin
         lens = self.lens
         width = self.scratch_width
@@ -415,10 +433,9 @@ class MeshContacts:
                 m.old_count_by_id[pid] = m.mesh_count[i]
                 for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
                     m.old_tri[k] = m.mesh_tri[k]
-                    m.old_history[k] = m.mesh_history[k]
                     m.old_contact[k] = m.mesh_contact[k]
-                    if ti.static(epsd):
-                        m.old_rolling_history[k] = m.rolling_history[k]
+                    for value, old_value in ti.static(carried):
+                        old_value[k] = value[k]
 
         @ti.kernel
         def save_rows(n: ti.i32, serial_loops: ti.template()):
@@ -463,10 +480,11 @@ class MeshContacts:
     def _compile_compact(self):
         m = self
         s = self.e.state
-        epsd = self.rolling_history is not None
         scratch = self.scratch
-
-        old_rolling = m.old_rolling_history if epsd else m.old_history  # (unused without EPSD)
+        # (value, its previous list's field, its zero)
+        carried = [(self.history[n], self.old_history_by_name[n],
+                    ti.Vector([0.0, 0.0, 0.0]) if self.e.contact_fields[n][0] else 0.0)
+                   for n in self.history]
 
         @ti.func
         def compact_and_carry_body(n, serial_loops: ti.template()):
@@ -481,14 +499,12 @@ class MeshContacts:
                     m.mesh_tri[k] = t
                     old = previous_entry(m.old_tri, old_start, old_count, t)
                     m.mesh_contact[k] = ti.u8(0)
-                    m.mesh_history[k] = ti.Vector([0.0, 0.0, 0.0])
-                    if ti.static(epsd):
-                        m.rolling_history[k] = ti.Vector([0.0, 0.0, 0.0])
+                    for value, old_value, zero in ti.static(carried):
+                        value[k] = zero
                     if old >= 0:
                         m.mesh_contact[k] = m.old_contact[old]
-                        m.mesh_history[k] = m.old_history[old]
-                        if ti.static(epsd):
-                            m.rolling_history[k] = old_rolling[old]
+                        for value, old_value, zero in ti.static(carried):
+                            value[k] = old_value[old]
 
         @ti.kernel
         def compact_and_carry(n: ti.i32, serial_loops: ti.template()):
@@ -515,8 +531,8 @@ class MeshContacts:
         # mesh_rolling_history (EPSD's)
         members = history_members(e.effect_list)
         _, _, History = contact_types(real, members)
-        stored = {"tangential": m.mesh_history, "rolling": m.rolling_history}
-        mesh_history = make_history_io(History, members, {k: stored[k] for k in members})
+        mesh_history = make_history_io(History, members,
+                                       {k: m.history[k + "_history"] for k in members})
         periodic = any(e.grid.periodic)
         heat_loads = self.particle_load_heat is not None
         same_surface_cos = SAME_SURFACE_COS

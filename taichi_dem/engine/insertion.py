@@ -188,12 +188,13 @@ class Insertion:
                     f[i] = 0
                 for f in ti.static(fresh_vectors):
                     f[i] = ti.Vector([0.0, 0.0, 0.0])
+                # (loops, not unrolled: one copy of the body whatever the number of walls)
                 for f in ti.static(wall_fields):
-                    for w in ti.static(range(n_walls)):
+                    for w in range(n_walls):
                         f[i, w] = ti.Vector([0.0, 0.0, 0.0])
                 if ti.static(has_mesh):
                     mesh.mesh_count[i] = 0
-                    for b in ti.static(range(n_bodies)):
+                    for b in range(n_bodies):
                         mesh.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
                         mesh.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
                         if ti.static(heat_loads):
