@@ -528,7 +528,7 @@ class PlugFlowGas(Effect):
 
     def cell_func(self, ctx):
         """``after_pairs`` as a ti.func (n, dt) for a loop that is already serial
-        (Engine.run_steps, several steps in one launch)."""
+        (engine/drivers.py run_steps, several steps in one launch)."""
         exchange = self.stream.exchange_serial
         time_scale = self.time_scale
 

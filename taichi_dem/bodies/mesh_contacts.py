@@ -295,7 +295,7 @@ class MeshContacts:
 
         @ti.func
         def set_frames(time):
-            """update_frames inside a loop that is already serial (Engine.run_steps)."""
+            """update_frames inside a loop that is already serial (drivers.run_steps)."""
             for b in range(nb):
                 rot, off, omega = frame_of(b, time)
                 m.rotation[b] = rot

@@ -17,7 +17,7 @@ integrate  the update of the particle's state from its load (velocity Verlet, te
 cell       between the pair stage and the particle stage, over cells: ``after_pairs(engine,
            n, dt)`` launches its kernel (the drag's solid per contact cell, the plug-flow
            gas's march); ``cell_func(engine)`` returns the same work as a ti.func ``(n, dt)``
-           for a loop that is already serial (Engine.run_steps: several steps per launch);
+           for a loop that is already serial (engine/drivers.py run_steps: several steps per launch);
            an effect without one keeps its scene to one launch per kernel per step
 process    factories and outlets (process/); observe: sensors (sensors/)
 

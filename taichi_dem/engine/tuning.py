@@ -1,7 +1,7 @@
 """The engine's tuning constants, in one place: each was chosen by a measurement recorded in
 BENCHMARKS.md (the section named beside it), and none changes a result beyond round-off -
 they pick loop modes, chunk sizes and array growth, not physics. The engine modules import
-them by name (tests and bench/workers_ab.py set them on engine.stepper)."""
+them by name or read them as tuning.NAME where tests and bench/workers_ab.py change them."""
 
 # Below this many particles a CPU runs every loop of the step on one thread (Engine.serial):
 # dispatching one parallel loop to Taichi's thread pool costs ~100 us here, two threads save

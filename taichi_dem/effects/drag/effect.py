@@ -66,7 +66,7 @@ class Drag(Effect):
 
         @ti.func
         def solid_per_cell_serial(n, dt):
-            """The same inside a loop that is already serial (Engine.run_steps)."""
+            """The same inside a loop that is already serial (drivers.run_steps)."""
             for c in range(cell_solid.shape[0]):
                 cell_solid[c] = 0.0
             for i in range(n):
@@ -82,7 +82,7 @@ class Drag(Effect):
         self._solid_per_cell(n)
 
     def cell_func(self, ctx):
-        """``after_pairs`` as a ti.func (n, dt) for Engine.run_steps."""
+        """``after_pairs`` as a ti.func (n, dt) for drivers.run_steps."""
         return self._solid_per_cell_serial
 
     def particle_func(self, ctx):

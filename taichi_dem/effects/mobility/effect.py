@@ -41,7 +41,7 @@ In "body_frame" the inactive core is part of the frame's body kinematically, so 
 hold it: each inactive particle's contacts from outside the core (active partners, walls,
 bodies), its weight and its centripetal mass-acceleration give the reaction F + m g - m a_rigid
 (and the contact torque T) that is booked on the frame body every step like a contact's load
-(engine/stepper.py ``book_carried_load``; the core's inner contacts cancel in that sum and are
+(``Mobility.make_carried_load``, run in engine/stepper.py's gather; the core's inner contacts cancel in that sum and are
 left out on both sides). Without it a drum whose core froze read its torque 10 % low: the weight
 of the core, and the shear of the cascading layer on it, never reached the shell
 (tests/unit/test_mobility.py checks the booked torque against sum m (x - c) x g exactly). The
