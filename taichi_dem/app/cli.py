@@ -78,6 +78,10 @@ def _parser() -> argparse.ArgumentParser:
     sc.add_argument("--keys", action="store_true",
                     help="a plain table instead: one line per key (path, unit, default, "
                          "description)")
+    from . import slice_map
+    mp = sub.add_parser("map", help="a periodic slice at several hold-ups: its steady transport, "
+                                    "torque and heat per metre (the machine's map)")
+    slice_map.add_arguments(mp)
     from . import plots
     pl = sub.add_parser("plot", help="PNG plots of a results file (torque, residence time, "
                                      "mass flows, temperatures, heat flows)")
@@ -119,6 +123,9 @@ def _main(argv=None) -> int:
         if args.command == "plot":
             from .plots import cmd_plot
             return cmd_plot(args)
+        if args.command == "map":
+            from .slice_map import cmd_map
+            return cmd_map(args)
     except SceneError as err:
         return _fail(str(err), 2)
     except KeyboardInterrupt:

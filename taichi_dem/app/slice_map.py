@@ -1,0 +1,433 @@
+"""The map of a machine from periodic axial slices (issue 31 item 1): a drum or paddle-cooler
+slice, periodic along its axis, filled to a set hold-up and run until its transport, torque and
+heat reach a statistical steady state; over several hold-ups, the table a whole machine is
+assembled from (the march along the axis: at each position the hold-up that carries the feed).
+
+What a slice reports at each output sample (``SliceObserver``), per metre of machine where it
+scales with length:
+
+axial_mass_flow      kg/s   sum m v_a / L: the mass crossing a cross-section per second
+axial_speed          m/s    sum m v_a / sum m, the bed's mean axial speed
+<body>/torque_per_metre  N m/m  the axial torque the particles exert on the body, / L
+<body>/power_per_metre   W/m    the drive power that torque takes at the body's speed, / L
+<body>/covered_area_per_metre, <body>/heat_transfer_coefficient: for an isothermal body
+slip_ratio           -      the tangential speed of the layer on the shell over the shell's at
+                            the same radius (1: the bed rides with the shell; a smooth shell's
+                            bed rolls like a bearing at ~0.5); NaN for a shell at rest
+dynamic_angle        deg    the slope of the bed's free surface across the section, against
+                            gravity's component in it
+
+``map_slices`` runs a scene at each hold-up (kg/m, or a fill fraction of the free section at
+a bulk solid fraction of BULK_SOLID_FRACTION) and reduces each series to its steady mean and
+standard error (app/steady_state.py: MSER-5 for the start, blocking for the error).
+``taichi-dem map`` writes the table (CSV, Markdown, JSON) and a plot.
+"""
+from __future__ import annotations
+
+import json
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+from .steady_state import steady_mean
+
+# bulk solid fraction of a sheared bed of spheres (random loose to random close packing is 0.55 -
+# 0.64; a rolling drum bed ~0.58 - 0.60): converts a fill fraction of the free section to kg/m
+BULK_SOLID_FRACTION = 0.6
+# the layer on the shell whose speed is compared with the shell's: centres within this many
+# radii of the shell
+SHELL_LAYER_RADII = 2.0
+# a bed whose layer on the shell moves at less than this fraction of the shell's speed slips
+SLIP_BELOW = 0.9
+
+
+@dataclass(frozen=True)
+class SliceGeometry:
+    """A periodic slice: its ``axis`` index (0, 1, 2 for x, y, z), ``length`` L (m), the
+    rotation axis (``axis_point`` m, ``axis_direction`` unit), the ``shell`` body's index and
+    radius (m: the largest distance of its vertices from the axis), the free cross-section
+    ``free_area`` (m^2: the shell's circle less what the other bodies fill, their convex
+    cross-section bounded by their radial extent at the shaft: pi r_shaft^2)."""
+    axis: int
+    length: float
+    axis_point: np.ndarray
+    axis_direction: np.ndarray
+    shell: int
+    shell_radius: float
+    free_area: float
+
+
+def _radial(points: np.ndarray, point: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    rel = points - point
+    return np.linalg.norm(rel - np.outer(rel @ direction, direction), axis=1)
+
+
+def slice_geometry(scene) -> SliceGeometry:
+    """The slice's geometry, or a SceneError (file: key: reason) when the scene is not a
+    periodic slice: one periodic axis, along which every body turns and which every body spans
+    (a body shorter than the period does not repeat across the periodic faces), no factories
+    or outlets (a slice holds its hold-up), and a particle fill to set the hold-up with."""
+    src = scene.source
+    if len(scene.domain.periodic) != 1:
+        raise SceneError(src, "domain.periodic", "a slice is periodic along its axis only "
+                         f"(one axis), this scene along {list(scene.domain.periodic) or 'none'}")
+    axis = "xyz".index(scene.domain.periodic[0])
+    length = float(scene.domain.max[axis] - scene.domain.min[axis])
+    unit = np.zeros(3)
+    unit[axis] = 1.0
+    if not scene.bodies:
+        raise SceneError(src, "bodies", "a slice needs a shell (a mesh body around the axis)")
+    for key, items in (("factories", scene.factories), ("outlets", scene.outlets)):
+        if items:
+            raise SceneError(src, key, "a slice holds its hold-up: no inlet or outlet (the map "
+                             "sets the hold-up; the march adds the feed)")
+    if not scene.fills:
+        raise SceneError(src, "particles", "a slice needs a particle fill to set the hold-up of")
+    point = np.asarray(scene.bodies[0].motion.axis_point, float)
+    for b in scene.bodies:
+        direction = np.asarray(b.motion.axis_direction, float)
+        if abs(abs(direction @ unit) - 1.0) > 1e-6:
+            raise SceneError(src, f"{b.key}.motion", f"body {b.name!r} turns about "
+                             f"{direction.tolist()}, not the periodic axis "
+                             f"{scene.domain.periodic[0]}")
+        extent = float(np.ptp(b.vertices[:, axis])) if len(b.vertices) else 0.0
+        if extent < length * (1.0 - 1e-6):
+            raise SceneError(src, f"{b.key}.mesh", f"body {b.name!r} spans {extent:.6g} m of "
+                             f"the {length:.6g} m period along {scene.domain.periodic[0]}: it does "
+                             "not repeat across the periodic faces (make it as long as the period)")
+    radii = [float(np.max(_radial(b.vertices, point, unit))) for b in scene.bodies]
+    shell = int(np.argmax(radii))
+    shell_radius = radii[shell]
+    # what the other bodies take from the section: a shaft's core (the smallest radial
+    # extent of its vertices near the axis is its surface; paddles are thin and not counted)
+    taken = 0.0
+    for k, b in enumerate(scene.bodies):
+        if k == shell:
+            continue
+        r = _radial(b.vertices, point, unit)
+        taken += math.pi * float(np.min(r[r > 1e-9])) ** 2 if np.any(r > 1e-9) else 0.0
+    free = math.pi * shell_radius ** 2 - taken
+    return SliceGeometry(axis, length, point, unit, shell, shell_radius, free)
+
+
+_HOLDUP = re.compile(r"^\s*([0-9.eE+-]+)\s*(kg/m|%)?\s*$")
+
+
+def parse_holdup(text: str) -> tuple[str, float]:
+    """``"60 kg/m"`` -> ("kg/m", 60.0); ``"25 %"`` -> ("fill", 0.25); a bare number is kg/m."""
+    m = _HOLDUP.match(str(text))
+    if not m:
+        raise ValueError(f"hold-up {text!r}: give kg/m (e.g. '60 kg/m') or a fill fraction "
+                         "of the free section (e.g. '25 %')")
+    value = float(m.group(1))
+    if m.group(2) == "%":
+        return "fill", value / 100.0
+    return "kg/m", value
+
+
+def fill_particle_mass(scene, fill_index: int = 0) -> float:
+    """The mean mass (kg) of a particle of fill ``fill_index``: from its radius (the mean of a
+    distribution: its mean r^3 for a normal law is r^3 (1 + 3 (s/r)^2), kept) and density."""
+    fill = scene.fills[fill_index]
+    if fill.radius is None:
+        radii = fill.radii
+        r3 = float(np.mean(radii ** 3)) if radii is not None and len(radii) else 0.0
+    else:
+        mean, std = fill.radius.mean, fill.radius.std
+        r3 = mean ** 3 * (1.0 + 3.0 * (std / mean) ** 2)
+    return 4.0 / 3.0 * math.pi * r3 * scene.materials[fill.material].density
+
+
+def holdup_count(scene, geometry: SliceGeometry, holdup: tuple[str, float],
+                 fill_index: int = 0) -> tuple[int, float, float]:
+    """(particles, hold-up kg/m, fill fraction) for ``holdup`` (parse_holdup's), or a
+    SceneError when the free section cannot hold it at BULK_SOLID_FRACTION."""
+    kind, value = holdup
+    fill = scene.fills[fill_index]
+    density = scene.materials[fill.material].density
+    per_metre_full = density * BULK_SOLID_FRACTION * geometry.free_area     # kg/m at fill 1
+    kg_per_m = value if kind == "kg/m" else value * per_metre_full
+    fraction = kg_per_m / per_metre_full
+    if not 0.0 < fraction <= 1.0:
+        raise SceneError(scene.source, f"{fill.key}.count",
+                         f"a hold-up of {kg_per_m:.4g} kg/m is a fill fraction of {fraction:.3g}: "
+                         f"the free section ({geometry.free_area:.4g} m^2) holds at most "
+                         f"{per_metre_full:.4g} kg/m at a bulk solid fraction of "
+                         f"{BULK_SOLID_FRACTION}")
+    count = int(round(kg_per_m * geometry.length / fill_particle_mass(scene, fill_index)))
+    return max(count, 1), kg_per_m, fraction
+
+
+class SliceObserver:
+    """Observer (Simulation.add_observer) recording a slice's figures at each sample."""
+
+    def __init__(self, sim, geometry: SliceGeometry):
+        self.g = geometry
+        self.scene = sim.scene
+        gravity = np.asarray(sim.scene.simulation.gravity, float)
+        a = geometry.axis_direction
+        across = gravity - (gravity @ a) * a
+        self.up = -across / np.linalg.norm(across) if np.linalg.norm(across) > 0 else np.array([0, 0, 1.0])
+        self.horizontal = np.cross(self.up, a)
+        self.series: dict[str, list] = {}
+
+    def _add(self, name: str, value: float):
+        self.series.setdefault(name, []).append(float(value))
+
+    def __call__(self, sim, values: dict):
+        g = self.g
+        p = sim.particles()
+        moving = ~p["fixed"]
+        x, v, m, r = p["position"][moving], p["velocity"][moving], p["mass"][moving], p["radius"][moving]
+        self._add("time", values.get("time", sim.time))
+        axial = v @ g.axis_direction
+        self._add("axial_mass_flow", float(np.sum(m * axial)) / g.length)
+        self._add("axial_speed", float(np.sum(m * axial) / np.sum(m)) if len(m) else math.nan)
+        shell = self.scene.bodies[g.shell]
+        omega = float(values.get(f"bodies/{shell.name}/angular_speed", 0.0))
+        self._add("slip_ratio", slip_ratio(x, v, r, g, omega))
+        self._add("dynamic_angle", dynamic_angle(x, r, g.axis_point, self.horizontal, self.up))
+        for body in self.scene.bodies:
+            prefix = f"bodies/{body.name}/"
+            for name, out in (("axial_torque", "torque_per_metre"), ("power", "power_per_metre"),
+                              ("covered_area", "covered_area_per_metre")):
+                if prefix + name in values:
+                    self._add(f"{body.name}/{out}", float(values[prefix + name]) / g.length)
+            if prefix + "heat_transfer_coefficient" in values:
+                self._add(f"{body.name}/heat_transfer_coefficient",
+                          float(values[prefix + "heat_transfer_coefficient"]))
+
+
+def slip_ratio(position, velocity, radius, geometry: SliceGeometry, omega: float) -> float:
+    """Mean tangential speed of the particles whose centres lie within SHELL_LAYER_RADII radii
+    of the shell, over the shell's speed at their radius (omega r, rad/s x m); NaN for a shell
+    at rest or no particle there."""
+    if omega == 0.0 or len(position) == 0:
+        return math.nan
+    a = geometry.axis_direction
+    rel = position - geometry.axis_point
+    radial = rel - np.outer(rel @ a, a)
+    r = np.linalg.norm(radial, axis=1)
+    near = r > geometry.shell_radius - SHELL_LAYER_RADII * radius
+    near &= r > 0.0
+    if not np.any(near):
+        return math.nan
+    tangent = np.cross(a, radial[near] / r[near, None])
+    return float(np.mean(np.sum(velocity[near] * tangent, axis=1)) / (omega * np.mean(r[near])))
+
+
+def dynamic_angle(position, radius, axis_point, horizontal, up, bins: int = 12) -> float:
+    """The free surface's slope across the section (degrees, 0 - 90): the section is cut into
+    ``bins`` strips across (along ``horizontal``), the surface in each is its highest particle
+    top (along ``up``), and a line is fitted through the inner two thirds of the strips the bed
+    occupies (the toe and the shoulder curve). NaN with fewer than 3 strips."""
+    if len(position) < 3:
+        return math.nan
+    rel = position - axis_point
+    h = rel @ horizontal
+    top = rel @ up + radius
+    edges = np.linspace(h.min(), h.max(), bins + 1)
+    which = np.clip(np.digitize(h, edges) - 1, 0, bins - 1)
+    centres, heights = [], []
+    for k in range(bins):
+        sel = which == k
+        if np.any(sel):
+            centres.append(0.5 * (edges[k] + edges[k + 1]))
+            heights.append(float(np.max(top[sel])))
+    n = len(centres)
+    cut = n // 6
+    centres, heights = np.array(centres[cut:n - cut]), np.array(heights[cut:n - cut])
+    if len(centres) < 3:
+        return math.nan
+    slope = np.polyfit(centres, heights, 1)[0]
+    return float(math.degrees(math.atan(abs(slope))))
+
+
+@dataclass
+class SliceResult:
+    """One hold-up of the map: what was set and each figure's steady mean (app/steady_state)."""
+    holdup: float            # kg/m
+    fill_fraction: float
+    particles: int
+    figures: dict            # name -> SteadyMean
+
+    def row(self) -> dict:
+        out = {"holdup_kg_per_m": self.holdup, "fill_fraction": self.fill_fraction,
+               "particles": self.particles}
+        for name, m in self.figures.items():
+            out[name] = m.mean
+            out[name + "_standard_error"] = m.standard_error
+            out[name + "_steady"] = m.steady
+        slip = self.figures.get("slip_ratio")
+        out["slips"] = bool(slip is not None and math.isfinite(slip.mean) and slip.mean < SLIP_BELOW)
+        return out
+
+
+# the figures a map reports (units), in table order; bodies' figures follow
+FIGURES = {"axial_mass_flow": "kg/s", "axial_speed": "m/s", "slip_ratio": "-",
+           "dynamic_angle": "deg"}
+BODY_FIGURES = {"torque_per_metre": "N m/m", "power_per_metre": "W/m",
+                "covered_area_per_metre": "m^2/m", "heat_transfer_coefficient": "W/(m^2 K)"}
+
+
+def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float,
+              fill_index: int = 0, base_dir=None, arch: str = "cpu") -> SliceResult:
+    """Build the slice of scene ``text`` at ``holdup``, run it ``duration`` s, and reduce each
+    sampled figure to its steady mean."""
+    from ..run.simulation import Simulation
+    from ..scene.loader import parse_scene
+    from .overrides import apply, to_text
+    scene = parse_scene(text, source=source, base_dir=base_dir)
+    geometry = slice_geometry(scene)
+    count, kg_per_m, fraction = holdup_count(scene, geometry, holdup, fill_index)
+    doc = apply(tomllib.loads(text), {f"particles.{fill_index}.count": count}, source)
+    sliced = parse_scene(to_text(doc), source=source, base_dir=base_dir)
+    with Simulation(sliced, arch=arch, h5="") as sim:
+        observer = SliceObserver(sim, geometry)
+        sim.add_observer(observer, now=False)
+        sim.run(sim.time + duration)
+        series = observer.series
+    # (a figure undefined at some samples - a slip ratio with nothing on the shell - is
+    # reduced over the samples where it is defined)
+    figures = {}
+    for name, values in series.items():
+        finite = np.asarray(values, float)
+        finite = finite[np.isfinite(finite)]
+        if name != "time" and len(finite) >= 2:
+            figures[name] = steady_mean(finite)
+    return SliceResult(kg_per_m, fraction, count, figures)
+
+
+def write_map(results: list[SliceResult], out_dir: Path, scene_name: str) -> list[Path]:
+    """map.csv, map.md, map.json and map.png (torque per metre and axial mass flow against
+    hold-up) in ``out_dir``; returns their paths."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    rows = [r.row() for r in results]
+    names = list(dict.fromkeys(k for row in rows for k in row))
+    csv = out_dir / "map.csv"
+    with open(csv, "w") as f:
+        f.write(",".join(names) + "\n")
+        for row in rows:
+            f.write(",".join(_cell(row.get(n, "")) for n in names) + "\n")
+    md = out_dir / "map.md"
+    figures = [n for n in names if not n.endswith(("_standard_error", "_steady"))
+               and n not in ("holdup_kg_per_m", "fill_fraction", "particles", "slips")]
+    lines = [f"# Map of {scene_name}: steady means +- standard error", "",
+             "| hold-up (kg/m) | fill | particles | " + " | ".join(
+                 f"{n} ({_unit(n)})" for n in figures) + " | slips |",
+             "|---" * (len(figures) + 4) + "|"]
+    for row in rows:
+        cells = [f"{row['holdup_kg_per_m']:.4g}", f"{row['fill_fraction']:.3f}",
+                 str(row["particles"])]
+        for n in figures:
+            mean, se = row.get(n), row.get(n + "_standard_error")
+            flag = "" if row.get(n + "_steady", True) else " (not steady)"
+            cells.append("" if mean is None else f"{mean:.4g} +- {se:.2g}{flag}")
+        cells.append("yes" if row["slips"] else "no")
+        lines.append("| " + " | ".join(cells) + " |")
+    md.write_text("\n".join(lines) + "\n")
+    js = out_dir / "map.json"
+    js.write_text(json.dumps({"scene": scene_name, "units": {n: _unit(n) for n in figures},
+                              "rows": rows}, indent=1, default=float))
+    png = out_dir / "map.png"
+    _plot(rows, png)
+    return [csv, md, js, png]
+
+
+def _unit(name: str) -> str:
+    if name in FIGURES:
+        return FIGURES[name]
+    return BODY_FIGURES.get(name.split("/")[-1], "")
+
+
+def _cell(value) -> str:
+    if isinstance(value, bool):
+        return "1" if value else "0"
+    if isinstance(value, float):
+        return f"{value:.8g}"
+    return str(value)
+
+
+def _plot(rows: list[dict], path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    holdup = [r["holdup_kg_per_m"] for r in rows]
+    torques = sorted({k for r in rows for k in r if k.endswith("/torque_per_metre")})
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for name in torques:
+        axes[0].errorbar(holdup, [r.get(name, np.nan) for r in rows],
+                         yerr=[r.get(name + "_standard_error", 0.0) for r in rows],
+                         marker="o", capsize=3, label=name.split("/")[0])
+    axes[0].set_xlabel("hold-up (kg/m)")
+    axes[0].set_ylabel("axial torque per metre (N m/m)")
+    if torques:
+        axes[0].legend()
+    axes[1].errorbar(holdup, [r.get("axial_mass_flow", np.nan) for r in rows],
+                     yerr=[r.get("axial_mass_flow_standard_error", 0.0) for r in rows],
+                     marker="o", capsize=3)
+    axes[1].set_xlabel("hold-up (kg/m)")
+    axes[1].set_ylabel("axial mass flow (kg/s)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def add_arguments(p) -> None:
+    """The ``taichi-dem map`` arguments."""
+    p.add_argument("scene", help="a periodic slice scene (one periodic axis along the bodies' "
+                                 "axis, a particle fill, no factories or outlets)")
+    p.add_argument("--holdup", nargs="+", required=True,
+                   help="hold-ups: kg/m ('60 kg/m', or a bare number) or a fill fraction of the "
+                        "free section ('25 %%')")
+    p.add_argument("--time", type=float, required=True,
+                   help="simulated seconds per hold-up (the steady state is detected in them)")
+    p.add_argument("--fill", type=int, default=0, help="the [[particles]] fill whose count is set")
+    p.add_argument("--out", default=None, help="folder for map.csv, map.md, map.json, map.png "
+                                               "(default: <scene>_map beside the scene)")
+    p.add_argument("--arch", default="cpu")
+
+
+def cmd_map(args) -> int:
+    """``taichi-dem map``: the slice at each hold-up, its steady figures, the table and plot."""
+    import sys
+    path = Path(args.scene)
+    try:
+        text = path.read_text()
+    except OSError as err:
+        raise SceneError(str(path), "", f"cannot read the scene: {err.strerror}") from None
+    holdups = []
+    for value in args.holdup:
+        try:
+            holdups.append(parse_holdup(value))
+        except ValueError as err:
+            raise SceneError("--holdup", "", str(err)) from None
+    if not args.time > 0.0:
+        raise SceneError("--time", "", f"must be > 0 s, got {args.time}")
+    from ..scene.loader import parse_scene
+    scene = parse_scene(text, source=str(path), base_dir=path.parent)
+    geometry = slice_geometry(scene)
+    if not 0 <= args.fill < len(scene.fills):
+        raise SceneError(str(path), "particles", f"--fill {args.fill}: the scene has "
+                         f"{len(scene.fills)} fill(s)")
+    for h in holdups:       # refuse every impossible hold-up before running any
+        holdup_count(scene, geometry, h, args.fill)
+    results = []
+    for h in holdups:
+        result = run_slice(text, str(path), h, args.time, args.fill, base_dir=path.parent,
+                           arch=args.arch)
+        results.append(result)
+        torque = {k: v for k, v in result.figures.items() if k.endswith("/torque_per_metre")}
+        print(f"hold-up {result.holdup:.4g} kg/m ({result.particles} particles): axial mass flow "
+              f"{result.figures['axial_mass_flow']} kg/s, "
+              + ", ".join(f"{k.split('/')[0]} torque {v} N m/m" for k, v in torque.items()),
+              flush=True)
+    out = Path(args.out) if args.out else path.with_name(path.stem + "_map")
+    paths = write_map(results, out, path.name)
+    print("wrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
+    return 0

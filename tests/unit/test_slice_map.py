@@ -1,0 +1,130 @@
+"""The map of a machine from periodic slices (app/slice_map.py): the slice's geometry and what
+it refuses, hold-ups, the figures against fields whose answer is known, and the map of a small
+drum slice at two hold-ups end to end (taichi-dem map)."""
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from taichi_dem.app import slice_map as sm
+from taichi_dem.errors import SceneError
+from taichi_dem.scene.loader import parse_scene
+
+SCENE = Path(__file__).with_name("slice_drum.toml")
+TEXT = SCENE.read_text()
+
+
+def scene(text=TEXT):
+    return parse_scene(text, source="slice.toml", base_dir=SCENE.parent)
+
+
+def test_the_slice_geometry_of_a_drum():
+    g = sm.slice_geometry(scene())
+    assert g.axis == 0 and g.length == pytest.approx(0.02)
+    # the shell's polygon vertices lie on R = 0.05 m; the free section is the circle's
+    assert g.shell_radius == pytest.approx(0.05, rel=1e-9)
+    assert g.free_area == pytest.approx(math.pi * 0.05 ** 2, rel=1e-9)
+
+
+@pytest.mark.parametrize("change, key, reason", [
+    (('periodic = ["x"]', 'periodic = []'), "domain.periodic", "one axis"),
+    (('periodic = ["x"]', 'periodic = ["x", "y"]'), "domain.periodic", "one axis"),
+    (("length = 0.02, end_walls", "length = 0.015, end_walls"), "bodies[0].mesh",
+     "does not repeat across the periodic faces"),
+    (("axis_direction = [1, 0, 0], speed", "axis_direction = [0, 1, 0], speed"),
+     "bodies[0].motion", "not the periodic axis"),
+])
+def test_what_is_not_a_slice_is_refused_with_file_key_and_reason(change, key, reason):
+    with pytest.raises(SceneError) as err:
+        sm.slice_geometry(scene(TEXT.replace(*change)))
+    assert err.value.key == key and reason in str(err.value) and "slice.toml" in str(err.value)
+
+
+def test_a_slice_has_no_inlet_or_outlet():
+    text = TEXT + """
+[[outlets]]
+name = "out"
+region = { box = { min = [0.0, -0.01, -0.05], max = [0.02, 0.01, -0.04] } }
+"""
+    with pytest.raises(SceneError, match="no inlet or outlet"):
+        sm.slice_geometry(scene(text))
+
+
+def test_holdups_in_kg_per_metre_and_as_fill_fractions():
+    s = scene()
+    g = sm.slice_geometry(s)
+    bead = 4.0 / 3.0 * math.pi * 0.002 ** 3 * 2500.0
+    full = 2500.0 * sm.BULK_SOLID_FRACTION * math.pi * 0.05 ** 2      # kg/m at fill 1
+    count, kg, fraction = sm.holdup_count(s, g, sm.parse_holdup("2 kg/m"))
+    assert kg == 2.0 and fraction == pytest.approx(2.0 / full)
+    assert count == round(2.0 * 0.02 / bead)
+    count, kg, fraction = sm.holdup_count(s, g, sm.parse_holdup("25 %"))
+    assert fraction == pytest.approx(0.25) and kg == pytest.approx(0.25 * full)
+    assert sm.parse_holdup("3.5") == ("kg/m", 3.5)
+    with pytest.raises(ValueError, match="kg/m"):
+        sm.parse_holdup("a lot")
+    # more than the shell can hold
+    with pytest.raises(SceneError, match="holds at most") as err:
+        sm.holdup_count(s, g, sm.parse_holdup("120 %"))
+    assert err.value.key == "particles[0].count"
+
+
+def drum_layer(omega, radius=0.05, n=400, rng=None):
+    """Bead centres 1 radius inside a shell of ``radius`` and their velocities in rigid
+    rotation at ``omega`` (rad/s) about +x."""
+    rng = rng or np.random.default_rng(0)
+    angle = rng.uniform(0.0, 2.0 * math.pi, n)
+    r = radius - 0.002
+    x = np.stack([rng.uniform(0.0, 0.02, n), r * np.cos(angle), r * np.sin(angle)], axis=1)
+    v = np.cross(np.array([omega, 0.0, 0.0]), x)
+    return x, v, np.full(n, 0.002)
+
+
+def test_slip_ratio_is_one_in_rigid_rotation_and_the_fraction_of_a_slower_layer():
+    g = sm.slice_geometry(scene())
+    x, v, r = drum_layer(2.0)
+    assert sm.slip_ratio(x, v, r, g, 2.0) == pytest.approx(1.0, rel=1e-12)
+    assert sm.slip_ratio(x, 0.54 * v, r, g, 2.0) == pytest.approx(0.54, rel=1e-12)
+    assert math.isnan(sm.slip_ratio(x, v, r, g, 0.0))       # a shell at rest
+
+
+@pytest.mark.parametrize("angle", [20.0, 35.0])
+def test_dynamic_angle_of_a_tilted_surface(angle):
+    """A bed of beads under a plane surface at ``angle`` across the section: the fitted slope."""
+    rng = np.random.default_rng(1)
+    h = rng.uniform(-0.04, 0.04, 3000)
+    depth = rng.uniform(0.0, 0.03, 3000)
+    top = math.tan(math.radians(angle)) * h - 0.002
+    up, across = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
+    x = np.outer(h, across) + np.outer(top - depth, up)
+    # the highest bead of a strip stands at most a strip's slope below the line
+    measured = sm.dynamic_angle(x, np.full(3000, 0.002), np.zeros(3), across, up, bins=24)
+    assert measured == pytest.approx(angle, abs=1.0)
+
+
+def test_the_map_of_a_drum_slice(tmp_path):
+    """``taichi-dem map`` at 10 % and 25 % fill for 1.5 s: every figure has a steady mean with
+    its error; the bed drifts down the incline (-x); the torque the bed exerts against the
+    turning grows with the hold-up; the table, JSON and plot are written."""
+    from taichi_dem.app.cli import main
+    out = tmp_path / "map"
+    code = main(["map", str(SCENE), "--holdup", "10 %", "25 %", "--time", "1.5",
+                 "--out", str(out)])
+    assert code == 0
+    for name in ("map.csv", "map.md", "map.json", "map.png"):
+        assert (out / name).stat().st_size > 0, name
+    import json
+    rows = json.loads((out / "map.json").read_text())["rows"]
+    assert [r["fill_fraction"] for r in rows] == pytest.approx([0.10, 0.25])
+    for r in rows:
+        for name in ("axial_mass_flow", "axial_speed", "slip_ratio", "dynamic_angle",
+                     "shell/torque_per_metre", "shell/power_per_metre"):
+            assert math.isfinite(r[name]) and math.isfinite(r[name + "_standard_error"]), name
+        assert r["axial_mass_flow"] < 0.0 and r["axial_speed"] < 0.0       # downhill, -x
+        assert 10.0 < r["dynamic_angle"] < 60.0
+        assert r["shell/power_per_metre"] > 0.0                              # the drive works
+    low, high = (abs(r["shell/torque_per_metre"]) for r in rows)
+    assert high > 1.5 * low
+    table = (out / "map.md").read_text()
+    assert "axial_mass_flow (kg/s)" in table and "+-" in table
