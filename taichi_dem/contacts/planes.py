@@ -41,10 +41,13 @@ class PlaneWalls:
 
 
 def make_plane_contacts(state, walls: PlaneWalls, sphere_surface, plane_law, wall_history,
-                        wall_force, wall_heat, thermal: bool, temperature_of):
+                        wall_force, wall_heat, thermal: bool, temperature_of,
+                        margin: float = 0.0):
     """A ti.func ``plane_contacts(i, dt, record, force, torque, heat, conductance)`` -> the
     four sums (N, N m, W, W/K) with particle i's plane-wall contacts added, in wall order.
-    ``record`` != 0: book the walls' loads."""
+    ``record`` != 0: book the walls' loads. ``margin``: the contact margin (a fraction of the
+    radius) within which a wall not touched is still handed to the law (heat through the gas
+    near it; contacts/law.margin_fraction of kind "plane")."""
     s = state
     n_walls = walls.count
     conducts = thermal and walls.conducts
@@ -57,31 +60,38 @@ def make_plane_contacts(state, walls: PlaneWalls, sphere_surface, plane_law, wal
         temperature_i = temperature_of(i)
         for w in range(n_walls):
             wall_normal = walls.normal[w]
-            wall_temperature = walls.temperature[w]
-            isothermal = 0
-            if ti.static(conducts):
-                if wall_temperature >= 0.0:
-                    isothermal = 1
-            c = sphere_surface(
-                wall_normal, ri - (xi - walls.point[w]).dot(wall_normal), ri, vi, wi,
-                s.acceleration[i], s.mass[i], inv_m, s.inverse_inertia[i], mi,
-                walls.material[w], vec0, vec0, wall_temperature - temperature_i, isothermal)
-            c.particle = i
-            history = wall_history.load(ti.Vector([i, w]))
-            out, history = plane_law(c, history, dt)
-            if ti.static(conducts):
-                if isothermal != 0:
-                    heat += out.heat
-                    conductance += out.conductance
+            overlap = ri - (xi - walls.point[w]).dot(wall_normal)
+            # most particles are far from most walls: only the history is cleared there, and
+            # the contact record and the law are built for the walls within reach only (with
+            # the walls read in a loop, not unrolled as constants, that is what keeps the
+            # step as fast: BENCHMARKS.md "Stop 24")
+            history = wall_history.empty()
+            if overlap > -ti.static(margin) * ri:
+                wall_temperature = walls.temperature[w]
+                isothermal = 0
+                if ti.static(conducts):
+                    if wall_temperature >= 0.0:
+                        isothermal = 1
+                c = sphere_surface(
+                    wall_normal, overlap, ri, vi, wi,
+                    s.acceleration[i], s.mass[i], inv_m, s.inverse_inertia[i], mi,
+                    walls.material[w], vec0, vec0, wall_temperature - temperature_i, isothermal)
+                c.particle = i
+                history = wall_history.load(ti.Vector([i, w]))
+                out, history = plane_law(c, history, dt)
+                if ti.static(conducts):
+                    if isothermal != 0:
+                        heat += out.heat
+                        conductance += out.conductance
+                        if record != 0:
+                            wall_heat[w] -= out.heat
+                if c.normal_overlap > 0.0 and inv_m > 0.0:
+                    force += out.force
+                    torque += out.torque_i
                     if record != 0:
-                        wall_heat[w] -= out.heat
-            if c.normal_overlap > 0.0 and inv_m > 0.0:
-                force += out.force
-                torque += out.torque_i
-                if record != 0:
-                    wall_force[w] -= out.force
-            else:
-                history = wall_history.empty()     # no spring to carry
+                        wall_force[w] -= out.force
+                else:
+                    history = wall_history.empty()     # no spring to carry
             wall_history.store(ti.Vector([i, w]), history)
         return force, torque, heat, conductance
 

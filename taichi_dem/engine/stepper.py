@@ -40,7 +40,7 @@ from .insertion import Insertion
 from .measure import Measure
 from ..contacts.geometry import contact_types, make_geometry
 from ..contacts.history import history_members, make_history_io
-from ..contacts.law import make_contact_law
+from ..contacts.law import make_contact_law, margin_fraction
 from ..contacts.planes import PlaneWalls, make_plane_contacts
 from ..effects.base import EffectContext
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
@@ -385,7 +385,8 @@ class Engine:
 
         plane_contacts = (make_plane_contacts(s, self.plane_walls, sphere_surface, plane_law,
                                               wall_history, wall_force, wall_heat, thermal,
-                                              temperature_of)
+                                              temperature_of,
+                                              margin_fraction(self.contact_effects, "plane"))
                           if n_walls else None)
 
         mobility = self.mobility is not None
