@@ -201,6 +201,14 @@ class SliceObserver:
             if prefix + "heat_transfer_coefficient" in values:
                 self._add(f"{body.name}/heat_transfer_coefficient",
                           float(values[prefix + "heat_transfer_coefficient"]))
+            if prefix + "heat_flow" in values and body.temperature is not None:
+                # the wall's conductance per metre, U' = Q / (L (T_bed - T_wall)) (W/(m K)): what
+                # the march cools the bed with (independent of [thermal] time_scale: a real heat
+                # flow over a real temperature difference)
+                difference = values.get("particles/mean_temperature", math.nan) - body.temperature
+                self._add(f"{body.name}/conductance_per_metre",
+                          float(values[prefix + "heat_flow"]) / (g.length * difference)
+                          if difference and math.isfinite(difference) else math.nan)
 
 
 def slip_ratio(position, velocity, radius, geometry: SliceGeometry, omega: float) -> float:
@@ -255,10 +263,13 @@ class SliceResult:
     fill_fraction: float
     particles: int
     figures: dict            # name -> SteadyMean
+    incline: float = 0.0     # deg, the +axis end raised (gravity's axial pull towards -axis)
+    axial_slope: float = 0.0 # gravity's axial component / its component in the section
 
     def row(self) -> dict:
         out = {"holdup_kg_per_m": self.holdup, "fill_fraction": self.fill_fraction,
-               "particles": self.particles}
+               "particles": self.particles, "incline_deg": self.incline,
+               "axial_slope": self.axial_slope}
         for name, m in self.figures.items():
             out[name] = m.mean
             out[name + "_standard_error"] = m.standard_error
@@ -270,23 +281,81 @@ class SliceResult:
 
 # the figures a map reports (units), in table order; bodies' figures follow
 FIGURES = {"axial_mass_flow": "kg/s", "axial_speed": "m/s", "slip_ratio": "-",
-           "dynamic_angle": "deg"}
+           "dynamic_angle": "deg", "saeman_flow": "kg/s", "saeman_ratio": "-"}
 BODY_FIGURES = {"torque_per_metre": "N m/m", "power_per_metre": "W/m",
-                "covered_area_per_metre": "m^2/m", "heat_transfer_coefficient": "W/(m^2 K)"}
+                "covered_area_per_metre": "m^2/m", "heat_transfer_coefficient": "W/(m^2 K)",
+                "conductance_per_metre": "W/(m K)"}
+
+
+def incline_of(gravity, geometry: SliceGeometry) -> tuple[float, float]:
+    """(incline deg, axial slope) of ``gravity``: the incline raises the +axis end (gravity's
+    axial component towards -axis is positive incline), the axial slope is gravity's axial
+    component over its component in the section (tan of minus the incline)."""
+    g = np.asarray(gravity, float)
+    along = float(g @ geometry.axis_direction)
+    across = float(np.linalg.norm(g - along * geometry.axis_direction))
+    slope = along / across if across > 0.0 else math.copysign(math.inf, along)
+    return -math.degrees(math.atan(slope)), slope
+
+
+def inclined_gravity(gravity, geometry: SliceGeometry, incline_deg: float) -> list:
+    """``gravity`` turned about the section so that the +axis end is raised ``incline_deg``:
+    the same magnitude, the same direction across the section (straight down when it had none)."""
+    g = np.asarray(gravity, float)
+    a = geometry.axis_direction
+    across = g - (g @ a) * a
+    down = across / np.linalg.norm(across) if np.linalg.norm(across) > 0 else -np.eye(3)[
+        2 if geometry.axis != 2 else 1]
+    t = math.radians(incline_deg)
+    new = float(np.linalg.norm(g)) * (math.cos(t) * down - math.sin(t) * a)
+    return [float(v) for v in new]
+
+
+def machine_info(scene, geometry: SliceGeometry, fill_index: int = 0) -> dict:
+    """What the march (app/machine.py) needs of the slice: the section (shell radius, shaft
+    radius, bulk density at BULK_SOLID_FRACTION), the mean particle diameter, the period, the
+    bodies' names, angular speeds (rad/s) and wall temperatures (K, isothermal bodies) and the
+    bed material's heat capacity (J/(kg K), thermal scenes)."""
+    fill = scene.fills[fill_index]
+    material = scene.materials[fill.material]
+    shaft_area = math.pi * geometry.shell_radius ** 2 - geometry.free_area
+    mass = fill_particle_mass(scene, fill_index)
+    diameter = 2.0 * (3.0 * mass / (4.0 * math.pi * material.density)) ** (1.0 / 3.0)
+    speeds, walls = {}, {}
+    for b in scene.bodies:
+        sched = b.motion.speed
+        speeds[b.name] = float(sched.at(0.0)) if sched is not None else 0.0
+        if b.temperature is not None:
+            walls[b.name] = float(b.temperature)
+    return {"shell_radius": geometry.shell_radius,
+            "shaft_radius": math.sqrt(max(shaft_area, 0.0) / math.pi),
+            "bulk_density": material.density * BULK_SOLID_FRACTION,
+            "particle_diameter": diameter, "period": geometry.length,
+            "axis": "xyz"[geometry.axis], "bodies": [b.name for b in scene.bodies],
+            "angular_speeds": speeds, "wall_temperatures": walls,
+            "heat_capacity": (getattr(material, "heat_capacity", None)
+                              if scene.thermal is not None else None)}
 
 
 def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float,
-              fill_index: int = 0, base_dir=None, arch: str = "cpu") -> SliceResult:
-    """Build the slice of scene ``text`` at ``holdup``, run it ``duration`` s, and reduce each
-    sampled figure to its steady mean."""
+              fill_index: int = 0, base_dir=None, arch: str = "cpu",
+              incline: float | None = None) -> SliceResult:
+    """Build the slice of scene ``text`` at ``holdup`` (and ``incline`` deg, the +axis end
+    raised; None: the scene's gravity), run it ``duration`` s, and reduce each sampled figure
+    to its steady mean."""
     from ..run.simulation import Simulation
     from ..scene.loader import parse_scene
     from .overrides import apply, to_text
     scene = parse_scene(text, source=source, base_dir=base_dir)
     geometry = slice_geometry(scene)
     count, kg_per_m, fraction = holdup_count(scene, geometry, holdup, fill_index)
-    doc = apply(tomllib.loads(text), {f"particles.{fill_index}.count": count}, source)
+    changes = {f"particles.{fill_index}.count": count}
+    if incline is not None:
+        changes["simulation.gravity"] = inclined_gravity(scene.simulation.gravity, geometry,
+                                                         incline)
+    doc = apply(tomllib.loads(text), changes, source)
     sliced = parse_scene(to_text(doc), source=source, base_dir=base_dir)
+    angle, slope = incline_of(sliced.simulation.gravity, geometry)
     with Simulation(sliced, arch=arch, h5="") as sim:
         observer = SliceObserver(sim, geometry)
         sim.add_observer(observer, now=False)
@@ -300,14 +369,22 @@ def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float
         finite = finite[np.isfinite(finite)]
         if name != "time" and len(finite) >= 2:
             figures[name] = steady_mean(finite)
-    return SliceResult(kg_per_m, fraction, count, figures)
+    return SliceResult(kg_per_m, fraction, count, figures, angle, slope)
 
 
-def write_map(results: list[SliceResult], out_dir: Path, scene_name: str) -> list[Path]:
+def write_map(results: list[SliceResult], out_dir: Path, scene_name: str,
+              machine: dict | None = None) -> list[Path]:
     """map.csv, map.md, map.json and map.png (torque per metre and axial mass flow against
     hold-up) in ``out_dir``; returns their paths."""
     out_dir.mkdir(parents=True, exist_ok=True)
     rows = [r.row() for r in results]
+    if machine:
+        from .machine import saeman_check
+        for row in rows:
+            flow, ratio = saeman_check(row, machine)
+            if math.isfinite(flow):
+                # Saeman's uniform-bed flow at the measured dynamic angle, and the map's over it
+                row["saeman_flow"], row["saeman_ratio"] = flow, ratio
     names = list(dict.fromkeys(k for row in rows for k in row))
     csv = out_dir / "map.csv"
     with open(csv, "w") as f:
@@ -316,24 +393,30 @@ def write_map(results: list[SliceResult], out_dir: Path, scene_name: str) -> lis
             f.write(",".join(_cell(row.get(n, "")) for n in names) + "\n")
     md = out_dir / "map.md"
     figures = [n for n in names if not n.endswith(("_standard_error", "_steady"))
-               and n not in ("holdup_kg_per_m", "fill_fraction", "particles", "slips")]
+               and n not in ("holdup_kg_per_m", "fill_fraction", "particles", "slips",
+                             "incline_deg", "axial_slope")]
     lines = [f"# Map of {scene_name}: steady means +- standard error", "",
-             "| hold-up (kg/m) | fill | particles | " + " | ".join(
+             "| incline (deg) | hold-up (kg/m) | fill | particles | " + " | ".join(
                  f"{n} ({_unit(n)})" for n in figures) + " | slips |",
-             "|---" * (len(figures) + 4) + "|"]
+             "|---" * (len(figures) + 5) + "|"]
     for row in rows:
-        cells = [f"{row['holdup_kg_per_m']:.4g}", f"{row['fill_fraction']:.3f}",
-                 str(row["particles"])]
+        cells = [f"{row['incline_deg']:.3g}", f"{row['holdup_kg_per_m']:.4g}",
+                 f"{row['fill_fraction']:.3f}", str(row["particles"])]
         for n in figures:
             mean, se = row.get(n), row.get(n + "_standard_error")
             flag = "" if row.get(n + "_steady", True) else " (not steady)"
-            cells.append("" if mean is None else f"{mean:.4g} +- {se:.2g}{flag}")
+            if mean is None:
+                cells.append("")
+            elif se is None:
+                cells.append(f"{mean:.4g}")
+            else:
+                cells.append(f"{mean:.4g} +- {se:.2g}{flag}")
         cells.append("yes" if row["slips"] else "no")
         lines.append("| " + " | ".join(cells) + " |")
     md.write_text("\n".join(lines) + "\n")
     js = out_dir / "map.json"
     js.write_text(json.dumps({"scene": scene_name, "units": {n: _unit(n) for n in figures},
-                              "rows": rows}, indent=1, default=float))
+                              "machine": machine or {}, "rows": rows}, indent=1, default=float))
     png = out_dir / "map.png"
     _plot(rows, png)
     return [csv, md, js, png]
@@ -387,6 +470,10 @@ def add_arguments(p) -> None:
                         "free section ('25 %%')")
     p.add_argument("--time", type=float, required=True,
                    help="simulated seconds per hold-up (the steady state is detected in them)")
+    p.add_argument("--incline", type=float, nargs="+", default=None,
+                   help="inclines (deg, the +axis end raised; gravity keeps its magnitude): the "
+                        "map at each; two or more let the march tell what the machine conveys "
+                        "by itself from what the slope adds (default: the scene's gravity)")
     p.add_argument("--fill", type=int, default=0, help="the [[particles]] fill whose count is set")
     p.add_argument("--out", default=None, help="folder for map.csv, map.md, map.json, map.png "
                                                "(default: <scene>_map beside the scene)")
@@ -418,16 +505,16 @@ def cmd_map(args) -> int:
     for h in holdups:       # refuse every impossible hold-up before running any
         holdup_count(scene, geometry, h, args.fill)
     results = []
-    for h in holdups:
+    for incline, h in [(i, h) for i in (args.incline or [None]) for h in holdups]:
         result = run_slice(text, str(path), h, args.time, args.fill, base_dir=path.parent,
-                           arch=args.arch)
+                           arch=args.arch, incline=incline)
         results.append(result)
         torque = {k: v for k, v in result.figures.items() if k.endswith("/torque_per_metre")}
-        print(f"hold-up {result.holdup:.4g} kg/m ({result.particles} particles): axial mass flow "
+        print(f"incline {result.incline:.3g} deg, hold-up {result.holdup:.4g} kg/m ({result.particles} particles): axial mass flow "
               f"{result.figures['axial_mass_flow']} kg/s, "
               + ", ".join(f"{k.split('/')[0]} torque {v} N m/m" for k, v in torque.items()),
               flush=True)
     out = Path(args.out) if args.out else path.with_name(path.stem + "_map")
-    paths = write_map(results, out, path.name)
+    paths = write_map(results, out, path.name, machine_info(scene, geometry, args.fill))
     print("wrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
     return 0

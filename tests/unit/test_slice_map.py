@@ -128,3 +128,19 @@ def test_the_map_of_a_drum_slice(tmp_path):
     assert high > 1.5 * low
     table = (out / "map.md").read_text()
     assert "axial_mass_flow (kg/s)" in table and "+-" in table
+    doc = json.loads((out / "map.json").read_text())
+    assert doc["machine"]["shell_radius"] == pytest.approx(0.05, rel=0.01)
+    assert doc["machine"]["bulk_density"] == pytest.approx(2500 * sm.BULK_SOLID_FRACTION)
+    for r in rows:      # a drum: Saeman's flow at the measured angle beside the map's
+        assert r["incline_deg"] == pytest.approx(5.0, abs=0.01)
+        assert r["saeman_flow"] < 0.0 and r["saeman_ratio"] > 0.0
+    # the whole machine from this map: 1 m at the map's incline, 15 kg/h
+    code = main(["machine", str(out), "--length", "1 m", "--feed", "15 kg/h", "--draws", "8",
+                 "--out", str(tmp_path / "machine")])
+    assert code == 0
+    answer = json.loads((tmp_path / "machine" / "machine.json").read_text())
+    feed = answer["feeds"][0]
+    assert feed["feed_kg_per_s"] == pytest.approx(15 / 3600)
+    assert feed["residence_time_s"] == pytest.approx(feed["holdup_kg"] / feed["feed_kg_per_s"])
+    assert feed["shell/torque_N_m"] < 0.0 and answer["capacity_kg_per_s"] > 15 / 3600
+    assert (tmp_path / "machine" / "profile.png").stat().st_size > 0

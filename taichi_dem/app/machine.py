@@ -1,0 +1,634 @@
+"""The whole machine from its map (issue 31 item 2): march along the axis from the discharge,
+at each position the hold-up that carries the feed, as Kramers & Croockewit (1952) and Saeman
+(1951) do for rotary drums.
+
+The map (app/slice_map.py) gives, for periodic slices at hold-ups H (kg/m) and at one or more
+inclines, the steady axial mass flow q (kg/s, along the slice's +axis), the dynamic angle beta,
+and per body the torque, drive power and shell conductance per metre. A slice has no axial
+gradient; in a machine the bed's depth h changes along the axis, and the slope of its free
+surface drives the surface layer as an incline would. Kramers' bed-depth equation for a drum,
+
+    dh/dx = tan(beta) [ 3 Phi_v / (4 pi n R^3) (2h/R - h^2/R^2)^(-3/2) - tan(theta) / sin(beta) ]
+
+(x from the discharge towards the feed, Phi_v m^3/s, n rev/s, R the drum radius, theta the
+incline), is the statement that the flow is Saeman's uniform-bed flow at an *effective* slope
+
+    s = tan(theta) + cos(beta) dh/dx,        q = rho_b (4/3) pi n (c/2)^3 s / sin(beta)
+
+(c the chord of the bed surface, rho_b the bulk density). The march generalises exactly this:
+the map's flow at each hold-up is fitted as q(H, s) = a(H) + b(H) s over the inclines mapped
+(a: what the machine conveys by itself - paddles, flights, screws; b: what the slope adds; a
+plain drum has a = 0 and one incline suffices), and at each position the depth gradient is the
+one at which q equals the feed. For a plain drum it reduces to Kramers' equation (tested).
+
+Along the marched profile H(x): the hold-up M = int H dx (kg), the mean residence time
+tau = M / F (the plug-flow mean: hold-up over throughput, exact for any mixing at steady state),
+each body's torque and power int T(H) dx, and the outlet temperature of a bed cooled (or heated)
+through the shell at the map's conductance per metre U(H) (W/(m K)):
+T_out = T_w + (T_in - T_w) exp(-int U dx / (F c_p)). The conductance is a ratio of real heat
+flow to real temperature difference, so it does not depend on the slice's [thermal]
+time_scale, and the residence here is real time (the thermal time scale is handled as in the
+runs: it only shortens the slice's own transient).
+
+The capacity is the largest feed whose profile stays below the overflow hold-up everywhere
+(by default the largest mapped hold-up: the march does not extrapolate beyond the map).
+Each figure's error is the standard deviation over re-marches with the map's figures drawn
+from their steady means and standard errors (independent normal draws per row).
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+
+
+# ---- the cross-section -------------------------------------------------------------------
+
+def _segment(radius: float, depth):
+    """Area (m^2) of a circle of ``radius`` below a level ``depth`` above its lowest point."""
+    d = np.clip(depth, 0.0, 2.0 * radius)
+    return radius ** 2 * np.arccos((radius - d) / radius) - (radius - d) * np.sqrt(
+        np.maximum(2.0 * radius * d - d * d, 0.0))
+
+
+@dataclass(frozen=True)
+class Section:
+    """The free cross-section of the machine: a shell of ``shell_radius`` (m) around a coaxial
+    shaft of ``shaft_radius`` (m, 0 for a drum), filled with a bed of ``bulk_density``
+    (kg/m^3). Depths h are measured from the shell's lowest point up (m)."""
+    shell_radius: float
+    shaft_radius: float
+    bulk_density: float
+
+    def area(self, depth):
+        """The bed's cross-section (m^2) at depth ``depth`` (m): the shell's segment less the
+        part of the shaft below the level."""
+        R, r = self.shell_radius, self.shaft_radius
+        shaft = _segment(r, np.asarray(depth, float) - (R - r)) if r > 0.0 else 0.0
+        return _segment(R, depth) - shaft
+
+    def holdup(self, depth):
+        """Hold-up (kg/m) at bed depth ``depth`` (m)."""
+        return self.bulk_density * self.area(depth)
+
+    def chord(self, depth):
+        """Width (m) of the bed's free surface across the shell at ``depth`` (the shaft, when
+        the level crosses it, does not change Saeman's chord: the surface layer flows around)."""
+        R = self.shell_radius
+        d = np.clip(np.asarray(depth, float), 0.0, 2.0 * R)
+        return 2.0 * np.sqrt(np.maximum(2.0 * R * d - d * d, 0.0))
+
+    def depth(self, holdup) -> np.ndarray:
+        """Bed depth (m) that holds ``holdup`` (kg/m), by bisection (the area grows with depth)."""
+        H = np.atleast_1d(np.asarray(holdup, float))
+        lo, hi = np.zeros_like(H), np.full_like(H, 2.0 * self.shell_radius)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            low = self.holdup(mid) < H
+            lo, hi = np.where(low, mid, lo), np.where(low, hi, mid)
+        return 0.5 * (lo + hi)
+
+
+def saeman_flow(section: Section, depth: float, revolutions_per_second: float,
+                slope: float, dynamic_angle_deg: float) -> float:
+    """Saeman's (1951) mass flow (kg/s) of a rolling drum bed of ``depth`` (m) at the effective
+    axial slope ``slope`` (tan of the incline plus cos(beta) dh/dx; dimensionless), turning at
+    ``revolutions_per_second``: rho_b (4/3) pi n (c/2)^3 slope / sin(beta)."""
+    c = float(section.chord(depth))
+    return (section.bulk_density * 4.0 / 3.0 * math.pi * revolutions_per_second
+            * (0.5 * c) ** 3 * slope / math.sin(math.radians(dynamic_angle_deg)))
+
+
+# ---- the map, as a transport law ----------------------------------------------------------
+
+@dataclass
+class MapRow:
+    """One slice of the map: hold-up (kg/m), the axial slope tan(theta) of gravity along the
+    slice's +axis (gravity's axial component over its component in the section), and each
+    figure's steady mean and standard error."""
+    holdup: float
+    axial_slope: float
+    figures: dict                    # name -> (mean, standard error)
+
+    def mean(self, name: str) -> float:
+        return self.figures.get(name, (math.nan, 0.0))[0]
+
+
+@dataclass
+class MachineMap:
+    """A map (the rows of ``taichi-dem map``) and what the march needs of the slice: its
+    ``section``, the bodies' angular speeds (rad/s), the mean particle diameter (m), the
+    bed material's heat capacity (J/(kg K), None without heat) and the bodies' wall
+    temperatures (K, for an isothermal body)."""
+    rows: list
+    section: Section
+    angular_speeds: dict
+    particle_diameter: float
+    heat_capacity: float | None = None
+    wall_temperatures: dict = field(default_factory=dict)
+    bodies: list = field(default_factory=list)
+
+    @classmethod
+    def load(cls, path) -> "MachineMap":
+        """Read a ``map.json`` written by ``taichi-dem map`` (or its folder)."""
+        path = Path(path)
+        if path.is_dir():
+            path = path / "map.json"
+        try:
+            doc = json.loads(path.read_text())
+        except OSError as err:
+            raise SceneError(str(path), "", f"cannot read the map: {err.strerror}") from None
+        except json.JSONDecodeError as err:
+            raise SceneError(str(path), "", f"not a map (JSON): {err}") from None
+        info = doc.get("machine")
+        if not isinstance(info, dict):
+            raise SceneError(str(path), "machine", "the map has no 'machine' section (write "
+                             "it again with this version of taichi-dem map)")
+        rows = []
+        for k, row in enumerate(doc.get("rows", [])):
+            figures = {}
+            for name, value in row.items():
+                if name + "_standard_error" in row:
+                    se = row[name + "_standard_error"]
+                    figures[name] = (float(value), float(se) if se is not None else 0.0)
+            rows.append(MapRow(float(row["holdup_kg_per_m"]), float(row.get("axial_slope", info.get("axial_slope", 0.0))),
+                               figures))
+        if not rows:
+            raise SceneError(str(path), "rows", "the map has no rows")
+        section = Section(float(info["shell_radius"]), float(info.get("shaft_radius", 0.0)),
+                          float(info["bulk_density"]))
+        return cls(rows, section, {k: float(v) for k, v in info.get("angular_speeds", {}).items()},
+                   float(info["particle_diameter"]), info.get("heat_capacity"),
+                   {k: float(v) for k, v in info.get("wall_temperatures", {}).items()},
+                   list(info.get("bodies", [])))
+
+    def drawn(self, rng) -> "MachineMap":
+        """A copy with every figure drawn from normal(mean, standard error)."""
+        rows = [MapRow(r.holdup, r.axial_slope,
+                       {n: (m + (rng.normal(0.0, se) if se and math.isfinite(se) else 0.0), se)
+                        for n, (m, se) in r.figures.items()}) for r in self.rows]
+        return MachineMap(rows, self.section, self.angular_speeds, self.particle_diameter,
+                          self.heat_capacity, self.wall_temperatures, self.bodies)
+
+
+class TransportLaw:
+    """q(H, s) = a(H) + b(H) s (kg/s along the slice's +axis) fitted to the map, a and b held
+    as multiples of the chord cubed (Saeman's dependence on the bed, so that a drum's map is
+    one constant and hold-ups below the map extrapolate as Saeman's do), interpolated linearly
+    in H and held constant beyond the mapped range; beta(H) (deg) likewise."""
+
+    def __init__(self, machine: MachineMap, source: str = "map"):
+        rows = machine.rows
+        holdups = sorted({round(r.holdup, 9) for r in rows})
+        slopes = sorted({round(r.axial_slope, 9) for r in rows})
+        section = machine.section
+        self.section = section
+        self.holdups = np.array(holdups)
+        self.depths = section.depth(self.holdups)
+        chord3 = section.chord(self.depths) ** 3
+        a, b, beta = [], [], []
+        for H in holdups:
+            at = [r for r in rows if round(r.holdup, 9) == H]
+            s = np.array([r.axial_slope for r in at])
+            q = np.array([r.mean("axial_mass_flow") for r in at])
+            if len(set(np.round(s, 9))) >= 2:
+                slope, icpt = np.polyfit(s, q, 1)
+            else:       # one incline: a plain drum's law, q proportional to the slope
+                if abs(s[0]) < 1e-12:
+                    raise SceneError(source, "rows", f"hold-up {H:g} kg/m was mapped only at a "
+                                     "level axis: the slope's effect cannot be told (map a "
+                                     "second incline)")
+                slope, icpt = q[0] / s[0], 0.0
+            a.append(icpt)
+            b.append(slope)
+            angles = [r.mean("dynamic_angle") for r in at]
+            angles = [x for x in angles if math.isfinite(x)]
+            beta.append(float(np.mean(angles)) if angles else math.nan)
+        self.a_per_chord3 = np.array(a) / chord3
+        self.b_per_chord3 = np.array(b) / chord3
+        beta = np.array(beta)
+        if not np.all(np.isfinite(beta)):
+            raise SceneError(source, "rows", "the map has no dynamic angle at some hold-up")
+        self.beta = beta
+        self.single_incline = len(slopes) < 2
+
+    def coefficients(self, holdup, depth=None):
+        """(a, b, beta_deg) at ``holdup`` (kg/m), whose bed ``depth`` (m) may be given."""
+        if depth is None:
+            depth = self.section.depth(holdup)[0]
+        c3 = float(self.section.chord(depth)) ** 3
+        a = float(np.interp(holdup, self.holdups, self.a_per_chord3)) * c3
+        b = float(np.interp(holdup, self.holdups, self.b_per_chord3)) * c3
+        return a, b, float(np.interp(holdup, self.holdups, self.beta))
+
+    def flow(self, holdup: float, slope: float, depth=None) -> float:
+        """q (kg/s along +axis) at ``holdup`` kg/m and effective axial slope ``slope``."""
+        a, b, _ = self.coefficients(holdup, depth)
+        return a + b * slope
+
+    def direction(self, slope: float) -> int:
+        """+1 or -1: where the machine carries its bed at the mapped hold-ups and ``slope``."""
+        q = [self.flow(H, slope, d) for H, d in zip(self.holdups, self.depths)]
+        return 1 if np.mean(q) >= 0.0 else -1
+
+
+def _interpolate_figure(machine: MachineMap, name: str, axial_slope: float):
+    """(holdups, values) of figure ``name`` at the design slope, anchored at (0, 0) (an empty
+    machine: no torque, no heat) and interpolated between the mapped inclines."""
+    holdups = sorted({round(r.holdup, 9) for r in machine.rows})
+    values = []
+    for H in holdups:
+        at = [r for r in machine.rows if round(r.holdup, 9) == H and name in r.figures]
+        if not at:
+            values.append(math.nan)
+            continue
+        s = np.array([r.axial_slope for r in at])
+        v = np.array([r.mean(name) for r in at])
+        if len(set(np.round(s, 9))) >= 2:
+            k, c = np.polyfit(s, v, 1)
+            values.append(float(k * axial_slope + c))
+        else:
+            values.append(float(v[0]))
+    return np.array([0.0] + holdups), np.array([0.0] + values)
+
+
+# ---- the march ----------------------------------------------------------------------------
+
+@dataclass
+class Profile:
+    """The machine at one feed: positions ``x`` (m, from the inlet end to the discharge),
+    ``depth`` (m) and ``holdup`` (kg/m) there; ``overflows`` when the hold-up passed the
+    overflow limit (the profile stops there)."""
+    feed: float
+    x: np.ndarray
+    depth: np.ndarray
+    holdup: np.ndarray
+    overflows: bool
+    flow_sign: int
+
+
+def march(law: TransportLaw, length: float, feed: float, axial_slope: float,
+          discharge_depth: float, overflow_holdup: float, steps: int = 400) -> Profile:
+    """The steady hold-up profile of a machine ``length`` m long at ``feed`` kg/s, gravity's
+    axial slope ``axial_slope`` along the slice's +axis, from the discharge (bed depth
+    ``discharge_depth`` m: a dam's height, or a few particles for a free discharge) upstream,
+    by RK4 in the bed depth: dh/dx_up = ((F - a)/b - s_d) / cos(beta), s_d the slope towards
+    the discharge."""
+    # the flow direction: where the machine carries its bed at the mapped hold-ups
+    sign = law.direction(axial_slope)
+    s_down = sign * axial_slope
+    section = law.section
+
+    # the law tabulated on a fine grid of depths (the march evaluates it ~4 x steps times)
+    cells = 4000
+    table_u = np.linspace(1e-6, 1.0, cells + 1)
+    table_h = table_u ** 2 * 2.0 * section.shell_radius
+    table_H = section.holdup(table_h)
+    ha, hb, hbeta = (np.interp(table_H, law.holdups, v)
+                     for v in (law.a_per_chord3, law.b_per_chord3, law.beta))
+    c3 = section.chord(table_h) ** 3
+    a_down = sign * ha * c3          # a along the flow; b (dq/ds) is the same either way
+    b = hb * c3
+    if np.any(hb <= 0.0):
+        raise SceneError("map", "rows", "the map's flow falls with the slope (b <= 0) at some "
+                         "hold-up: not a transport law the march can use")
+    inv_cos = 1.0 / np.cos(np.radians(hbeta))
+    two_r, du = 2.0 * section.shell_radius, table_u[1] - table_u[0]
+
+    def rate(h):
+        # Kramers' dh/dx is singular on an empty shell: the table starts just above it
+        k = min(max(math.sqrt(h / two_r) - 1e-6, 0.0) / du, cells - 1e-9)
+        i = int(k)
+        w = k - i
+        aa = a_down[i] * (1 - w) + a_down[i + 1] * w
+        bb = b[i] * (1 - w) + b[i + 1] * w
+        return ((feed - aa) / bb - s_down) * (inv_cos[i] * (1 - w) + inv_cos[i + 1] * w)
+
+    # positions from the discharge on a grid fine where the bed is shallow and steep
+    grid = length * (np.arange(steps + 1) / steps) ** 2
+    h = float(discharge_depth)
+    up = [0.0]
+    depths = [h]
+    full = float(section.depth(overflow_holdup)[0])
+    overflows = False
+    for k in range(steps):
+        dx = grid[k + 1] - grid[k]
+        k1 = rate(h)
+        k2 = rate(max(h + 0.5 * dx * k1, 0.0))
+        k3 = rate(max(h + 0.5 * dx * k2, 0.0))
+        k4 = rate(max(h + dx * k3, 0.0))
+        h = max(h + dx / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4), 0.0)
+        up.append(grid[k + 1])
+        depths.append(h)
+        if h > full * (1.0 + 1e-9):
+            overflows = True
+            break
+    up = np.array(up)
+    depths = np.array(depths)
+    x = length - up[::-1]          # from the inlet end
+    depths = depths[::-1]
+    return Profile(feed, x, depths, section.holdup(depths), overflows, sign)
+
+
+def _integral(x, y) -> float:
+    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(x)))
+
+
+@dataclass
+class MachineAnswer:
+    """What the march gives at one feed (kg/s): hold-up (kg), mean residence (s), each body's
+    torque (N m) and power (W), outlet temperature (K) and the inlet-end hold-up (kg/m)."""
+    feed: float
+    holdup: float
+    residence_time: float
+    inlet_holdup: float
+    torques: dict
+    powers: dict
+    outlet_temperature: float | None
+    overflows: bool
+    profile: Profile
+
+
+def answer(machine: MachineMap, length: float, feed: float, axial_slope: float,
+           discharge_depth: float | None = None, overflow_holdup: float | None = None,
+           inlet_temperature: float | None = None, law: TransportLaw | None = None,
+           steps: int = 400) -> MachineAnswer:
+    """The machine ``length`` m long at ``feed`` kg/s: march and integrate (module docstring).
+    ``discharge_depth`` defaults to one particle diameter, ``overflow_holdup`` to the largest
+    mapped hold-up."""
+    law = law or TransportLaw(machine)
+    depth0 = machine.particle_diameter if discharge_depth is None else discharge_depth
+    limit = float(law.holdups[-1]) if overflow_holdup is None else overflow_holdup
+    prof = march(law, length, feed, axial_slope, depth0, limit, steps)
+    hold = _integral(prof.x, prof.holdup)
+    torques, powers = {}, {}
+    for body in machine.bodies:
+        for name, out in (("torque_per_metre", torques), ("power_per_metre", powers)):
+            hs, vs = _interpolate_figure(machine, f"{body}/{name}", axial_slope)
+            if np.all(np.isfinite(vs)):
+                out[body] = _integral(prof.x, np.interp(prof.holdup, hs, vs))
+    t_out = None
+    if inlet_temperature is not None and machine.heat_capacity:
+        ntu = 0.0
+        wall = None
+        for body in machine.bodies:
+            hs, vs = _interpolate_figure(machine, f"{body}/conductance_per_metre", axial_slope)
+            if body in machine.wall_temperatures and np.all(np.isfinite(vs)):
+                ntu += _integral(prof.x, np.interp(prof.holdup, hs, vs)) / (feed * machine.heat_capacity)
+                wall = machine.wall_temperatures[body] if wall is None else wall
+        if wall is not None:
+            t_out = wall + (inlet_temperature - wall) * math.exp(-ntu)
+    return MachineAnswer(feed, hold, hold / feed, float(prof.holdup[0]), torques, powers, t_out,
+                         prof.overflows, prof)
+
+
+def capacity(machine: MachineMap, length: float, axial_slope: float,
+             discharge_depth: float | None = None, overflow_holdup: float | None = None,
+             law: TransportLaw | None = None, steps: int = 200) -> float:
+    """The largest feed (kg/s) whose profile stays below the overflow hold-up (bisection)."""
+    law = law or TransportLaw(machine)
+    limit = float(law.holdups[-1]) if overflow_holdup is None else overflow_holdup
+
+    slope_sign = law.direction(axial_slope)
+    depth0 = machine.particle_diameter if discharge_depth is None else discharge_depth
+
+    def fits(feed):
+        return not march(law, length, feed, axial_slope, depth0, limit, steps).overflows
+    # the feed whose uniform bed sits at the overflow brackets the capacity (a short machine
+    # with a shallow discharge holds more)
+    uniform = max(slope_sign * law.flow(limit, axial_slope), 1e-12)
+    lo, hi = 0.0, 2.0 * uniform
+    while fits(hi) and hi < 1e3 * uniform:
+        lo, hi = hi, 2.0 * hi
+    if fits(hi):
+        return hi
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        if fits(mid):
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo < 1e-3 * hi:
+            break
+    return lo
+
+
+def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
+                discharge_depth=None, overflow_holdup=None, inlet_temperature=None,
+                draws: int = 40, seed: int = 0) -> dict:
+    """The answers at each feed and the capacity, each with the standard deviation over
+    ``draws`` re-marches of maps drawn from the figures' standard errors."""
+    rng = np.random.default_rng(seed)
+    base = {"capacity": capacity(machine, length, axial_slope, discharge_depth, overflow_holdup),
+            "feeds": [answer(machine, length, f, axial_slope, discharge_depth, overflow_holdup,
+                             inlet_temperature) for f in feeds]}
+    samples = {"capacity": [], "feeds": [[] for _ in feeds]}
+    for _ in range(draws):
+        drawn = machine.drawn(rng)
+        try:
+            law = TransportLaw(drawn)
+            samples["capacity"].append(capacity(drawn, length, axial_slope, discharge_depth,
+                                                overflow_holdup, law=law))
+            for k, f in enumerate(feeds):
+                samples["feeds"][k].append(answer(drawn, length, f, axial_slope, discharge_depth,
+                                                  overflow_holdup, inlet_temperature, law=law))
+        except SceneError:        # a draw whose flow falls with the slope: skipped
+            continue
+    base["capacity_error"] = float(np.std(samples["capacity"], ddof=1)) if len(samples["capacity"]) > 1 else math.nan
+    errors = []
+    for answers in samples["feeds"]:
+        e = {}
+        if len(answers) > 1:
+            e["holdup"] = float(np.std([a.holdup for a in answers], ddof=1))
+            e["residence_time"] = float(np.std([a.residence_time for a in answers], ddof=1))
+            for body in machine.bodies:
+                vals = [a.torques[body] for a in answers if body in a.torques]
+                if len(vals) > 1:
+                    e[f"{body}/torque"] = float(np.std(vals, ddof=1))
+                vals = [a.powers[body] for a in answers if body in a.powers]
+                if len(vals) > 1:
+                    e[f"{body}/power"] = float(np.std(vals, ddof=1))
+            temps = [a.outlet_temperature for a in answers if a.outlet_temperature is not None]
+            if len(temps) > 1:
+                e["outlet_temperature"] = float(np.std(temps, ddof=1))
+        errors.append(e)
+    base["errors"] = errors
+    base["draws"] = len(samples["capacity"])
+    return base
+
+
+def saeman_check(row: dict, info: dict) -> tuple[float, float]:
+    """(Saeman's mass flow kg/s along +axis, the map's flow over it) for a map ``row`` of a
+    drum (the shell turning): Saeman's uniform-bed flow at the row's hold-up, incline and
+    measured dynamic angle. (nan, nan) when the shell does not turn or the angle is missing."""
+    shell = info.get("bodies", [None])[0] if info.get("bodies") else None
+    speeds = info.get("angular_speeds", {})
+    omega = max((abs(v) for v in speeds.values()), default=0.0)
+    beta = row.get("dynamic_angle", math.nan)
+    if omega == 0.0 or not math.isfinite(beta) or beta <= 0.0 or shell is None:
+        return math.nan, math.nan
+    section = Section(info["shell_radius"], info.get("shaft_radius", 0.0), info["bulk_density"])
+    depth = float(section.depth(row["holdup_kg_per_m"])[0])
+    # gravity's pull towards -axis (positive incline) carries the bed towards -x
+    q = -saeman_flow(section, depth, omega / (2.0 * math.pi), math.tan(math.radians(
+        row.get("incline_deg", 0.0))), beta)
+    return q, row["axial_mass_flow"] / q if q else math.nan
+
+
+# ---- taichi-dem machine -------------------------------------------------------------------
+
+def add_arguments(p) -> None:
+    """The ``taichi-dem machine`` arguments."""
+    p.add_argument("map", help="a map.json written by `taichi-dem map` (or its folder)")
+    p.add_argument("--length", required=True, help="the machine's length ('6 m', or metres)")
+    p.add_argument("--feed", nargs="+", required=True,
+                   help="feed rates ('6.5 t/h', or kg/s): the answers at each")
+    p.add_argument("--incline", type=float, default=None,
+                   help="the machine's incline (deg, the +axis end raised; default: the map's "
+                        "only incline; with several mapped, any incline between them)")
+    p.add_argument("--inlet-temperature", default=None,
+                   help="the feed's temperature ('450 C'): the outlet temperature from the map's "
+                        "shell conductance per metre")
+    p.add_argument("--discharge-depth", default=None,
+                   help="the bed's depth at the discharge ('20 mm': a dam's height; default one "
+                        "particle diameter, a free discharge)")
+    p.add_argument("--overflow", default=None,
+                   help="the hold-up at which the inlet end overflows ('90 kg/m', or a fill "
+                        "fraction '40 %%'; default the largest mapped hold-up)")
+    p.add_argument("--draws", type=int, default=40,
+                   help="re-marches with the map drawn from its standard errors (the errors)")
+    p.add_argument("--out", default=None, help="folder for machine.md, machine.json and "
+                                               "profile.png (default: beside the map)")
+
+
+def _quantity(text, dimension, key):
+    from ..scene.units import parse_quantity
+    return parse_quantity(text if not _is_number(text) else float(text), dimension,
+                          file="taichi-dem machine", key=key)
+
+
+def _is_number(text) -> bool:
+    try:
+        float(text)
+        return True
+    except (TypeError, ValueError):
+        return False
+
+
+def cmd_machine(args) -> int:
+    """``taichi-dem machine``: the whole machine from its map (module docstring)."""
+    import sys
+    m = MachineMap.load(args.map)
+    map_path = Path(args.map)
+    length = _quantity(args.length, "length", "--length")
+    feeds = [_quantity(f, "mass_rate", "--feed") for f in args.feed]
+    if length <= 0.0 or any(f <= 0.0 for f in feeds):
+        raise SceneError("taichi-dem machine", "--length/--feed", "must be > 0")
+    inclines = sorted({round(-math.degrees(math.atan(r.axial_slope)), 9) for r in m.rows})
+    if args.incline is None:
+        if len(inclines) > 1:
+            raise SceneError("taichi-dem machine", "--incline", "the map has several inclines "
+                             f"({inclines} deg): say which the machine has")
+        incline = inclines[0]
+    else:
+        incline = args.incline
+        if len(inclines) > 1 and not inclines[0] - 1e-9 <= incline <= inclines[-1] + 1e-9:
+            print(f"warning: incline {incline} deg is outside the mapped {inclines[0]} - "
+                  f"{inclines[-1]} deg: the law is extrapolated", file=sys.stderr)
+    slope = -math.tan(math.radians(incline))
+    t_in = (_quantity(args.inlet_temperature, "temperature", "--inlet-temperature")
+            if args.inlet_temperature is not None else None)
+    depth0 = (_quantity(args.discharge_depth, "length", "--discharge-depth")
+              if args.discharge_depth is not None else None)
+    overflow = None
+    if args.overflow is not None:
+        from .slice_map import parse_holdup
+        try:
+            kind, value = parse_holdup(args.overflow)
+        except ValueError as err:
+            raise SceneError("taichi-dem machine", "--overflow", str(err)) from None
+        full = float(m.section.holdup(2.0 * m.section.shell_radius))
+        overflow = value if kind == "kg/m" else value * full
+    out = with_errors(m, length, feeds, slope, depth0, overflow, t_in, draws=args.draws)
+    report = machine_report(m, out, length, incline, t_in)
+    print(report["text"])
+    folder = Path(args.out) if args.out else (map_path if map_path.is_dir() else map_path.parent)
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "machine.md").write_text(report["text"] + "\n")
+    (folder / "machine.json").write_text(json.dumps(report["json"], indent=1, default=float))
+    _plot_profiles(out, folder / "profile.png")
+    print(f"wrote {folder / 'machine.md'}, {folder / 'machine.json'}, {folder / 'profile.png'}",
+          file=sys.stderr)
+    return 0
+
+
+def machine_report(m: MachineMap, out: dict, length: float, incline: float, t_in) -> dict:
+    """The answers as a Markdown table and a JSON-ready dict (values with their errors)."""
+    lines = [f"# The machine from its map: {length:g} m at {incline:.3g} deg", "",
+             f"capacity (the inlet end at the overflow hold-up): {out['capacity'] * 3.6:.4g} "
+             f"+- {out['capacity_error'] * 3.6:.2g} t/h", "",
+             "| feed (t/h) | inlet-end hold-up (kg/m) | hold-up (kg) | mean residence (s) | "
+             + " | ".join(f"{b} torque (N m) | {b} power (W)" for b in m.bodies)
+             + (" | outlet temperature (C) |" if t_in is not None else " |"),
+             "|---" * (4 + 2 * len(m.bodies) + (1 if t_in is not None else 0)) + "|"]
+    rows = []
+    for ans, err in zip(out["feeds"], out["errors"]):
+        cells = [f"{ans.feed * 3.6:.4g}", f"{ans.inlet_holdup:.4g}"
+                 + (" (overflows)" if ans.overflows else ""),
+                 f"{ans.holdup:.4g} +- {err.get('holdup', math.nan):.2g}",
+                 f"{ans.residence_time:.4g} +- {err.get('residence_time', math.nan):.2g}"]
+        row = {"feed_kg_per_s": ans.feed, "inlet_holdup_kg_per_m": ans.inlet_holdup,
+               "holdup_kg": ans.holdup, "holdup_kg_error": err.get("holdup"),
+               "residence_time_s": ans.residence_time,
+               "residence_time_s_error": err.get("residence_time"), "overflows": ans.overflows,
+               "profile_x_m": ans.profile.x.tolist(),
+               "profile_holdup_kg_per_m": ans.profile.holdup.tolist()}
+        for b in m.bodies:
+            t, p = ans.torques.get(b, math.nan), ans.powers.get(b, math.nan)
+            cells += [f"{t:.4g} +- {err.get(f'{b}/torque', math.nan):.2g}",
+                      f"{p:.4g} +- {err.get(f'{b}/power', math.nan):.2g}"]
+            row[f"{b}/torque_N_m"], row[f"{b}/power_W"] = t, p
+            row[f"{b}/torque_N_m_error"] = err.get(f"{b}/torque")
+            row[f"{b}/power_W_error"] = err.get(f"{b}/power")
+        if t_in is not None:
+            t = ans.outlet_temperature
+            cells.append("n/a (no conductance in the map)" if t is None else
+                         f"{t - 273.15:.4g} +- {err.get('outlet_temperature', math.nan):.2g}")
+            row["outlet_temperature_K"] = t
+            row["outlet_temperature_K_error"] = err.get("outlet_temperature")
+        lines.append("| " + " | ".join(cells) + " |")
+        rows.append(row)
+    lines += ["", f"errors: one standard deviation over {out['draws']} re-marches of the map "
+              "drawn from its standard errors (noise only: not the particle size or precision)"]
+    mapped = sorted(r.holdup for r in m.rows)
+    outside = [a.feed * 3.6 for a in out["feeds"]
+               if a.profile.holdup.max() < mapped[0] * 0.999 or a.overflows]
+    if outside:
+        lines.append(f"note: at {', '.join(f'{f:.3g}' for f in outside)} t/h the bed lies "
+                     f"outside the mapped hold-ups ({mapped[0]:.4g} - {mapped[-1]:.4g} kg/m): "
+                     "below them the law is extrapolated as Saeman's (chord cubed); map lower "
+                     "or higher hold-ups to be sure")
+    doc = {"length_m": length, "incline_deg": incline, "capacity_kg_per_s": out["capacity"],
+           "capacity_kg_per_s_error": out["capacity_error"], "feeds": rows,
+           "inlet_temperature_K": t_in}
+    return {"text": "\n".join(lines), "json": doc}
+
+
+def _plot_profiles(out: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for ans in out["feeds"]:
+        ax.plot(ans.profile.x, ans.profile.holdup, label=f"{ans.feed * 3.6:.3g} t/h")
+    ax.set_xlabel("distance from the inlet end (m)")
+    ax.set_ylabel("hold-up (kg/m)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

@@ -1,0 +1,195 @@
+"""The whole machine from its map (app/machine.py): the march must reduce to Kramers &
+Croockewit's bed-depth equation for a plain drum, reach Saeman's uniform depth far from the
+discharge, keep a self-conveying machine at the hold-up that carries the feed, and integrate
+residence, torque and the outlet temperature as their closed forms give them."""
+import math
+
+import numpy as np
+import pytest
+
+from taichi_dem.app import machine as mc
+from taichi_dem.errors import SceneError
+
+R = 0.5                   # drum radius, m
+N = 3.0 / 60.0            # rev/s (3 rpm)
+BETA = 35.0               # dynamic angle, deg
+THETA = 3.0               # incline, deg: the drum discharges towards -x
+RHO_B = 1500.0            # bulk density, kg/m^3
+SECTION = mc.Section(R, 0.0, RHO_B)
+
+
+def drum_map(depths=(0.1, 0.2, 0.3, 0.45, 0.6), shaft_torque=None, conductance=None):
+    """A plain drum's map as Saeman's law gives it, at one incline (gravity towards -x)."""
+    rows = []
+    slope = -math.tan(math.radians(THETA))
+    for d in depths:
+        h = d * R
+        H = float(SECTION.holdup(h))
+        q = -mc.saeman_flow(SECTION, h, N, math.tan(math.radians(THETA)), BETA)
+        figures = {"axial_mass_flow": (q, 0.0), "dynamic_angle": (BETA, 0.0)}
+        if shaft_torque is not None:
+            figures["shell/torque_per_metre"] = (shaft_torque * H, 0.0)
+        if conductance is not None:
+            figures["shell/conductance_per_metre"] = (conductance, 0.0)
+        rows.append(mc.MapRow(H, slope, figures))
+    return mc.MachineMap(rows, SECTION, {"shell": 2 * math.pi * N}, 0.004, 1000.0,
+                         {"shell": 300.0}, ["shell"])
+
+
+def kramers(feed, length, h0, steps=20000):
+    """Kramers & Croockewit's equation as published (x from the discharge), RK4."""
+    phi = feed / RHO_B
+    tb, sb = math.tan(math.radians(BETA)), math.sin(math.radians(BETA))
+    tt = math.tan(math.radians(THETA))
+
+    def rate(h):
+        f = 2 * h / R - (h / R) ** 2
+        return tb * (3 * phi / (4 * math.pi * N * R ** 3) * f ** -1.5 - tt / sb)
+    x = np.linspace(0.0, length, steps + 1)
+    h = np.empty_like(x)
+    h[0] = h0
+    dx = x[1] - x[0]
+    for k in range(steps):
+        y = h[k]
+        k1 = rate(y)
+        k2 = rate(y + 0.5 * dx * k1)
+        k3 = rate(y + 0.5 * dx * k2)
+        k4 = rate(y + dx * k3)
+        h[k + 1] = y + dx / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return x, h
+
+
+def saeman_depth(feed):
+    """The uniform (plateau) depth at which Saeman's flow at the incline carries ``feed``."""
+    c_half3 = 3 * (feed / RHO_B) * math.sin(math.radians(BETA)) / (
+        4 * math.pi * N * math.tan(math.radians(THETA)))
+    c = 2 * c_half3 ** (1 / 3)
+    return R - math.sqrt(R * R - c * c / 4)
+
+
+def test_section_geometry():
+    s = mc.Section(0.4, 0.08, 1000.0)
+    assert s.area(0.8) == pytest.approx(math.pi * (0.4 ** 2 - 0.08 ** 2), rel=1e-9)
+    assert s.area(0.4) == pytest.approx(0.5 * math.pi * (0.4 ** 2 - 0.08 ** 2), rel=1e-9)
+    assert s.area(0.3) == pytest.approx(mc._segment(0.4, 0.3), rel=1e-12)   # below the shaft
+    for d in (0.05, 0.33, 0.5, 0.75):
+        assert s.depth(s.holdup(d))[0] == pytest.approx(d, rel=1e-9)
+    assert s.chord(0.4) == pytest.approx(0.8)
+
+
+def test_march_reduces_to_kramers_for_a_plain_drum():
+    feed = 1.2 * 1.0                             # kg/s
+    length, h0 = 12.0, 0.02
+    law = mc.TransportLaw(drum_map())
+    assert law.single_incline
+    prof = mc.march(law, length, feed, -math.tan(math.radians(THETA)), h0,
+                    overflow_holdup=float(SECTION.holdup(R)), steps=800)
+    assert not prof.overflows and prof.flow_sign == -1
+    x_ref, h_ref = kramers(feed, length, h0)
+    up = length - prof.x                         # the march's distance from the discharge
+    for d in (0.05, 0.3, 1.0, 3.0, 8.0, 12.0):
+        got = float(np.interp(d, up[::-1], prof.depth[::-1]))
+        assert got == pytest.approx(float(np.interp(d, x_ref, h_ref)), rel=2e-3), d
+    # far from the discharge, Saeman's uniform depth
+    assert prof.depth[0] == pytest.approx(saeman_depth(feed), rel=5e-3)
+
+
+def test_march_residence_torque_and_outlet_temperature():
+    feed = 1.2
+    length = 12.0
+    m = drum_map(shaft_torque=-2.0, conductance=150.0)
+    ans = mc.answer(m, length, feed, -math.tan(math.radians(THETA)), discharge_depth=0.02,
+                    inlet_temperature=700.0, steps=800)
+    x_ref, h_ref = kramers(feed, length, 0.02)
+    hold_ref = float(np.trapezoid(SECTION.holdup(h_ref), x_ref))
+    assert ans.holdup == pytest.approx(hold_ref, rel=3e-3)
+    assert ans.residence_time == pytest.approx(hold_ref / feed, rel=3e-3)
+    # the torque per metre is -2 N m per kg/m of hold-up: the total is -2 x the hold-up
+    assert ans.torques["shell"] == pytest.approx(-2.0 * hold_ref, rel=3e-3)
+    # constant conductance along a bed that never empties: the closed form
+    t_out = 300.0 + 400.0 * math.exp(-150.0 * length / (feed * 1000.0))
+    assert ans.outlet_temperature == pytest.approx(t_out, rel=1e-3)
+
+
+def test_a_self_conveying_machine_carries_the_feed_at_its_own_hold_up():
+    """q = a(H) + b(H) s fitted over two inclines; the plateau is where it equals the feed."""
+    s1, s2 = 0.0, -math.tan(math.radians(5.0))   # level and raised 5 deg at +x
+    rows = []
+    for d in (0.15, 0.3, 0.45, 0.6):
+        h = d * R
+        H = float(SECTION.holdup(h))
+        c3 = float(SECTION.chord(h)) ** 3
+        for s in (s1, s2):
+            q = c3 * (2.0 + 6.0 * s)          # conveys towards +x, against the incline
+            rows.append(mc.MapRow(H, s, {"axial_mass_flow": (q, 0.0),
+                                         "dynamic_angle": (BETA, 0.0)}))
+    m = mc.MachineMap(rows, SECTION, {}, 0.01, None, {}, [])
+    law = mc.TransportLaw(m)
+    assert not law.single_incline
+    a, b, _ = law.coefficients(float(SECTION.holdup(0.3 * R)))
+    c3 = float(SECTION.chord(0.3 * R)) ** 3
+    assert a == pytest.approx(2.0 * c3, rel=1e-6) and b == pytest.approx(6.0 * c3, rel=1e-6)
+    feed = 0.5
+    ans = mc.answer(m, 6.0, feed, s2, discharge_depth=0.01, steps=600)
+    assert ans.profile.flow_sign == 1
+    # plateau: c^3 (2 + 6 s2) = feed
+    c = (feed / (2.0 + 6.0 * s2)) ** (1 / 3)
+    h_plateau = R - math.sqrt(R * R - c * c / 4)
+    assert ans.profile.depth[0] == pytest.approx(h_plateau, rel=5e-3)
+    # the same machine inclined more carries the feed at a larger hold-up
+    steeper = mc.answer(m, 6.0, feed, -math.tan(math.radians(8.0)), discharge_depth=0.01)
+    assert steeper.inlet_holdup > ans.inlet_holdup
+
+
+def test_capacity_is_the_feed_that_fills_the_inlet_end_to_the_overflow():
+    m = drum_map()
+    limit = float(SECTION.holdup(0.6 * R))
+    cap = mc.capacity(m, 60.0, -math.tan(math.radians(THETA)), discharge_depth=0.02,
+                      overflow_holdup=limit)
+    # a long drum at its capacity is at Saeman's uniform depth at the overflow level
+    expected = mc.saeman_flow(SECTION, 0.6 * R, N, math.tan(math.radians(THETA)), BETA)
+    assert cap == pytest.approx(expected, rel=1e-2)
+    over = mc.answer(m, 60.0, 1.05 * cap, -math.tan(math.radians(THETA)), 0.02, limit)
+    assert over.overflows
+
+
+def test_errors_follow_the_map_standard_errors():
+    m = drum_map()
+    for r in m.rows:                     # a 5 % standard error on every flow
+        q, _ = r.figures["axial_mass_flow"]
+        r.figures["axial_mass_flow"] = (q, 0.05 * abs(q))
+    out = mc.with_errors(m, 12.0, [1.0], -math.tan(math.radians(THETA)), 0.02, draws=30)
+    rel = out["errors"][0]["residence_time"] / out["feeds"][0].residence_time
+    # the hold-up of a Saeman bed goes as q^(-2/3) in the chord cubed: ~3 % for 5 % in q,
+    # less for the rows' independent draws partly cancelling
+    assert 0.005 < rel < 0.06
+    assert 0.0 < out["capacity_error"] / out["capacity"] < 0.1
+
+
+def test_a_map_at_a_level_axis_only_is_refused():
+    rows = [mc.MapRow(10.0, 0.0, {"axial_mass_flow": (0.1, 0.0), "dynamic_angle": (30.0, 0.0)})]
+    with pytest.raises(SceneError, match="second incline"):
+        mc.TransportLaw(mc.MachineMap(rows, SECTION, {}, 0.01))
+
+
+def test_machine_command_refuses_bad_input_with_file_key_reason(tmp_path, capsys):
+    from taichi_dem.app.cli import main
+    assert main(["machine", str(tmp_path / "none.json"), "--length", "6 m",
+                 "--feed", "1 t/h"]) == 2
+    assert "cannot read the map" in capsys.readouterr().err
+    old = tmp_path / "old.json"
+    old.write_text('{"rows": []}')
+    assert main(["machine", str(old), "--length", "6 m", "--feed", "1 t/h"]) == 2
+    assert "no 'machine' section" in capsys.readouterr().err
+    import json
+    two = tmp_path / "two.json"
+    rows = [{"holdup_kg_per_m": 20.0, "axial_slope": s, "axial_mass_flow": -0.1 + s,
+             "axial_mass_flow_standard_error": 0.0, "dynamic_angle": 30.0,
+             "dynamic_angle_standard_error": 0.0} for s in (-0.05, -0.09)]
+    two.write_text(json.dumps({"machine": {"shell_radius": 0.2, "bulk_density": 1500.0,
+                                           "particle_diameter": 0.004}, "rows": rows}))
+    assert main(["machine", str(two), "--length", "6 m", "--feed", "1 t/h"]) == 2
+    assert "--incline" in capsys.readouterr().err
+    assert main(["machine", str(two), "--length", "six metres", "--feed", "1 t/h",
+                 "--incline", "3"]) == 2
+    assert "--length" in capsys.readouterr().err
