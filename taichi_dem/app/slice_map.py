@@ -11,6 +11,8 @@ axial_speed          m/s    sum m v_a / sum m, the bed's mean axial speed
 <body>/torque_per_metre  N m/m  the axial torque the particles exert on the body, / L
 <body>/power_per_metre   W/m    the drive power that torque takes at the body's speed, / L
 <body>/covered_area_per_metre, <body>/heat_transfer_coefficient: for an isothermal body
+shell_layer_axial_speed m/s the axial speed of the layer on the shell (Saeman's passive bed has
+                            none: a layer creeping along the shell carries more than Saeman)
 slip_ratio           -      the tangential speed of the layer on the shell over the shell's at
                             the same radius (1: the bed rides with the shell; a smooth shell's
                             bed rolls like a bearing at ~0.5); NaN for a shell at rest
@@ -191,6 +193,7 @@ class SliceObserver:
         shell = self.scene.bodies[g.shell]
         omega = float(values.get(f"bodies/{shell.name}/angular_speed", 0.0))
         self._add("slip_ratio", slip_ratio(x, v, r, g, omega))
+        self._add("shell_layer_axial_speed", shell_layer_axial_speed(x, v, r, g))
         self._add("dynamic_angle", dynamic_angle(x, r, g.axis_point, self.horizontal, self.up))
         for body in self.scene.bodies:
             prefix = f"bodies/{body.name}/"
@@ -227,6 +230,18 @@ def slip_ratio(position, velocity, radius, geometry: SliceGeometry, omega: float
         return math.nan
     tangent = np.cross(a, radial[near] / r[near, None])
     return float(np.mean(np.sum(velocity[near] * tangent, axis=1)) / (omega * np.mean(r[near])))
+
+
+def shell_layer_axial_speed(position, velocity, radius, geometry: SliceGeometry) -> float:
+    """Mean axial speed (m/s) of the particles whose centres lie within SHELL_LAYER_RADII radii
+    of the shell: Saeman's bed moves along the axis only in its surface layer; a layer on the
+    shell creeping along it (spheres rolling down the incline between lifters) carries more.
+    NaN with nothing there."""
+    a = geometry.axis_direction
+    rel = position - geometry.axis_point
+    r = np.linalg.norm(rel - np.outer(rel @ a, a), axis=1)
+    near = r > geometry.shell_radius - SHELL_LAYER_RADII * radius
+    return float(np.mean(velocity[near] @ a)) if np.any(near) else math.nan
 
 
 def dynamic_angle(position, radius, axis_point, horizontal, up, bins: int = 12) -> float:
@@ -281,6 +296,7 @@ class SliceResult:
 
 # the figures a map reports (units), in table order; bodies' figures follow
 FIGURES = {"axial_mass_flow": "kg/s", "axial_speed": "m/s", "slip_ratio": "-",
+           "shell_layer_axial_speed": "m/s",
            "dynamic_angle": "deg", "saeman_flow": "kg/s", "saeman_ratio": "-"}
 BODY_FIGURES = {"torque_per_metre": "N m/m", "power_per_metre": "W/m",
                 "covered_area_per_metre": "m^2/m", "heat_transfer_coefficient": "W/(m^2 K)",

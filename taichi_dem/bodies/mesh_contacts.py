@@ -664,6 +664,54 @@ class MeshContacts:
 
         return particle_contacts
 
+    def make_shields(self):
+        """ti.func (i, j, d) -> True when a triangle near particle i or j (its contact
+        candidates) lies across the line between their centres (``d`` = x_i - x_j, minimum image, m):
+        a plate between two spheres, which then are not a contact (a zero-thickness paddle or
+        flight would otherwise let the spheres on its two faces push each other through it).
+        Only particles with mesh candidates look: the test is a segment-triangle intersection
+        (Moeller & Trumbore 1997) per candidate, after a cheaper test that the two centres lie
+        on the two sides of the triangle's plane."""
+        m = self
+
+        @ti.func
+        def crosses(k, x, segment):
+            """Whether the segment x -> x + segment crosses the triangle of entry k."""
+            wa, wb, wc = m.world_triangle(m.mesh_tri[k])
+            origin = m.triangle_image(x, wa, wb, wc)
+            e1 = wb - wa
+            e2 = wc - wa
+            normal = e1.cross(e2)
+            side = (origin - wa).dot(normal)
+            hit = False
+            # the two ends on the two sides of the plane (most candidates fail here)
+            if side * (side + segment.dot(normal)) < 0.0:
+                pvec = segment.cross(e2)
+                det = e1.dot(pvec)
+                inv = 1.0 / det
+                tvec = origin - wa
+                u = tvec.dot(pvec) * inv
+                qvec = tvec.cross(e1)
+                v = segment.dot(qvec) * inv
+                hit = u >= 0.0 and v >= 0.0 and u + v <= 1.0
+            return hit
+
+        @ti.func
+        def shields(i, j, d):
+            # every candidate triangle of either sphere, not only those touched at the last
+            # step: a triangle across a segment shorter than 2 r is within r of one of its
+            # ends, so it is touched now (a flag from the last step would be one step late)
+            hit = False
+            for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
+                if not hit:
+                    hit = crosses(k, m.e.state.position[i], -d)
+            for k in range(m.mesh_start[j], m.mesh_start[j] + m.mesh_count[j]):
+                if not hit:
+                    hit = crosses(k, m.e.state.position[j], d)
+            return hit
+
+        return shields
+
     # --------------------------------------------------------------- driver
     def update_frames(self, time: float):
         self._update_frames(time)

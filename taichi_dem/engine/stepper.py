@@ -369,6 +369,8 @@ class Engine:
                 make_contact_law(effects, "triangle", real, self.context),
                 make_contact_law(effects, "surface", real, self.context), sphere_surface)
         has_mesh = mesh_contacts is not None
+        # a plate between two spheres: no pair contact through it
+        shields = self.mesh.make_shields() if has_mesh else None
         Load = ti.types.struct(acceleration=ti.types.vector(3, real), heat=real,
                                conductance=real)
         particle_effects = tuple(e.particle_func(self.context) for e in self.particle_effects)
@@ -490,7 +492,11 @@ class Engine:
                 reach = ri + rj
                 if ti.static(pair_margin > 0.0):
                     reach += ti.static(pair_margin) * ti.max(ri, rj)
-                if distance_sq < reach * reach and distance_sq > 0.0:
+                within = distance_sq < reach * reach and distance_sq > 0.0
+                if ti.static(has_mesh):
+                    if within:
+                        within = not shields(i, j, d)
+                if within:
                     # a pair within the margin but apart (heat only): its geometry without the
                     # motion; touching: the whole contact
                     touching = True
