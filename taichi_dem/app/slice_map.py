@@ -18,6 +18,8 @@ slip_ratio           -      the tangential speed of the layer on the shell over 
                             bed rolls like a bearing at ~0.5); NaN for a shell at rest
 dynamic_angle        deg    the slope of the bed's free surface across the section, against
                             gravity's component in it
+surface_chord        m      the length of that surface across the shell (Saeman's c), through
+                            the top layer's centres
 
 ``map_slices`` runs a scene at each hold-up (kg/m, or a fill fraction of the free section at
 a bulk solid fraction of BULK_SOLID_FRACTION) and reduces each series to its steady mean and
@@ -194,7 +196,13 @@ class SliceObserver:
         omega = float(values.get(f"bodies/{shell.name}/angular_speed", 0.0))
         self._add("slip_ratio", slip_ratio(x, v, r, g, omega))
         self._add("shell_layer_axial_speed", shell_layer_axial_speed(x, v, r, g))
-        self._add("dynamic_angle", dynamic_angle(x, r, g.axis_point, self.horizontal, self.up))
+        slope, offset = bed_surface(x, r, g.axis_point, self.horizontal, self.up)
+        self._add("dynamic_angle", math.degrees(math.atan(abs(slope))) if math.isfinite(slope)
+                  else math.nan)
+        # the surface through the top layer's centres (the tops less a mean radius): the
+        # chord Saeman's flow is computed from, measured rather than from an assumed packing
+        self._add("surface_chord", surface_chord(slope, offset - float(np.mean(r)) if len(r)
+                                                 else math.nan, g.shell_radius))
         for body in self.scene.bodies:
             prefix = f"bodies/{body.name}/"
             for name, out in (("axial_torque", "torque_per_metre"), ("power", "power_per_metre"),
@@ -244,13 +252,14 @@ def shell_layer_axial_speed(position, velocity, radius, geometry: SliceGeometry)
     return float(np.mean(velocity[near] @ a)) if np.any(near) else math.nan
 
 
-def dynamic_angle(position, radius, axis_point, horizontal, up, bins: int = 12) -> float:
-    """The free surface's slope across the section (degrees, 0 - 90): the section is cut into
-    ``bins`` strips across (along ``horizontal``), the surface in each is its highest particle
-    top (along ``up``), and a line is fitted through the inner two thirds of the strips the bed
-    occupies (the toe and the shoulder curve). NaN with fewer than 3 strips."""
+def bed_surface(position, radius, axis_point, horizontal, up, bins: int = 12):
+    """The bed's free surface across the section as a line up = slope h + offset (m, about
+    the axis): the section is cut into ``bins`` strips across (along ``horizontal``), the
+    surface in each is its highest particle top (along ``up``), and a line is fitted through
+    the inner two thirds of the strips the bed occupies (the toe and the shoulder curve).
+    (nan, nan) with fewer than 3 strips."""
     if len(position) < 3:
-        return math.nan
+        return math.nan, math.nan
     rel = position - axis_point
     h = rel @ horizontal
     top = rel @ up + radius
@@ -266,9 +275,24 @@ def dynamic_angle(position, radius, axis_point, horizontal, up, bins: int = 12) 
     cut = n // 6
     centres, heights = np.array(centres[cut:n - cut]), np.array(heights[cut:n - cut])
     if len(centres) < 3:
+        return math.nan, math.nan
+    slope, offset = np.polyfit(centres, heights, 1)
+    return float(slope), float(offset)
+
+
+def dynamic_angle(position, radius, axis_point, horizontal, up, bins: int = 12) -> float:
+    """The free surface's slope across the section (degrees, 0 - 90; bed_surface's line)."""
+    slope, _ = bed_surface(position, radius, axis_point, horizontal, up, bins)
+    return float(math.degrees(math.atan(abs(slope)))) if math.isfinite(slope) else math.nan
+
+
+def surface_chord(slope: float, offset: float, shell_radius: float) -> float:
+    """The length (m) of the bed's surface line (bed_surface) across a shell of
+    ``shell_radius``: 2 sqrt(R^2 - p^2), p the line's distance from the axis (Saeman's c)."""
+    if not (math.isfinite(slope) and math.isfinite(offset)):
         return math.nan
-    slope = np.polyfit(centres, heights, 1)[0]
-    return float(math.degrees(math.atan(abs(slope))))
+    p = abs(offset) / math.sqrt(1.0 + slope * slope)
+    return 2.0 * math.sqrt(max(shell_radius ** 2 - p * p, 0.0))
 
 
 @dataclass
@@ -296,7 +320,7 @@ class SliceResult:
 
 # the figures a map reports (units), in table order; bodies' figures follow
 FIGURES = {"axial_mass_flow": "kg/s", "axial_speed": "m/s", "slip_ratio": "-",
-           "shell_layer_axial_speed": "m/s",
+           "shell_layer_axial_speed": "m/s", "surface_chord": "m", "bed_solid_fraction": "-",
            "dynamic_angle": "deg", "saeman_flow": "kg/s", "saeman_ratio": "-"}
 BODY_FIGURES = {"torque_per_metre": "N m/m", "power_per_metre": "W/m",
                 "covered_area_per_metre": "m^2/m", "heat_transfer_coefficient": "W/(m^2 K)",
@@ -348,6 +372,7 @@ def machine_info(scene, geometry: SliceGeometry, fill_index: int = 0) -> dict:
             "bulk_density": material.density * BULK_SOLID_FRACTION,
             "particle_diameter": diameter, "period": geometry.length,
             "axis": "xyz"[geometry.axis], "bodies": [b.name for b in scene.bodies],
+            "shell": scene.bodies[geometry.shell].name,
             "angular_speeds": speeds, "wall_temperatures": walls,
             "heat_capacity": (getattr(material, "heat_capacity", None)
                               if scene.thermal is not None else None)}
@@ -401,6 +426,15 @@ def write_map(results: list[SliceResult], out_dir: Path, scene_name: str,
             if math.isfinite(flow):
                 # Saeman's uniform-bed flow at the measured dynamic angle, and the map's over it
                 row["saeman_flow"], row["saeman_ratio"] = flow, ratio
+            chord = row.get("surface_chord", math.nan)
+            R = machine["shell_radius"]
+            if math.isfinite(chord) and 0.0 < chord < 2.0 * R:
+                from .machine import Section
+                depth = R - math.sqrt(R * R - 0.25 * chord * chord)
+                area = float(Section(R, machine.get("shaft_radius", 0.0), 1.0).area(depth))
+                density = machine["bulk_density"] / BULK_SOLID_FRACTION
+                # the bed's solid fraction under its measured surface
+                row["bed_solid_fraction"] = row["holdup_kg_per_m"] / (density * area)
     names = list(dict.fromkeys(k for row in rows for k in row))
     csv = out_dir / "map.csv"
     with open(csv, "w") as f:
