@@ -218,8 +218,49 @@ def describe_scene(scene) -> str:
         lines.append(f"fastest body surface: {body_surface_speed(scene):.3g} m/s "
                      f"({body_surface_speed(scene) * ts.dt / float(np.min(radii)):.3f} "
                      f"of the smallest radius per step)")
+        for note in narrow_gap_notes(scene, float(np.max(radii))):
+            ts.notes.append(note)
     lines += [f"note: {note}" for note in ts.notes]
     return "\n".join(lines)
+
+
+def narrow_gap_notes(scene, largest_radius: float) -> list:
+    """Warnings for each pair of bodies, one turning about an axis the other shares or is
+    swept round, whose narrowest radial gap (geometry/gaps.py) the largest sphere cannot pass:
+    spheres wedge between paddle tips and the shell there (a jam, a torque spike)."""
+    from geometry.gaps import radial_gap, surface_points
+    notes = []
+    bodies = list(scene.bodies)
+    for i, a in enumerate(bodies):
+        for b in bodies[i + 1:]:
+            turning = [x for x in (a, b) if x.motion.speed is not None]
+            if not turning:
+                continue
+            axis_point = np.asarray(turning[0].motion.axis_point, float)
+            axis = np.asarray(turning[0].motion.axis_direction, float)
+            if len(turning) == 2:
+                other = np.asarray(turning[1].motion.axis_direction, float)
+                offset = np.asarray(turning[1].motion.axis_point, float) - axis_point
+                if (abs(abs(other @ axis) - 1.0) > 1e-6
+                        or np.linalg.norm(offset - (offset @ axis) * axis) > 1e-6):
+                    continue        # not coaxial: no swept annulus to speak of
+            pa, pb = (surface_points(x.vertices, x.faces) for x in (a, b))
+            if not len(pa) or not len(pb):
+                continue
+
+            def median_radius(points):
+                rel = points - axis_point
+                return float(np.median(np.linalg.norm(rel - np.outer(rel @ axis, axis), axis=1)))
+            inner, outer, p_in, p_out = ((a, b, pa, pb) if median_radius(pa) < median_radius(pb)
+                                         else (b, a, pb, pa))
+            gap, where = radial_gap(p_in, p_out, axis_point, axis, slab=largest_radius)
+            if 2.0 * largest_radius >= gap:
+                notes.append(f"the largest sphere (diameter {2e3 * largest_radius:.3g} mm) cannot "
+                             f"pass the narrowest gap between bodies {inner.name!r} and "
+                             f"{outer.name!r} ({1e3 * gap:.3g} mm, {where:.3g} m along the axis): "
+                             "spheres wedge there (jams, torque spikes); smaller spheres or a "
+                             "wider clearance")
+    return notes
 
 
 def cmd_check(args) -> int:
