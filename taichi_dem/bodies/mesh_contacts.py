@@ -543,6 +543,7 @@ class MeshContacts:
         lens = self.lens
         nb = self.n_bodies
         vec0 = ti.Vector([0.0, 0.0, 0.0])
+        split = e.model.split_positions
 
         @ti.func
         def particle_contacts(i, xi, vi, wi, ri, mass_i, inv_mi, inverse_inertia_i, ai, mi,
@@ -553,6 +554,9 @@ class MeshContacts:
             conductance = 0.0
             start = m.mesh_start[i]
             end = start + m.mesh_count[i]
+            residual_i = vec0
+            if ti.static(split):
+                residual_i = e.state.position_residual[i]
             nearest = ti.Vector([ri * ti.static(2.0 + lens)] * max(nb, 1))
             # geometry of every candidate triangle, in its body's reference frame: the particle
             # is moved into that frame (one rotation) instead of the triangle out of it (three)
@@ -567,12 +571,19 @@ class MeshContacts:
                     # half the period is nearer another image than the one near its vertex
                     wa, wb, wc = m.world_triangle(t)
                     x_world = m.triangle_image(xi, wa, wb, wc)
-                x_ref = rot.transpose() @ (x_world - pivot - m.offset[body]) + pivot
                 m.mesh_status[k] = ti.u8(2)
+                # the particle and the triangle relative to the body's pivot: with split
+                # positions (f32 far from the origin, engine/precision.py) the differences of
+                # near coordinates are exact and the residual is added to them
+                x_ref = rot.transpose() @ (x_world - pivot - m.offset[body])
+                if ti.static(split):
+                    x_ref += rot.transpose() @ residual_i
+                tri_a = m.tri_a[t] - pivot
                 # a triangle whose plane is farther than r (and the lens) cannot touch (most
                 # candidates)
-                if ti.abs((x_ref - m.tri_a[t]).dot(m.tri_normal[t])) < ri * ti.static(1.0 + lens):
-                    q, region = closest_point_on_triangle(x_ref, m.tri_a[t], m.tri_b[t], m.tri_c[t])
+                if ti.abs((x_ref - tri_a).dot(m.tri_normal[t])) < ri * ti.static(1.0 + lens):
+                    q, region = closest_point_on_triangle(x_ref, tri_a, m.tri_b[t] - pivot,
+                                                          m.tri_c[t] - pivot)
                     d = x_ref - q
                     dist_sq = d.dot(d)
                     if ti.static(near):
@@ -584,7 +595,7 @@ class MeshContacts:
                         dist = ti.sqrt(dist_sq)
                         m.mesh_overlap[k] = ri - dist
                         m.mesh_normal[k] = rot @ (d / dist)
-                        m.mesh_point[k] = rot @ (q - pivot) + pivot + m.offset[body]
+                        m.mesh_point[k] = rot @ q + pivot + m.offset[body]
                         m.mesh_status[k] = ti.u8(0)
             # deepest first; drop neighbours of the same flat or convex surface
             for _ in range(end - start):

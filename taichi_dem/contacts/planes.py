@@ -52,15 +52,23 @@ def make_plane_contacts(state, walls: PlaneWalls, sphere_surface, plane_law, wal
     n_walls = walls.count
     conducts = thermal and walls.conducts
     vec0 = ti.Vector([0.0, 0.0, 0.0])
+    # positions with residuals (engine/precision.py)
+    split = "position_residual" in state.spec
 
     @ti.func
     def plane_contacts(i, dt, record, force, torque, heat, conductance):
         xi, vi, wi, ri, mi = s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i], s.material[i]
         inv_m = s.inverse_mass[i]
         temperature_i = temperature_of(i)
+        residual = ti.Vector([0.0, 0.0, 0.0])
+        if ti.static(split):
+            residual = s.position_residual[i]
         for w in range(n_walls):
             wall_normal = walls.normal[w]
             overlap = ri - (xi - walls.point[w]).dot(wall_normal)
+            if ti.static(split):
+                # f32 far from the origin (engine/precision.py)
+                overlap -= residual.dot(wall_normal)
             # most particles are far from most walls: only the history is cleared there, and
             # the contact record and the law are built for the walls within reach only (with
             # the walls read in a loop, not unrolled as constants, that is what keeps the

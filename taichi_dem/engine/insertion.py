@@ -134,6 +134,7 @@ class Insertion:
             fresh.update({n: v for n, (v, _) in effect.particle_fields.items() if n not in inserted})
         fresh_scalars = [getattr(s, n) for n, vec in fresh.items() if not vec]
         fresh_vectors = [getattr(s, n) for n, vec in fresh.items() if vec]
+        split = e.model.split_positions
 
         @ti.kernel
         def insert(start: ti.i32, k: ti.i32, reals: ti.types.ndarray(dtype=ti.f64, ndim=2),
@@ -146,6 +147,9 @@ class Insertion:
                 x = ti.Vector([ti.cast(reals[q, C.POSITION + a], real) for a in ti.static(range(3))])
                 s.position[i] = x
                 s.reference_position[i] = x
+                if ti.static(split):
+                    # (what f32 cannot hold of an inserted position: below its spacing, dropped)
+                    s.position_residual[i] = ti.Vector([0.0, 0.0, 0.0])
                 s.velocity[i] = ti.Vector([ti.cast(reals[q, C.VELOCITY + a], real)
                                     for a in ti.static(range(3))])
                 s.angular_velocity[i] = ti.Vector([ti.cast(reals[q, C.ANGULAR_VELOCITY + a], real)

@@ -14,6 +14,19 @@ from ..effects import enabled_effects
 from ..setup.pair_tables import PairTables
 from .grid import GridSpec
 
+# In f32, positions farther than this from the origin (m) carry a residual (split positions:
+# engine/precision.py): the f32 spacing there, 1.2e-7 m, is what a resting bed would jitter by
+SPLIT_POSITIONS_BEYOND = 1.0
+
+
+def split_positions(scene) -> bool:
+    """Whether an f32 scene's positions reach farther than SPLIT_POSITIONS_BEYOND from the
+    origin (its domain's farthest coordinate): then each keeps a residual."""
+    if scene.simulation.precision != "f32":
+        return False
+    reach = max(max(abs(v) for v in scene.domain.min), max(abs(v) for v in scene.domain.max))
+    return reach > SPLIT_POSITIONS_BEYOND
+
 
 @dataclass(frozen=True, eq=False)
 class Model:
@@ -54,6 +67,9 @@ class Model:
         particle_fields, contact_fields, pair_fields = {}, {}, {}
         for e in effect_list:
             particle_fields.update(e.particle_fields)
+        if split_positions(scene):
+            # the part of each position f32 cannot hold (engine/precision.py)
+            particle_fields["position_residual"] = (True, "real")
         for e in contact:
             contact_fields.update(e.contact_fields)
             pair_fields.update(e.pair_fields)
@@ -88,6 +104,11 @@ class Model:
     @property
     def thermal(self) -> bool:
         return self.scene.thermal is not None
+
+    @property
+    def split_positions(self) -> bool:
+        """Positions carry a residual (f32 far from the origin: engine/precision.py)."""
+        return "position_residual" in self.particle_fields
 
     @property
     def moisture(self) -> bool:

@@ -36,6 +36,7 @@ import taichi as ti
 from . import backend, transfer
 from .broadphase import Broadphase
 from .model import Model
+from .precision import make_split_add
 from .insertion import Insertion
 from .measure import Measure
 from ..contacts.geometry import contact_types, make_geometry
@@ -273,6 +274,10 @@ class Engine:
         body_frame = self.mobility_frame >= 0
         rigid_drift = self.mobility.make_rigid_drift(self.context) if body_frame else None
         rigid_velocity = self.mobility.make_rigid_velocity(self.context) if body_frame else None
+        # positions with residuals (engine/precision.py: f32 far from the origin)
+        split = self.model.split_positions
+        split_add = make_split_add(real) if split else None
+        vec0 = ti.Vector([0.0, 0.0, 0.0])
 
         @ti.func
         def drift_particle(i, dt, t_new):
@@ -295,22 +300,35 @@ class Engine:
                     if frozen:
                         x_new = rigid_drift(x_old, dt, t_new)
                         s.velocity[i] = rigid_velocity(x_new, t_new)
+                residual = vec0
+                if ti.static(split):
+                    residual = s.position_residual[i]
                 if not frozen:
                     v = s.velocity[i] + 0.5 * dt * s.acceleration[i]
                     s.velocity[i] = v
                     s.angular_velocity[i] = s.angular_velocity[i] + 0.5 * dt * s.angular_acceleration[i]
-                    x_new = x_old + dt * v
+                    if ti.static(split):
+                        # far from the origin: the step added to (position, residual) in f64
+                        x_new, residual = split_add(x_old, residual, dt * v)
+                    else:
+                        x_new = x_old + dt * v
                 x = x_new
                 inside = True
+                wrap = vec0
                 for k in ti.static(range(3)):
                     if ti.static(g.periodic[k]):
                         # wrap into [lo, hi): the particle re-enters through the opposite face
                         if x[k] >= hi[k]:
-                            x[k] -= span[k]
+                            wrap[k] = -span[k]
                         elif x[k] < lo[k]:
-                            x[k] += span[k]
+                            wrap[k] = span[k]
                     elif x[k] < lo[k] or x[k] > hi[k]:
                         inside = False
+                if ti.static(split):
+                    x, residual = split_add(x, residual, wrap)
+                    s.position_residual[i] = residual
+                else:
+                    x += wrap
                 s.position[i] = x
                 removed = False
                 if ti.static(has_process):
@@ -400,6 +418,7 @@ class Engine:
         # one thread (the serial mode) adds each pair's partner share to the partner directly
         # (Engine.scatter_ok); [mobility]'s frozen and carried pairs read theirs at the entries
         scatter_ok = self.scatter_ok
+        split = self.model.split_positions
 
         @ti.func
         def pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
@@ -463,6 +482,9 @@ class Engine:
             xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
             ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
             temperature_i = temperature_of(i)
+            residual_i = vec0
+            if ti.static(split):
+                residual_i = s.position_residual[i]
             owned_force = vec0
             owned_torque = vec0
             owned_heat = 0.0
@@ -487,6 +509,9 @@ class Engine:
                                 p.partner_heat[k] = -q
                         continue
                 d = minimum_image(xi - s.position[j])
+                if ti.static(split):
+                    # x_i - x_j of near particles is exact in f32: the residuals make it precise
+                    d += residual_i - s.position_residual[j]
                 rj = s.radius[j]
                 distance_sq = d.dot(d)
                 reach = ri + rj

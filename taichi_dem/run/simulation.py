@@ -510,6 +510,8 @@ class Simulation:
             names += ["temperature"] + (["temperature_residual"] if s.compensated else [])
         if self.engine.moisture:
             names += ["moisture"] + (["moisture_residual"] if s.compensated else [])
+        if self.engine.model.split_positions:
+            names.append("position_residual")
         host = dict(zip(names, transfer.read(getattr(s, name) for name in names)))
         alive = np.nonzero(host["alive"][:n] != 0)[0]
         ids = host[names[1]][alive]
@@ -517,6 +519,8 @@ class Simulation:
         out = {"id": np.sort(ids, kind="stable")}
         for name in ("position", "velocity", "angular_velocity", "radius", "mass"):
             out[name] = host[name][:n][order].astype(np.float64)
+        if "position_residual" in host:
+            out["position"] += host["position_residual"][:n][order]
         out["fixed"] = host["inverse_mass"][:n][order] == 0.0
         for name in ("temperature", "moisture"):
             if name in host:

@@ -45,15 +45,15 @@ of 20 rpm (torque +3 %, kinetic energy +20 %: passes) - but they do see a differ
 rolling friction of 0.1 instead of 0.02 in the far drum (torque +11 %, centre of mass +6.6 deg)
 fails them (checked by hand).
 
-Finding (xfail, strict): the far bed does not come to rest. With the drum still, the bed at
-the origin reaches a kinetic energy of 3e-11 J (minimum over the samples 0.4-0.58 s) while the
-one at 6 m keeps jittering: minimum 3.5e-7 J, mean 8.5e-7 J (v_rms 2.6 mm/s; single spheres
-slip at up to 5 cm/s), 10^4 times more, as predicted above; a shorter step makes it worse
-(dt = 4e-5 s: v_rms 4.3 mm/s, mean 1.9e-6 J), as q/dt says. In f64 both beds rest alike
-(3e-9 J at 0.4-0.58 s, still creeping). It is within what f32 at 6 m allows (asserted), but a
-resting bed far from the origin is not at rest, and a long run of a resting or slow bed (a
-cooler's 6 m shell, positions up to 6 m along its axis) creeps by it. Fix: store positions relative to a local origin (the domain's centre, or per cell), or
-keep positions in f64 with forces in f32.
+Found (issue 11), fixed (issue 31 item 6): the far bed did not come to rest. With the drum
+still, the bed at the origin reaches a kinetic energy of 3e-11 J (minimum over the samples
+0.4-0.58 s) while the one at 6 m kept jittering: minimum 3.5e-7 J, mean 8.5e-7 J (v_rms 2.6
+mm/s), 10^4 times more, as q/dt predicts; a shorter step made it worse. Now an f32 scene whose
+domain reaches beyond 1 m splits its positions (engine/precision.py): each carries an f32
+residual, the drift adds v dt to the pair in f64, and the contacts add the residuals to the
+(exact) differences of near coordinates, and take mesh triangles relative to the body's
+pivot. Measured: the far bed rests at 1.45e-11 J against 6.5e-12 J at the origin (the near
+bed's own figure varies 3e-12 - 3e-11 J between builds); asserted within 10x the near one's.
 
 Also bounded (both drums): finite, no particle lost or outside the shell, overlaps sampled at
 every output (0.02 s) below 1.1 x the elastic Hertz overlap of a sphere falling across the
@@ -275,10 +275,8 @@ def test_far_bed_at_rest_jitters_only_as_f32_allows(drums):
     assert far["ke_rest"] < allowed_far
 
 
-@pytest.mark.xfail(strict=True, reason="f32 positions 6 m from the origin are quantised to "
-                   "4.8e-7 m: a resting bed jitters at ~q/dt (mm/s), 1e4 x the kinetic energy of "
-                   "the same bed at the origin; fix: positions relative to a local origin")
 def test_far_bed_comes_to_rest_like_the_near_one(drums):
+    """Split positions (engine/precision.py): the far bed rests as the near one does."""
     near, far = drums
     assert far["ke_rest"] < 10 * max(near["ke_rest"], 1e-10)
 
