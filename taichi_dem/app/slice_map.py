@@ -528,6 +528,23 @@ def add_arguments(p) -> None:
     p.add_argument("--out", default=None, help="folder for map.csv, map.md, map.json, map.png "
                                                "(default: <scene>_map beside the scene)")
     p.add_argument("--arch", default="cpu")
+    p.add_argument("--dask", action="store_true",
+                   help="run the slices as tasks on Dask workers (a LocalCluster here, or "
+                        "--scheduler) instead of one after another in this process")
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT", default=None,
+                   help="an existing Dask scheduler (implies --dask; the workers need this "
+                        "taichi-dem and the scene's files)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="LocalCluster workers for --dask (default: the cores)")
+
+
+def _print_result(result: SliceResult) -> None:
+    torque = {k: v for k, v in result.figures.items() if k.endswith("/torque_per_metre")}
+    print(f"incline {result.incline:.3g} deg, hold-up {result.holdup:.4g} kg/m "
+          f"({result.particles} particles): axial mass flow "
+          f"{result.figures['axial_mass_flow']} kg/s, "
+          + ", ".join(f"{k.split('/')[0]} torque {v} N m/m" for k, v in torque.items()),
+          flush=True)
 
 
 def cmd_map(args) -> int:
@@ -554,16 +571,27 @@ def cmd_map(args) -> int:
                          f"{len(scene.fills)} fill(s)")
     for h in holdups:       # refuse every impossible hold-up before running any
         holdup_count(scene, geometry, h, args.fill)
-    results = []
-    for incline, h in [(i, h) for i in (args.incline or [None]) for h in holdups]:
-        result = run_slice(text, str(path), h, args.time, args.fill, base_dir=path.parent,
-                           arch=args.arch, incline=incline)
-        results.append(result)
-        torque = {k: v for k, v in result.figures.items() if k.endswith("/torque_per_metre")}
-        print(f"incline {result.incline:.3g} deg, hold-up {result.holdup:.4g} kg/m ({result.particles} particles): axial mass flow "
-              f"{result.figures['axial_mass_flow']} kg/s, "
-              + ", ".join(f"{k.split('/')[0]} torque {v} N m/m" for k, v in torque.items()),
-              flush=True)
+    jobs = [(i, h) for i in (args.incline or [None]) for h in holdups]
+    if args.dask or args.scheduler:
+        # one task per slice (sweep.make_client: a LocalCluster of processes, or a scheduler)
+        from .sweep import close_client, make_client
+        client = make_client(args.scheduler, args.workers)
+        try:
+            futures = [client.submit(run_slice, text, str(path), h, args.time, args.fill,
+                                     base_dir=path.parent, arch=args.arch, incline=i, pure=False)
+                       for i, h in jobs]
+            results = client.gather(futures)
+        finally:
+            close_client(client)
+        for result in results:
+            _print_result(result)
+    else:
+        results = []
+        for incline, h in jobs:
+            result = run_slice(text, str(path), h, args.time, args.fill, base_dir=path.parent,
+                               arch=args.arch, incline=incline)
+            results.append(result)
+            _print_result(result)
     out = Path(args.out) if args.out else path.with_name(path.stem + "_map")
     paths = write_map(results, out, path.name, machine_info(scene, geometry, args.fill))
     print("wrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
