@@ -25,6 +25,11 @@ BENCHES = {
                    "--repeats", "1"], r"taichi_dem\s+32k run 1:\s+([\d.]+)"),
     "mesh drum 20k": (["bench/mesh_drum.py", "--particles", "20000", "--steps", "300",
                        "--repeats", "1", "--settle", "0.2"], r"run 1: ([\d.]+) M particle-steps/s"),
+    "mesh drum 20k x1000": (["bench/mesh_drum.py", "--particles", "20000", "--steps", "1000",
+                             "--repeats", "1", "--settle", "0.2"],
+                            r"run 1: ([\d.]+) M particle-steps/s"),
+    "cooler slice 60 kg/m": (["bench/cooler_slice_step.py", "--holdup", "60"],
+                             r"run 1: ([\d.]+) M particle-steps/s"),
 }
 
 
@@ -42,14 +47,14 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--before", required=True, type=Path)
     p.add_argument("--rounds", type=int, default=3)
-    p.add_argument("--only", choices=list(BENCHES))
+    p.add_argument("--only", nargs="+", choices=list(BENCHES))
     a = p.parse_args(argv)
     trees = {"before": a.before.resolve(), "after": AFTER}
     results = {name: {"before": [], "after": []} for name in BENCHES}
     for r in range(a.rounds):
         order = ("before", "after") if r % 2 == 0 else ("after", "before")
         for name, (args, pattern) in BENCHES.items():
-            if a.only and name != a.only:
+            if a.only and name not in a.only:
                 continue
             for which in order:
                 v = run(trees[which], args, pattern)
