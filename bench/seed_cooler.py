@@ -66,7 +66,8 @@ def table(results: dict, walls: dict | None) -> str:
     for design, seed in (("original", {
             "capacity": "about 6 t/h; 4.6 t/h already at its limit",
             "speed": "0.02 m/s, 300 s over 6 m (at 6.5 t/h fed to the pair; 4.6 t/h in cooler 1)",
-            "torque": "6 kN m (fully loaded)"}),
+            "torque": "6 kN m (fully loaded)",
+            "holdup": "64-90 kg/m (4.6-6.5 t/h at 0.02 m/s)"}),
             ("optimised", {"capacity": "6.5 t/h each, not overloaded",
                            "speed": "36-39 mm/s at the paddles, ~150 s",
                            "torque": "1 kN m (fully loaded)"})):
@@ -74,26 +75,32 @@ def table(results: dict, walls: dict | None) -> str:
             continue
         r = results[design]
         out = r["out"]
+        r_map = r["map"]
         cap = fmt(out["capacity"], out["capacity_error"], 3.6) + " t/h"
         by_feed = {round(a.feed * 3.6, 2): (a, e) for a, e in zip(out["feeds"], out["errors"])}
         a, e = by_feed[6.5]
         speed = (f"{LENGTH / a.residence_time * 1e3:.3g} mm/s, "
                  f"{fmt(a.residence_time, e.get('residence_time'))} s at 6.5 t/h"
                  + (" (overflows: beyond capacity)" if a.overflows else ""))
-        shaft = fmt(a.torques.get("shaft"), e.get("shaft/torque"))
+        # the drive torque: minus the particles' torque on the shaft
+        shaft = fmt(-a.torques.get("shaft", math.nan), e.get("shaft/torque")) + " N m"
         temp = fmt(None if a.outlet_temperature is None else a.outlet_temperature - 273.15,
                    e.get("outlet_temperature"))
         label = "original paddles, 5 deg" if design == "original" else \
             "optimised paddles (45 deg), 2 deg; no inlet screw"
-        rows += [(f"{label}: capacity", seed["capacity"], cap),
+        hold = (f"{fmt(a.holdup / LENGTH, e.get('holdup', math.nan) / LENGTH)} kg/m mean, "
+                f"{a.inlet_holdup:.3g} kg/m at the inlet end")
+        rows += [(f"{label}: capacity (inlet end at {max(r.holdup for r in r_map.rows):.3g} kg/m)",
+                  seed["capacity"], cap),
                  (f"{label}: axial speed / residence", seed["speed"], speed),
-                 (f"{label}: shaft torque at 6.5 t/h (N m)", seed["torque"], shaft),
+                 (f"{label}: hold-up at 6.5 t/h", seed.get("holdup", ""), hold),
+                 (f"{label}: shaft drive torque at 6.5 t/h", seed["torque"], shaft),
                  (f"{label}: outlet temperature at 6.5 t/h (C, fed at 450 C)",
                   "(not simulated)", temp)]
         a46, e46 = by_feed[4.6]
-        rows.append((f"{label}: at 4.6 t/h: residence (s), shaft torque (N m)", "",
+        rows.append((f"{label}: at 4.6 t/h: residence (s), shaft drive torque (N m)", "",
                      f"{fmt(a46.residence_time, e46.get('residence_time'))}; "
-                     f"{fmt(a46.torques.get('shaft'), e46.get('shaft/torque'))}"))
+                     f"{fmt(-a46.torques.get('shaft', math.nan), e46.get('shaft/torque'))}"))
     lines = ["| " + " | ".join(rows[0]) + " |", "|---|---|---|"]
     lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]
     if walls:
