@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -462,6 +463,21 @@ def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
     return base
 
 
+_HOLDUP = re.compile(r"^\s*([0-9.eE+-]+)\s*(kg/m|%)?\s*$")
+
+
+def parse_holdup(text: str) -> tuple[str, float]:
+    """``"60 kg/m"`` -> ("kg/m", 60.0); ``"25 %"`` -> ("fill", 0.25); a bare number is kg/m."""
+    m = _HOLDUP.match(str(text))
+    if not m:
+        raise ValueError(f"hold-up {text!r}: give kg/m (e.g. '60 kg/m') or a fill fraction "
+                         "of the free section (e.g. '25 %')")
+    value = float(m.group(1))
+    if m.group(2) == "%":
+        return "fill", value / 100.0
+    return "kg/m", value
+
+
 def saeman_check(row: dict, info: dict) -> tuple[float, float]:
     """(Saeman's mass flow kg/s along +axis, the map's flow over it) for a map ``row`` of a
     drum (the shell turning): Saeman's uniform-bed flow at the row's incline and measured
@@ -550,7 +566,6 @@ def cmd_machine(args) -> int:
               if args.discharge_depth is not None else None)
     overflow = None
     if args.overflow is not None:
-        from .slice_map import parse_holdup
         try:
             kind, value = parse_holdup(args.overflow)
         except ValueError as err:

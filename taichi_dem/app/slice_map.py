@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SceneError
+from .machine import parse_holdup, saeman_check
 from .steady_state import steady_mean
 
 # bulk solid fraction of a sheared bed of spheres (random loose to random close packing is 0.55 -
@@ -119,19 +119,6 @@ def slice_geometry(scene) -> SliceGeometry:
     return SliceGeometry(axis, length, point, unit, shell, shell_radius, free)
 
 
-_HOLDUP = re.compile(r"^\s*([0-9.eE+-]+)\s*(kg/m|%)?\s*$")
-
-
-def parse_holdup(text: str) -> tuple[str, float]:
-    """``"60 kg/m"`` -> ("kg/m", 60.0); ``"25 %"`` -> ("fill", 0.25); a bare number is kg/m."""
-    m = _HOLDUP.match(str(text))
-    if not m:
-        raise ValueError(f"hold-up {text!r}: give kg/m (e.g. '60 kg/m') or a fill fraction "
-                         "of the free section (e.g. '25 %')")
-    value = float(m.group(1))
-    if m.group(2) == "%":
-        return "fill", value / 100.0
-    return "kg/m", value
 
 
 def fill_particle_mass(scene, fill_index: int = 0) -> float:
@@ -420,7 +407,6 @@ def write_map(results: list[SliceResult], out_dir: Path, scene_name: str,
     out_dir.mkdir(parents=True, exist_ok=True)
     rows = [r.row() for r in results]
     if machine:
-        from .machine import saeman_check
         for row in rows:
             flow, ratio = saeman_check(row, machine)
             if math.isfinite(flow):
