@@ -176,7 +176,8 @@ SLOW_FILES = {
     "tests/verification/test_gas_gap_table.py": 74,
     "tests/verification/test_drum_wall_heat.py": 74,
     "tests/unit/test_slice_map.py": 90,        # (2026-12-04: ~35 s, and the Dask map ~40 s)
-    "tests/verification/test_saeman_drum.py": 120,   # a 900-particle drum slice, 8 s (2026-12-04)
+    "tests/verification/test_saeman_drum.py": 120,
+    "tests/verification/test_direct_check.py": 60,   # a 3-row cooler inlet to outlet, 40 s   # a 900-particle drum slice, 8 s (2026-12-04)
     "tests/unit/test_engine_surface.py": 73,
     "tests/verification/test_thermal.py": 72,
     "tests/verification/test_energy.py": 70,

@@ -513,6 +513,10 @@ def add_arguments(p) -> None:
     p.add_argument("--fill", type=int, default=0, help="the [[particles]] fill whose count is set")
     p.add_argument("--out", default=None, help="folder for map.csv, map.md, map.json, map.png "
                                                "(default: <scene>_map beside the scene)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="a scene key changed for every slice (one value; repeatable), e.g. "
+                        "simulation.precision=f64 or particles.0.radius=0.012: the map of a "
+                        "modelling choice, to set beside the scene's own")
     p.add_argument("--arch", default="cpu")
     p.add_argument("--dask", action="store_true",
                    help="run the slices as tasks on Dask workers (a LocalCluster here, or "
@@ -541,6 +545,16 @@ def cmd_map(args) -> int:
         text = path.read_text()
     except OSError as err:
         raise SceneError(str(path), "", f"cannot read the scene: {err.strerror}") from None
+    changes = {}
+    if args.set:
+        from .overrides import overridden_text, parse_set
+        for arg in args.set:
+            spec = parse_set(arg)
+            if len(spec.values) != 1:
+                raise SceneError("--set", spec.key, f"one value per key for a map, got "
+                                 f"{len(spec.values)} (run one map per value)")
+            changes[spec.key] = spec.values[0]
+        text = overridden_text(text, changes, str(path))
     holdups = []
     for value in args.holdup:
         try:
@@ -579,6 +593,9 @@ def cmd_map(args) -> int:
             results.append(result)
             _print_result(result)
     out = Path(args.out) if args.out else path.with_name(path.stem + "_map")
-    paths = write_map(results, out, path.name, machine_info(scene, geometry, args.fill))
+    info = machine_info(scene, geometry, args.fill)
+    if changes:
+        info["scene_changes"] = changes          # what --set changed: the modelling choice
+    paths = write_map(results, out, path.name, info)
     print("wrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
     return 0

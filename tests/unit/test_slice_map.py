@@ -153,9 +153,27 @@ def test_the_map_on_dask_workers(tmp_path):
     import json
     out = tmp_path / "map"
     code = main(["map", str(SCENE), "--holdup", "10 %", "20 %", "--time", "0.3",
-                 "--dask", "--workers", "2", "--out", str(out)])
+                 "--dask", "--workers", "2", "--set", "interactions.0.friction=0.4",
+                 "--out", str(out)])
     assert code == 0
-    rows = json.loads((out / "map.json").read_text())["rows"]
+    doc = json.loads((out / "map.json").read_text())
+    # the modelling choice a --set made is part of the map
+    assert doc["machine"]["scene_changes"] == {"interactions.0.friction": 0.4}
+    rows = doc["rows"]
     assert [r["fill_fraction"] for r in rows] == pytest.approx([0.10, 0.20])
     assert rows[0]["particles"] < rows[1]["particles"]
     assert all(math.isfinite(r["shell/torque_per_metre"]) for r in rows)
+
+
+@pytest.mark.parametrize("arg, words", [
+    ("simulation.precision=f64,f32", "one value per key"),
+    ("simulation.precision=f16", "precision"),
+    ("no_such_section.key=1", "no_such_section"),
+])
+def test_a_bad_set_is_refused_before_any_slice_runs(arg, words, capsys):
+    """``map --set``: one value per key, validated by the scene loader, refused with the key
+    and the reason (exit 2) before any slice is built."""
+    from taichi_dem.app.cli import main
+    code = main(["map", str(SCENE), "--holdup", "10 %", "--time", "1", "--set", arg])
+    assert code == 2
+    assert words in capsys.readouterr().err

@@ -1,0 +1,99 @@
+#!/usr/bin/env python3
+"""What each modelling choice costs a slice's map (issue 31 item 5): the map of a slice with one
+scene key changed (`taichi-dem map --set`) beside the scene's own map, each figure's difference
+against the two standard errors combined, so that a bias is told from noise (|z| > 2: a bias
+the runs resolve; below: within the noise of runs this long), and the wall time of each map.
+
+    python bench/modelling_choices.py --out bench/results/modelling_choices
+    python bench/modelling_choices.py --out bench/results/modelling_choices --reuse   # table
+
+Default slice: bench/direct_check/cooler_slice.toml (20 mm spheres in a 0.3 m cooler with a
+25 mm paddle clearance), hold-ups 6 and 9 kg/m at 5 deg, 15 s each. Choices: f64; spheres of
+16 and 24 mm (24 mm just passes the clearance); the thermal time scale 10.
+"""
+import argparse
+import json
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "bench" / "direct_check" / "cooler_slice.toml"
+CHOICES = {"reference": [],
+           "f64": ["simulation.precision=f64"],
+           "16 mm spheres": ["particles.0.radius=0.008"],
+           "24 mm spheres": ["particles.0.radius=0.012"],
+           "thermal time scale 10": ["thermal.time_scale=10"]}
+FIGURES = ("axial_mass_flow", "shaft/torque_per_metre", "shell/torque_per_metre",
+           "shell/conductance_per_metre", "dynamic_angle")
+
+
+def folder(out: Path, name: str) -> Path:
+    return out / name.replace(" ", "_")
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "modelling_choices")
+    p.add_argument("--scene", type=Path, default=SCENE)
+    p.add_argument("--holdups", nargs="+", default=["6", "9"])
+    p.add_argument("--incline", default="5")
+    p.add_argument("--time", type=float, default=15.0)
+    p.add_argument("--only", nargs="+", default=None, help="choices to run (default all)")
+    p.add_argument("--reuse", action="store_true", help="keep maps already in OUT")
+    a = p.parse_args(argv)
+    walls_file = a.out / "walls.json"
+    walls = json.loads(walls_file.read_text()) if walls_file.exists() else {}
+    for name, sets in CHOICES.items():
+        if a.only and name not in a.only and name != "reference":
+            continue
+        out = folder(a.out, name)
+        if a.reuse and (out / "map.json").exists():
+            continue
+        cmd = [sys.executable, "-m", "taichi_dem", "map", str(a.scene), "--holdup", *a.holdups,
+               "--incline", a.incline, "--time", str(a.time), "--out", str(out)]
+        for s in sets:
+            cmd += ["--set", s]
+        t0 = time.perf_counter()
+        subprocess.run(cmd, check=True)
+        walls[name] = time.perf_counter() - t0
+        a.out.mkdir(parents=True, exist_ok=True)
+        walls_file.write_text(json.dumps(walls, indent=1))
+    maps = {}
+    for name in CHOICES:
+        f = folder(a.out, name) / "map.json"
+        if f.exists():
+            maps[name] = json.loads(f.read_text())["rows"]
+    ref = maps["reference"]
+    lines = [f"Slice {a.scene.name}, {a.time:g} s per hold-up at {a.incline} deg; each figure: "
+             "the choice's value, its difference from the reference in %, and z = difference / "
+             "combined standard error (|z| > 2: a bias these runs resolve).", "",
+             "| choice | hold-up (kg/m) | " + " | ".join(FIGURES) + " | map wall (min) |",
+             "|---|---|" + "---|" * len(FIGURES) + "---|"]
+    for name, rows in maps.items():
+        for k, row in enumerate(rows):
+            cells = []
+            for fig in FIGURES:
+                v, e = row.get(fig, math.nan), row.get(fig + "_standard_error", math.nan)
+                if name == "reference":
+                    cells.append(f"{v:.4g} +- {e:.2g}")
+                    continue
+                r, re_ = ref[k].get(fig, math.nan), ref[k].get(fig + "_standard_error", math.nan)
+                diff = v - r
+                z = diff / math.hypot(e, re_) if math.hypot(e, re_) > 0 else math.nan
+                pct = 100.0 * diff / abs(r) if r else math.nan
+                cells.append(f"{v:.4g} ({pct:+.0f} %, z {z:+.1f})")
+            wall = walls.get(name)
+            lines.append(f"| {name} | {row['holdup_kg_per_m']:.3g} | " + " | ".join(cells)
+                         + f" | {wall / 60:.1f} |" if wall and k == 0 else
+                         f"| {name} | {row['holdup_kg_per_m']:.3g} | " + " | ".join(cells) + " | |")
+    text = "\n".join(lines)
+    print(text)
+    (a.out / "choices.md").write_text(text + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
