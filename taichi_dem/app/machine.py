@@ -26,9 +26,11 @@ tau = M / F (the plug-flow mean: hold-up over throughput, exact for any mixing a
 each body's torque and power int T(H) dx, and the outlet temperature of a bed cooled (or heated)
 through the shell at the map's conductance per metre U(H) (W/(m K)):
 T_out = T_w + (T_in - T_w) exp(-int U dx / (F c_p)). The conductance is a ratio of real heat
-flow to real temperature difference, so it does not depend on the slice's [thermal]
-time_scale, and the residence here is real time (the thermal time scale is handled as in the
-runs: it only shortens the slice's own transient).
+flow to the bed's mean temperature difference, and the residence here is real time. Map the
+slice without a thermal time scale: with [thermal] time_scale = S the bed's heat moves S times
+faster than its mixing, the particles at the wall are drained before the mixing renews them,
+and the conductance falls (measured on bench/direct_check/cooler_slice.toml at S = 10: -71 %,
+BENCHMARKS.md "Stop 25"); the march's outlet temperature assumes it was mapped at S = 1.
 
 The capacity is the largest feed whose profile stays below the overflow hold-up everywhere
 (by default the largest mapped hold-up: the march does not extrapolate beyond the map).
