@@ -273,6 +273,9 @@ def cmd_check(args) -> int:
         return _fail("check: give a scene file (or --builders)")
     from ..scene.loader import load_scene
     scene = load_scene(args.scene)
+    _refuse_unwritable(args.scene, (("output.h5", scene.output.h5),
+                                    ("output.rrd", scene.output.rrd)))
+    _note_ignored(args.scene, scene)
     print(describe_scene(scene))
     print("scene OK")
     return 0
@@ -296,6 +299,22 @@ def _window_problem(args):
     return display_problem()
 
 
+def _note_ignored(source, scene) -> None:
+    """A note on stderr for each key the scene gives that nothing will read."""
+    from ..scene.sections.consistency import ignored_keys
+    for key, reason in ignored_keys(scene):
+        print(f"note: {source}: {key}: {reason}", file=sys.stderr)
+
+
+def _refuse_unwritable(source, paths) -> None:
+    """SceneError (file: key: reason) for the first of (key, path) that cannot be written."""
+    from ..scene.sections.consistency import output_path_problem
+    for key, path in paths:
+        problem = output_path_problem(path)
+        if problem:
+            raise SceneError(str(source), key, f"cannot write the results there: {problem}")
+
+
 def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
     from ..run.checkpoint import default_path
     from ..run.simulation import Simulation
@@ -308,6 +327,9 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
     h5 = _output_path(args.h5, scene.output.h5, args.out, scene_path, ".h5")
     rrd = args.rrd or (_output_path(None, scene.output.rrd, args.out, scene_path, ".rrd")
                        if scene.output.rrd else None)
+    _refuse_unwritable(scene_path, (("--h5" if args.h5 else "output.h5", h5),
+                                    ("--rrd" if args.rrd else "output.rrd", rrd)))
+    _note_ignored(scene_path, scene)
     every_nth = getattr(args, "every_nth", 1) or 1
     if every_nth < 1:
         return _fail(f"--every-nth: {every_nth} is not a positive whole number")

@@ -28,6 +28,7 @@ from .keys import effect_sections, suggest as _suggest
 from .model import Scene
 from .sections.common import Reader, decode_utf8 as _decode_utf8
 from .sections.materials import MaterialSections
+from .sections.consistency import ConsistencySections
 from .sections.particles import ParticleSections, region_bounds  # noqa: F401 (re-exported)
 from .sections.process import ProcessSections
 from .sections.simulation import SimulationSections
@@ -81,7 +82,7 @@ def parse_scene(text: str, source: str = "<string>", base_dir=None) -> Scene:
 
 
 class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, ParticleSections,
-              ProcessSections):
+              ProcessSections, ConsistencySections):
     """One scene document, read section by section (the mixins: scene/sections/)."""
 
     # -- the scene -----------------------------------------------------------------------------
@@ -119,6 +120,7 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
         thermal = (parse_thermal(doc["thermal"], self, sources, walls, bodies)
                    if "thermal" in doc else None)
         self.check_coarse_grained(thermal, sources, walls, bodies)
+        self.check_consistency(doc, simulation, output, sources, walls, bodies, thermal)
         if thermal is None:
             for f in sources:
                 if f.moisture is not None:

@@ -1249,6 +1249,78 @@ class Fuzzer:
         return self._case("duplicate_key", base, f"line {line}", {}, (), text=text.encode(),
                           expect_fragments=("TOML syntax error", f"line {line}"))
 
+    # -- scenes whose keys are each valid but do not work together (issue 33 item 7) -----------
+    INCONSISTENT = ("interval", "behind_wall", "flipped_wall", "h5")
+
+    def inconsistent_cases(self, n: int, seed: int = 0) -> list[Case]:
+        """``n`` cases, each kind of INCONSISTENT in turn, from ``seed``."""
+        out, k = [], 0
+        while len(out) < n and k < 50 * n:
+            rng = random.Random(f"inconsistent:{seed}:{k}")
+            kind = self.INCONSISTENT[len(out) % len(self.INCONSISTENT)]
+            k += 1
+            case = self.m_inconsistent(rng, rng.choice(self.bases), kind)
+            if case is not None and case.ident not in {c.ident for c in out}:
+                out.append(case)
+        return out
+
+    def m_inconsistent(self, rng, base, kind):
+        doc = copy.deepcopy(base.doc)
+        sim = doc.get("simulation", {})
+        if kind == "interval":
+            end = sim.get("end_time")
+            if not isinstance(end, (int, float)) or isinstance(end, bool):
+                return None
+            doc.setdefault("output", {})["interval"] = float(end) * rng.choice([1.5, 3.0, 10.0])
+            return self._case("inconsistent", base, "interval past end_time", doc,
+                              ("output.interval",))
+        if kind == "h5":
+            doc.setdefault("output", {})["h5"] = "/etc/passwd/results.h5"
+            return self._case("inconsistent", base, "h5 under a file", doc, ("output.h5",))
+        # a box region of a fill or factory, and a plane wall
+        walls = doc.get("walls", [])
+        lo, hi = doc.get("domain", {}).get("min"), doc.get("domain", {}).get("max")
+        if not walls or not (isinstance(lo, list) and isinstance(hi, list)):
+            return None
+        regions = [(sec, i) for sec in ("particles", "factories")
+                   for i, f in enumerate(doc.get(sec, []))
+                   if isinstance(f.get("region"), dict) and "box" in f["region"]]
+        if not regions:
+            return None
+        sec, i = rng.choice(regions)
+        box = doc[sec][i]["region"]["box"]
+        j = rng.randrange(len(walls))
+        w = walls[j]
+        try:
+            p = [float(x) for x in w["plane"]["point"]]
+            nrm = [float(x) for x in w["plane"]["normal"]]
+            corners = [[(box["min"], box["max"])[a][0], (box["min"], box["max"])[b][1],
+                        (box["min"], box["max"])[c][2]] for a in (0, 1) for b in (0, 1)
+                       for c in (0, 1)]
+            side = [sum((x - q) * m for x, q, m in zip(cr, p, nrm)) for cr in corners]
+            centre = sum((0.5 * (float(a) + float(b)) - q) * m
+                         for a, b, q, m in zip(lo, hi, p, nrm))
+        except (KeyError, TypeError, ValueError):
+            return None
+        if kind == "flipped_wall":
+            # a wall with the region wholly in front of it and the domain's centre too
+            if min(side) <= 0.0 or centre <= 0.0:
+                return None
+            w["plane"]["normal"] = [-x for x in nrm]
+            return self._case("inconsistent", base, f"walls[{j}] normal flipped", doc,
+                              (("walls", j, "normal"),))
+        # behind_wall: the region moved to just behind a wall facing the domain's centre
+        if centre <= 0.0 or max(abs(x) for x in nrm) < 1.0 - 1e-12:
+            return None
+        a = max(range(3), key=lambda k: abs(nrm[k]))
+        width = float(box["max"][a]) - float(box["min"][a])
+        if nrm[a] > 0:
+            box["max"][a], box["min"][a] = p[a] - 1e-3, p[a] - 1e-3 - width
+        else:
+            box["min"][a], box["max"][a] = p[a] + 1e-3, p[a] + 1e-3 + width
+        return self._case("inconsistent", base, f"{sec}[{i}] region behind walls[{j}]", doc,
+                          ((sec, i, "region"),))
+
     def m_garbage(self, rng, base):
         how = rng.choice(["bytes", "ascii", "nul", "utf16", "binary_prefix"])
         if how == "bytes":

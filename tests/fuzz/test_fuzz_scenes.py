@@ -23,6 +23,8 @@ LIMIT_S = 5.0              # per case (most take a few milliseconds)
 
 BASES = sf.base_scenes()
 CORPUS = sf.Fuzzer(BASES).corpus(CHECK_CASES, SEED)
+# scenes whose keys are each valid but cannot work together (issue 33 item 7)
+INCONSISTENT = sf.Fuzzer(BASES).inconsistent_cases(16, SEED)
 RUN_CASES = [c for cat in sf.CATEGORIES
              for c in [x for x in CORPUS if x.category == cat][:RUN_PER_CATEGORY]]
 
@@ -61,6 +63,34 @@ def test_check_refuses(case, tmp_path, no_taichi_runtime):
     o = sf.run_case(case, tmp_path, "check", LIMIT_S)
     assert not o.problems, _report(case, o)
     assert o.seconds < LIMIT_S
+
+
+@pytest.mark.parametrize("case", INCONSISTENT, ids=[c.ident for c in INCONSISTENT])
+def test_check_refuses_what_cannot_work_together(case, tmp_path, no_taichi_runtime):
+    """An output interval past end_time, a fill or factory region wholly behind a wall (the
+    region blamed), a flipped wall normal (the normal blamed, not the fill's count), a results
+    path that cannot be written: each exits 2 naming the key."""
+    o = sf.run_case(case, tmp_path, "check", LIMIT_S)
+    assert not o.problems, _report(case, o)
+
+
+def test_the_inconsistent_cases_cover_every_kind():
+    kinds = collections.Counter(c.ident.split("/")[-1].split()[-1] for c in INCONSISTENT)
+    assert len(INCONSISTENT) == 16
+    for words in ("end_time", "under a file", "flipped", "region behind"):
+        assert any(words in c.ident for c in INCONSISTENT), (words, kinds)
+
+
+def test_check_notes_a_temperature_without_thermal(tmp_path, capsys):
+    """A temperature in a scene without [thermal] is not refused (CONTRACT.md's example has
+    them) but named as ignored."""
+    from taichi_dem.app.cli import main
+    base = next(b for b in BASES if b.name == "contract_scene")
+    path = sf.write_case(sf.Case("t", "t", base.name, base.text.encode(), files=base.files),
+                         tmp_path)
+    assert main(["check", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert "particles[0].temperature: ignored" in err and "walls[0].temperature: ignored" in err
 
 
 @pytest.mark.parametrize("case", RUN_CASES, ids=[c.ident for c in RUN_CASES])
