@@ -5,6 +5,13 @@ _ERRORS = ("SceneError", "GeometryError", "BackendError", "DivergenceError",
            "StaleSimulationError", "CheckpointError", "WindowError")
 
 
+__all__ = ["__version__", "Simulation", *_ERRORS]
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
+
+
 def __getattr__(name):
     # keep `import taichi_dem` light: Taichi is imported only when a simulation is made
     if name == "Simulation":

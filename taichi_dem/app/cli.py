@@ -48,7 +48,9 @@ def _common_outputs(p: argparse.ArgumentParser):
 
 
 def _parser() -> argparse.ArgumentParser:
+    from .._version import __version__
     p = argparse.ArgumentParser(prog="taichi-dem", description=__doc__.splitlines()[0])
+    p.add_argument("--version", action="version", version=f"taichi-dem {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="run a scene")
     r.add_argument("scene")
@@ -103,8 +105,15 @@ def main(argv=None) -> int:
         checkpoint.KEEP_LAST_GOOD = saved
 
 
+# commands whose stdout is a report to read or parse: Taichi's import banner stays off it
+QUIET_IMPORT = ("check", "schema", "machine", "map")
+
+
 def _main(argv=None) -> int:
     args = _parser().parse_args(argv)
+    if args.command in QUIET_IMPORT:
+        import os
+        os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "False")
     try:
         if args.command == "check":
             return cmd_check(args)
