@@ -439,9 +439,12 @@ def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> in
     steps = sim.step_count - steps0
     # particles that leave (outlets, the domain) make the final count too small a measure
     mean_count = float(np.mean(s["particles/count"])) if len(s["particles/count"]) else sim.particle_count
+    # the particle-steps the progress counted block by block, when it ran (else the mean count)
+    particle_steps = getattr(sim, "progress_particle_steps", None) or steps * mean_count
     print(f"simulated {sim.time - time0:.4g} s (to t = {sim.time:.4g} s) in {wall:.1f} s wall "
           f"({sim.wall_seconds:.1f} s stepping); {steps:,} steps, "
-          f"{steps * mean_count / max(sim.wall_seconds, 1e-9) / 1e6:.2f} M particle-steps/s")
+          f"{particle_steps / max(sim.wall_seconds, 1e-9) / 1e6:.2f} M particle-steps/s "
+          "over the stepping time")
     print(f"particles: {sim.particle_count} (lost {int(s['particles/lost'][-1])}); "
           f"kinetic energy {s['particles/kinetic_energy'][-1]:.4g} J")
     for w in scene.walls:

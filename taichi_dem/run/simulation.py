@@ -142,6 +142,12 @@ def _factory_capacity(scene: Scene) -> int:
 PINCH_WARNING = 0.2
 
 
+# progress lines into a log (stderr not a terminal): one every this many wall seconds
+PLAIN_PROGRESS_S = 10.0
+# the ETA's simulated-time rate is taken over this much recent wall time
+ETA_WINDOW_S = 20.0
+
+
 class Simulation:
     """One DEM simulation. Units SI throughout (m, kg, s, K, N)."""
 
@@ -349,24 +355,44 @@ class Simulation:
         if not progress:
             self.step(max(steps, 0))
             return
+        # progress on stderr: on a terminal one line rewritten twice a second, else (a log
+        # file) a plain line every PLAIN_PROGRESS_S; the rate counts the particle-steps done
+        # (the count changes as factories feed and outlets remove), the ETA comes from the
+        # simulated-time rate over the last ETA_WINDOW_S of wall time (not from the start,
+        # whose compilation would inflate it)
+        tty = sys.stderr.isatty()
+        every = 0.5 if tty else PLAIN_PROGRESS_S
         done = 0
+        particle_steps = 0.0
         t0 = _time.perf_counter()
         block = max(self.output_every, 1)
         shown = -1.0
+        recent = [(0.0, self.time)]
         while done < steps:
             k = min(block, steps - done)
             self.step(k)
             done += k
+            particle_steps += k * self.engine.count
             wall = _time.perf_counter() - t0
-            if wall - shown < 0.5 and done < steps:
-                continue            # at most two lines a second
+            recent.append((wall, self.time))
+            while len(recent) > 2 and wall - recent[1][0] > ETA_WINDOW_S:
+                recent.pop(0)
+            if wall - shown < every and done < steps:
+                continue
             shown = wall
-            rate = done * self.engine.count / wall if wall > 0 else 0.0
-            eta = wall / done * (steps - done)
-            print(f"\r  t = {self.time:8.4f} s   wall {wall:7.1f} s   "
-                  f"{rate / 1e6:6.2f} M particle-steps/s   ETA {eta:6.1f} s", end="",
-                  file=sys.stderr, flush=True)
-        print(file=sys.stderr)
+            rate = particle_steps / wall if wall > 0 else 0.0
+            (w0, s0) = recent[0]
+            sim_rate = (self.time - s0) / (wall - w0) if wall > w0 else 0.0
+            eta = (until - self.time) / sim_rate if sim_rate > 0 else float("nan")
+            line = (f"  t = {self.time:8.4f} s   wall {wall:7.1f} s   "
+                    f"{rate / 1e6:6.2f} M particle-steps/s   ETA {eta:6.1f} s")
+            if tty:
+                print("\r" + line, end="", file=sys.stderr, flush=True)
+            else:
+                print(line, file=sys.stderr, flush=True)
+        if tty:
+            print(file=sys.stderr)
+        self.progress_particle_steps = particle_steps
 
     # ---------------------------------------------------------------- observing
     def _sample(self):
