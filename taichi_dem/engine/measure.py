@@ -1,3 +1,4 @@
+import math
 """The state's sums at an output sample, by one reduction kernel into the engine's named
 slots (state.Reduction, and the f64 state.ThermalSum for the heat balance): what the run's
 checks (divergence, the thermal step limit) and the sensors read."""
@@ -77,10 +78,10 @@ class Measure:
         if e.thermal:
             energy, thermal_mass = h[ThermalSum.THERMAL_ENERGY], h[ThermalSum.THERMAL_MASS]
             out.update(thermal_energy=float(energy),
-                       mean_temperature=float(energy / thermal_mass) if thermal_mass else 0.0,
+                       mean_temperature=float(energy / thermal_mass) if thermal_mass else math.nan,
                        thermal_step_ratio=float(r[Reduction.THERMAL_STEP_RATIO]))
         if e.moisture:
             water, dry = h[ThermalSum.WATER_MASS], h[ThermalSum.DRY_MASS]
-            out.update(mean_moisture=float(water / dry) if dry else 0.0,
+            out.update(mean_moisture=float(water / dry) if dry else math.nan,
                        evaporated_mass=float(e.evaporated[0]))
         return out
