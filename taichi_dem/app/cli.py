@@ -284,6 +284,7 @@ def cmd_check(args) -> int:
     scene = load_scene(args.scene)
     _refuse_unwritable(args.scene, (("output.h5", scene.output.h5),
                                     ("output.rrd", scene.output.rrd)))
+    _refuse_inconsistent(args.scene, scene)
     _note_ignored(args.scene, scene)
     print(describe_scene(scene))
     print("scene OK")
@@ -306,6 +307,14 @@ def _window_problem(args):
         return None
     from .window import display_problem
     return display_problem()
+
+
+def _refuse_inconsistent(source, scene) -> None:
+    """SceneError for what a command-line run of the scene cannot do (consistency.py)."""
+    from ..scene.sections.consistency import interval_problem
+    problem = interval_problem(scene)
+    if problem:
+        raise SceneError(str(source), *problem)
 
 
 def _note_ignored(source, scene) -> None:
@@ -338,6 +347,8 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
                        if scene.output.rrd else None)
     _refuse_unwritable(scene_path, (("--h5" if args.h5 else "output.h5", h5),
                                     ("--rrd" if args.rrd else "output.rrd", rrd)))
+    if getattr(args, "until", None) is None:
+        _refuse_inconsistent(scene_path, scene)
     _note_ignored(scene_path, scene)
     every_nth = getattr(args, "every_nth", 1) or 1
     if every_nth < 1:

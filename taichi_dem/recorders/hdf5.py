@@ -18,6 +18,13 @@ def _label(ds, name: str) -> None:
         ds.attrs["units"] = unit
 
 
+# the units of the per-particle frame datasets and the residence records (CONTRACT.md)
+FRAME_UNITS = {"id": "1", "position": "m", "velocity": "m/s", "angular_velocity": "rad/s",
+               "radius": "m", "temperature": "K", "mass": "kg", "moisture": "1",
+               "material": "1"}
+RESIDENCE_UNITS = {"id": "1", "t_in": "s", "t_out": "s"}
+
+
 class HDF5Recorder:
     """Writes /series/<name> (extendable along time) and /frames/<k>/... groups."""
 
@@ -83,6 +90,7 @@ class HDF5Recorder:
         for col, key, dtype in ((0, "id", np.int64), (1, "t_in", np.float64), (2, "t_out", np.float64)):
             if key not in g:
                 g.create_dataset(key, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(4096,))
+                g[key].attrs["units"] = RESIDENCE_UNITS[key]
             ds = g[key]
             n = ds.shape[0]
             ds.resize(n + len(records), axis=0)
@@ -91,8 +99,11 @@ class HDF5Recorder:
     def append_frame(self, time: float, arrays: dict[str, np.ndarray]):
         g = self.frames.create_group(str(self.frame_count))
         g.attrs["time"] = time
+        g.attrs["time_units"] = "s"
         for name, arr in arrays.items():
-            g.create_dataset(name, data=arr)
+            ds = g.create_dataset(name, data=arr)
+            if name in FRAME_UNITS:
+                ds.attrs["units"] = FRAME_UNITS[name]
         self.frame_count += 1
 
     def flush(self):

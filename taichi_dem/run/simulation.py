@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import sys
 import time as _time
 from typing import Optional
@@ -142,7 +143,8 @@ def _factory_capacity(scene: Scene) -> int:
 PINCH_WARNING = 0.2
 
 
-# progress lines into a log (stderr not a terminal): one every this many wall seconds
+# progress lines into a log (stderr not a terminal): one every this many wall seconds (the
+# environment variable TAICHI_DEM_PROGRESS_S overrides it)
 PLAIN_PROGRESS_S = 10.0
 # the ETA's simulated-time rate is taken over this much recent wall time
 ETA_WINDOW_S = 20.0
@@ -361,7 +363,7 @@ class Simulation:
         # simulated-time rate over the last ETA_WINDOW_S of wall time (not from the start,
         # whose compilation would inflate it)
         tty = sys.stderr.isatty()
-        every = 0.5 if tty else PLAIN_PROGRESS_S
+        every = 0.5 if tty else float(os.environ.get("TAICHI_DEM_PROGRESS_S", PLAIN_PROGRESS_S))
         done = 0
         particle_steps = 0.0
         t0 = _time.perf_counter()

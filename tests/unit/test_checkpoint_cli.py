@@ -120,7 +120,8 @@ def test_sigkill_mid_run_leaves_readable_results_and_checkpoint(tmp_path):
     scene.write_text(scene_text("f32", extra="checkpoint_interval = 0.005").replace(
         "end_time = 0.1", "end_time = 100.0"))
     out = tmp_path / "out"
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    # a progress line into the log every 0.5 s (default 10 s), so the kill lands near t = 0.08 s
+    env = dict(os.environ, PYTHONPATH=str(ROOT), TAICHI_DEM_PROGRESS_S="0.5")
     log = open(tmp_path / "stderr.txt", "w")
     proc = subprocess.Popen([sys.executable, "-m", "taichi_dem", "run", str(scene), "--out",
                              str(out)], cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=log)

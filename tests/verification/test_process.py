@@ -198,6 +198,11 @@ def test_outlet_temperature_and_hdf5(tmp_path):
         assert f["series/outlets/drain/mass_flow"].attrs["units"] == "kg/s"
         ids = f[f"frames/{len(f['frames']) - 1}/id"][:]
         assert len(np.unique(ids)) == len(ids)
+        # and every frame and residence dataset (issue 33 item 3)
+        frame = f[f"frames/{len(f['frames']) - 1}"]
+        assert frame["position"].attrs["units"] == "m" and frame.attrs["time_units"] == "s"
+        assert all(frame[n].attrs.get("units") for n in frame), list(frame)
+        assert f["residence/res/t_out"].attrs["units"] == "s"
 
 
 def test_full_region_waits_and_says_so(capfd):

@@ -1,7 +1,9 @@
 """Scenes whose keys are each valid but which cannot work together (issue 33 item 7), refused
 on load with ``file: key: reason`` instead of running to a silent wrong result:
 
-- an output interval longer than ``end_time`` (the run would record nothing after its start);
+- an output interval longer than ``end_time`` (a command-line run would record nothing after
+  its start: ``interval_problem``, used by ``check`` and ``run``; a Python script may run past
+  end_time, so the loader does not refuse it);
 - a fill or factory region wholly behind a plane wall (no particle can live there): blamed on
   the wall's normal when the domain's centre lies behind it too (a flipped normal), else on the
   region;
@@ -15,6 +17,7 @@ named by ``ignored_keys`` for ``check`` and ``run`` to print as notes.
 from __future__ import annotations
 
 import os
+import tomllib
 from pathlib import Path
 from typing import Optional
 
@@ -74,6 +77,17 @@ def ignored_keys(scene) -> list[tuple[str, str]]:
     return out
 
 
+def interval_problem(scene) -> Optional[tuple[str, str]]:
+    """(key, reason) when the scene gives an output interval longer than its end_time."""
+    given = "interval" in (tomllib.loads(scene.text).get("output", {}) if scene.text else {})
+    if given and scene.output.interval > scene.simulation.end_time:
+        return ("output.interval",
+                f"{scene.output.interval:g} s is longer than simulation.end_time "
+                f"{scene.simulation.end_time:g} s: the run would record no sample after its "
+                "start (shorten the interval or lengthen the run)")
+    return None
+
+
 class ConsistencySections:
     """Mixin of the scene parser (scene/loader.py): the checks of the module docstring."""
 
@@ -81,12 +95,6 @@ class ConsistencySections:
                           thermal) -> None:
         """Refuse the combinations of the module docstring (``doc``: the raw scene, to tell a
         key given from its default)."""
-        given = doc.get("output", {}) if isinstance(doc.get("output"), dict) else {}
-        if "interval" in given and output.interval > simulation.end_time:
-            raise self.err("output.interval",
-                           f"{output.interval:g} s is longer than simulation.end_time "
-                           f"{simulation.end_time:g} s: the run would record no sample after "
-                           "its start (shorten the interval or lengthen the run)")
         centre = 0.5 * (np.asarray(self.domain.min, float) + np.asarray(self.domain.max, float))
         for f in sources:
             corners = region_corners(getattr(f, "region", None))
