@@ -92,6 +92,9 @@ def _parser() -> argparse.ArgumentParser:
     pl = sub.add_parser("plot", help="PNG plots of a results file (torque, residence time, "
                                      "mass flows, temperatures, heat flows)")
     plots.add_arguments(pl)
+    from . import export
+    ex = sub.add_parser("export", help="a results file's series or one particle frame as CSV")
+    export.add_arguments(ex)
     return p
 
 
@@ -106,7 +109,7 @@ def main(argv=None) -> int:
 
 
 # commands whose stdout is a report to read or parse: Taichi's import banner stays off it
-QUIET_IMPORT = ("check", "schema", "machine", "map")
+QUIET_IMPORT = ("check", "schema", "machine", "map", "export")
 
 
 def _main(argv=None) -> int:
@@ -142,6 +145,9 @@ def _main(argv=None) -> int:
         if args.command == "machine":
             from .machine import cmd_machine
             return cmd_machine(args)
+        if args.command == "export":
+            from .export import cmd_export
+            return cmd_export(args)
     except SceneError as err:
         return _fail(str(err), 2)
     except KeyboardInterrupt:

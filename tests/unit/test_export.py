@@ -1,0 +1,73 @@
+"""``taichi-dem export`` (issue 33 item 4, CSV part): a results file's series and a frame as
+CSV, read back with the csv module and compared with the file's own arrays."""
+import csv
+import io
+
+import h5py
+import numpy as np
+import pytest
+
+from taichi_dem.app.cli import main
+from taichi_dem.app import export
+
+
+@pytest.fixture
+def results(tmp_path):
+    """A results file in the layout the recorder writes (CONTRACT.md), small and synthetic."""
+    path = tmp_path / "run.h5"
+    t = np.array([0.0, 0.5, 1.0])
+    with h5py.File(path, "w") as f:
+        s = f.create_group("series")
+        s.create_dataset("time", data=t).attrs["units"] = "s"
+        s.create_dataset("particles/mean_temperature",
+                         data=[np.nan, 700.5, 690.25]).attrs["units"] = "K"
+        s.create_dataset("bodies/drum/force", data=np.arange(9.0).reshape(3, 3)).attrs["units"] = "N"
+        s.create_dataset("late", data=[1.0])          # sampled fewer times: left out
+        for k, time in enumerate((0.0, 1.0)):
+            g = f.create_group(f"frames/{k}")
+            g.attrs["time"] = time
+            g.create_dataset("id", data=np.array([3, 7]))
+            g.create_dataset("position", data=np.array([[0.1, 0.2, 0.3], [1.0, 2.0, 3.0 + k]]))
+            g["position"].attrs["units"] = "m"
+            g.create_dataset("radius", data=np.array([0.01, 0.02]))
+    return path
+
+
+def test_series_as_csv_with_units(results, tmp_path):
+    out = tmp_path / "s.csv"
+    assert main(["export", str(results), "--series", "--out", str(out)]) == 0
+    rows = list(csv.reader(out.open()))
+    # time first, then the series by name
+    assert rows[0] == ["time [s]", "bodies/drum/force[0] [N]", "bodies/drum/force[1] [N]",
+                       "bodies/drum/force[2] [N]", "particles/mean_temperature [K]"]
+    values = np.array([[float(x) for x in r] for r in rows[1:]])
+    assert values.shape == (3, 5)
+    assert np.isnan(values[0, 4]) and values[2, 4] == 690.25       # exact, NaN kept
+    assert np.array_equal(values[:, 1:4], np.arange(9.0).reshape(3, 3))
+
+
+def test_the_last_frame_as_csv(results):
+    buf = io.StringIO()
+    assert export.export_frame(results, -1, buf) == 2
+    lines = buf.getvalue().splitlines()
+    assert lines[0] == "# frame 1, time 1.0 s"
+    rows = list(csv.reader(lines[1:]))
+    assert rows[0] == ["id", "position[0] [m]", "position[1] [m]", "position[2] [m]", "radius"]
+    assert [float(x) for x in rows[2]] == [7, 1.0, 2.0, 4.0, 0.02]
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--frame", "5"], "no such frame"),
+    (["--frame", "-3"], "no such frame"),
+])
+def test_a_missing_frame_is_refused(results, args, words, capsys):
+    assert main(["export", str(results), *args]) == 2
+    assert words in capsys.readouterr().err
+
+
+def test_not_a_results_file_is_refused(tmp_path, capsys):
+    bad = tmp_path / "x.h5"
+    bad.write_text("not hdf5")
+    assert main(["export", str(bad), "--series"]) == 2
+    assert "not an HDF5 results file" in capsys.readouterr().err
+    assert main(["export", str(tmp_path / "none.h5"), "--series"]) == 2
