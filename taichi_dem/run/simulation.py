@@ -424,7 +424,8 @@ class Simulation:
                 self.recorder.append_residence(name, rec)
             arrays = self.particles()
             self.recorder.append_frame(self.time, {k: arrays[k] for k in (
-                "id", "position", "velocity", "angular_velocity", "radius", "temperature")
+                "id", "position", "velocity", "angular_velocity", "radius", "mass", "temperature",
+                "moisture")
                 if k in arrays})
             self.recorder.flush()
         for hook in self.after_sample:          # the periodic checkpoint, the last good state

@@ -201,6 +201,8 @@ def test_outlet_temperature_and_hdf5(tmp_path):
         # and every frame and residence dataset (issue 33 item 3)
         frame = f[f"frames/{len(f['frames']) - 1}"]
         assert frame["position"].attrs["units"] == "m" and frame.attrs["time_units"] == "s"
+        assert frame["mass"].attrs["units"] == "kg" and np.all(frame["mass"][()] > 0)
+        assert "moisture" in frame            # this scene dries: each particle's water
         assert all(frame[n].attrs.get("units") for n in frame), list(frame)
         assert f["residence/res/t_out"].attrs["units"] == "s"
 
