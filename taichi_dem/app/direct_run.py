@@ -198,12 +198,16 @@ class Comparison:
         return bool(math.isfinite(self.ratio) and abs(self.ratio - 1.0) <= self.tolerance)
 
 
-def compare(direct: DirectResult, answer, errors: dict, tolerances: dict) -> list[Comparison]:
+def compare(direct: DirectResult, answer, errors: dict, tolerances: dict,
+            inlet_temperature: float | None = None) -> list[Comparison]:
     """The march's ``answer`` (machine.MachineAnswer, its ``errors`` from machine.with_errors)
     beside the direct run's figures, each with ``tolerances[name]`` (fraction; a figure not
     named there is not compared): "holdup", "residence_time", "<body>/torque",
-    "outlet_temperature_drop" (the cooling, T_in - T_out, compared rather than the
-    absolute temperature, which hides a wrong cooling behind the inlet temperature)."""
+    "outlet_temperature_drop" (the cooling, ``inlet_temperature`` K minus T_out, compared
+    rather than the absolute temperature, which hides a wrong cooling behind the inlet
+    temperature)."""
+    if "outlet_temperature_drop" in tolerances and inlet_temperature is None:
+        raise ValueError("the cooling is compared from the inlet temperature: give it")
     rows = []
     nan = math.nan
     if "holdup" in tolerances:
@@ -222,13 +226,12 @@ def compare(direct: DirectResult, answer, errors: dict, tolerances: dict) -> lis
                                    tolerances[key]))
     if ("outlet_temperature_drop" in tolerances and direct.outlet_temperature is not None
             and answer.outlet_temperature is not None):
-        t_in = tolerances.get("inlet_temperature")
-        if t_in is not None:
-            rows.append(Comparison(
-                "cooling T_in - T_out", "K",
-                Figure(t_in - direct.outlet_temperature.value, direct.outlet_temperature.error),
-                Figure(t_in - answer.outlet_temperature, errors.get("outlet_temperature", nan)),
-                tolerances["outlet_temperature_drop"]))
+        t_in = inlet_temperature
+        rows.append(Comparison(
+            "cooling T_in - T_out", "K",
+            Figure(t_in - direct.outlet_temperature.value, direct.outlet_temperature.error),
+            Figure(t_in - answer.outlet_temperature, errors.get("outlet_temperature", nan)),
+            tolerances["outlet_temperature_drop"]))
     return rows
 
 

@@ -28,8 +28,8 @@ through the shell at the map's conductance per metre U(H) (W/(m K)):
 T_out = T_w + (T_in - T_w) exp(-int U dx / (F c_p)). The conductance is a ratio of real heat
 flow to the bed's mean temperature difference, and the residence here is real time. Map the
 slice without a thermal time scale: with [thermal] time_scale = S the bed's heat moves S times
-faster than its mixing, the particles at the wall are drained before the mixing renews them,
-and the conductance falls (measured on bench/direct_check/cooler_slice.toml at S = 10: -71 %,
+faster than its mixing (likely: the particles at the wall drained before the mixing renews
+them), and the conductance falls (measured on bench/direct_check/cooler_slice.toml at S = 10: -71 %,
 BENCHMARKS.md "Stop 25"); the march's outlet temperature assumes it was mapped at S = 1.
 
 The capacity is the largest feed whose profile stays below the overflow hold-up everywhere
