@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import taichi as ti
 
 from .correlations import erfcx as erfcx_reference
@@ -109,5 +110,46 @@ def represented_bed(material, coarse, k_gas: float, temperature: float) -> dict:
             "effusivity_sq": density * material.heat_capacity * k_bed}
 
 
+def reference_temperature(scene, material: str) -> float:
+    """K, for the gas's mean free path in alpha_WS: the mean of the heat-exchanging walls'
+    and bodies' mean temperature and the hottest temperature the material's particles
+    are filled or fed at."""
+    hot = [w.temperature for w in list(scene.walls) + list(scene.bodies)
+           if w.temperature is not None]
+    fed = [f.temperature for f in list(scene.fills) + list(scene.factories)
+           if f.material == material and f.temperature is not None]
+    wall = sum(hot) / len(hot)
+    return 0.5 * (wall + (max(fed) if fed else wall))
+
+
+def represented(scene) -> dict:
+    """{material name: coarse_grained.represented_bed(...) at its reference temperature}."""
+    th = scene.thermal
+    out = {}
+    for name, mat in scene.materials.items():
+        if mat.coarse_grained is not None:
+            out[name] = represented_bed(
+                mat, mat.coarse_grained, th.gap_gas_conductivity,
+                reference_temperature(scene, name))
+    return out
+
+
+def tables_for(scene, tables) -> dict:
+    """(M, M) tables: [a, :] = alpha_WS (W/(m^2 K)) and e = rho_b c k_bed of material a's
+    represented bed and its wall area per particle A_p / R^2 = pi / phi_A, 0 where a is
+    not coarse-grained."""
+    beds = represented(scene)
+    m = len(tables.names)
+    alpha, effusivity, area = np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m))
+    for a, name in enumerate(tables.names):
+        if name in beds:
+            alpha[a, :] = beds[name]["alpha_ws"]
+            effusivity[a, :] = beds[name]["effusivity_sq"]
+            area[a, :] = beds[name]["area_over_r2"]
+    return {"coarse_alpha_ws": alpha, "coarse_effusivity_sq": effusivity,
+            "coarse_area_over_r2": area}
+
+
 __all__ = ["wall_area_per_particle", "erfcx", "bed_coefficient", "bed_coefficient_reference",
-           "bed_heat_reference", "represented_bed"]
+           "bed_heat_reference", "represented_bed", "reference_temperature", "represented",
+           "tables_for"]

@@ -27,11 +27,11 @@ from taichi_dem.effects.base import Effect
 from taichi_dem.errors import DivergenceError
 from taichi_dem.effects.regions import region_test
 from taichi_dem.engine.precision import make_compensated_add
-from taichi_dem.engine.tuning import MOST_SPECIES
 
 from . import coarse_grained as coarse
 from . import convection as gas_convection
-from . import gas_gap
+from .gas_gap_effects import (MODEL_WORDS, PAIR_SHARE, WALL_AGE_FIELDS, GasGapPair, GasGapWall, _gap_words,
+                              _skips_coarse, first_layer_ratios, gas_gap_free_path)
 from . import moisture as drying
 from . import radiation as radiative
 from .conduction import contact_conductance
@@ -46,7 +46,7 @@ class Conduction(Effect):
     kinds = ("pair",)
     tables = ("conductance_factor", "radius_correction")
     # the partner's share, stored at the owner's entry: heat W, conductance W/K
-    pair_fields = {"partner_heat": (False, "real"), "pair_conductance": (False, "real")}
+    pair_fields = PAIR_SHARE
 
     def table_values(self, scene, tables):
         from taichi_dem.setup.pair_tables import conduction_tables
@@ -89,273 +89,6 @@ class WallConduction(Conduction):
         return out
 
 
-def _skips_coarse(effect, ctx):
-    """ti.func (contact) -> 1 where ``effect`` must leave the particle alone (a coarse-grained
-    material: CoarseGrainedWall stands in), else 0; a constant 0 when the scene has none."""
-    if not getattr(effect, "skip_coarse", False):
-        @ti.func
-        def never(c):
-            return 0
-        return never
-    alpha_ws = ctx.table["coarse_alpha_ws"]
-
-    @ti.func
-    def coarse_grained(c):
-        out = 0
-        if alpha_ws[c.material_i, c.material_j] > 0.0:
-            out = 1
-        return out
-    return coarse_grained
-
-
-def _gas_over_solid(scene, tables, k_gas):
-    """(M, M) table: [a, b] = k_g / k_s of material a (the row's), for the solid-resistance
-    gas-gap model; 0 where a material has no conductivity (then isothermal)."""
-    names = tables.names
-    out = np.zeros((len(names), len(names)))
-    for a, name in enumerate(names):
-        k_s = scene.materials[name].thermal_conductivity
-        if k_s:
-            out[a, :] = k_gas / k_s
-    return out
-
-
-# the gas-gap models that put the particles' own resistance in series (their k_g / k_s table)
-SOLID_MODELS = ("solid_resistance", "voronoi")
-
-
-class _GasGap(Effect):
-    """What the two gas-gap effects share: k_g (W/(m K)), the lens (radii, also the contact
-    margin), the minimum gap (m), the model and, for the series model, the k_g/k_s table.
-
-    In the step the gas-gap integral is looked up (gas_gap.py "tables"): one table per pair of
-    particle species (``ctx.species``: (material index, radius m) of each species the scene
-    holds or inserts), or per species against a wall, tabulated at set-up. Without a finite set
-    (radii from a distribution) every contact integrates (Gauss-Legendre, as in the tests)."""
-
-    stage = "contact"
-    MOST_SPECIES = MOST_SPECIES       # (engine/tuning.py)
-
-    def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance",
-                 porosity=0.4, coarse_materials=False):
-        super().__init__(description)
-        self.skip_coarse = bool(coarse_materials)    # (walls only) leave those particles alone
-        self.parameters = (float(conductivity), float(lens), float(min_gap))
-        self.margin = float(lens)
-        self.model = model
-        self.porosity = float(porosity)          # the "voronoi" model's packing porosity
-        self.solid = model in SOLID_MODELS       # the particles' own resistance counts
-        self.tables = ("gas_over_solid",) if self.solid else ()
-        if self.skip_coarse:
-            self.tables = self.tables + ("coarse_alpha_ws",)
-        self.species_tabulated = None     # the species the tables are for (None: no tables)
-
-    def table_values(self, scene, tables):
-        if not self.solid:
-            return {}
-        return {"gas_over_solid": _gas_over_solid(scene, tables, self.parameters[0])}
-
-    def _tabulate(self, ctx) -> bool:
-        species = getattr(ctx, "species", None)
-        return species is not None and 0 < len(species) <= self.MOST_SPECIES
-
-    def _allocate_tables(self, ctx, tree, prefix, shape):
-        """Fields for the tables (shape + nodes) and their ranges (shape + 3: s_lo, s_hi,
-        nodes per unit ln(1 + s/S))."""
-        self.species_tabulated = ctx.species
-        self.table = tree.add(prefix + "_table", ctx.real, shape + (gas_gap.TABLE_NODES,))
-        self.table_range = tree.add(prefix + "_range", ctx.real, shape + (3,))
-
-    def _ratios(self, ctx):
-        """k_g / k_s of each material (0: isothermal), from the engine's table."""
-        if not self.solid:
-            return None
-        return ctx.table["gas_over_solid"].to_numpy()[:, 0].astype(np.float64)
-
-    def species_func(self):
-        """ti.func (material, radius) -> the kind's index in the tables, -1 if none."""
-        species = self.species_tabulated
-
-        @ti.func
-        def species_of(material, radius):
-            k = -1
-            for q in ti.static(range(len(species))):
-                if material == ti.static(species[q][0]) and ti.abs(
-                        radius - ti.static(species[q][1])) <= ti.static(1e-5 * species[q][1]):
-                    k = q
-            return k
-
-        return species_of
-
-
-class GasGapWall(_GasGap):
-    """Particle-fluid-wall conduction (gas_gap.py): through the gas between a particle and a
-    wall or body within the fluid lens, touching or not; isothermal surfaces."""
-
-    name = "gas_gap_wall"
-    kinds = ("plane", "surface")
-
-    def table_values(self, scene, tables):
-        out = super().table_values(scene, tables)
-        if self.skip_coarse:
-            out["coarse_alpha_ws"] = CoarseGrainedWall.tables_for(scene, tables)["coarse_alpha_ws"]
-        return out
-
-    def allocate(self, ctx, tree):
-        # the isothermal plane has a closed form: tables only for the models with the solid
-        if self.solid and self._tabulate(ctx):
-            self._allocate_tables(ctx, tree, "gas_gap_wall", (len(ctx.species),))
-
-    def upload(self, ctx):
-        if self.species_tabulated is None:
-            return
-        _, lens, min_gap = self.parameters
-        ratio = self._ratios(ctx)
-        values, ranges = [], []
-        for material, radius in self.species_tabulated:
-            values.append(gas_gap.plane_table(radius, lens, min_gap, ratio[material],
-                                              self.model, self.porosity))
-            ranges.append(gas_gap.table_range(radius, radius, lens, min_gap))
-        npf = np.float64 if ctx.real == ti.f64 else np.float32
-        self.table.from_numpy(np.array(values, npf))
-        self.table_range.from_numpy(np.array(ranges, npf))
-
-    def contact_func(self, ctx):
-        k_gas, lens, min_gap = self.parameters
-        solid = self.solid
-        voronoi = self.model == "voronoi"
-        porosity = self.porosity
-        ratio = ctx.table["gas_over_solid"] if solid else None
-        tabulated = self.species_tabulated is not None
-        species_of = self.species_func() if tabulated else None
-        table, table_range = (self.table, self.table_range) if tabulated else (None, None)
-        last = gas_gap.TABLE_NODES
-
-        skip_coarse = _skips_coarse(self, ctx)
-
-        @ti.func
-        def gas_gap_wall(c, out):
-            distance = c.radius_i - c.normal_overlap
-            if skip_coarse(c) != 0:
-                pass
-            elif ti.static(solid):
-                integrate = True
-                value = 0.0 * distance
-                if ti.static(tabulated):
-                    k = species_of(c.material_i, c.radius_i)
-                    if k >= 0:
-                        index, fraction = gas_gap.table_position(
-                            -c.normal_overlap, table_range[k, 0], table_range[k, 1],
-                            table_range[k, 2], min_gap)
-                        if index >= 0:
-                            integrate = False
-                            if index < last:
-                                value = ((1.0 - fraction) * table[k, index]
-                                         + fraction * table[k, index + 1])
-                if integrate:
-                    if ti.static(voronoi):
-                        value = gas_gap.plane_voronoi_gap_integral(
-                            c.radius_i, distance, lens, min_gap,
-                            ratio[c.material_i, c.material_j], porosity)
-                    else:
-                        value = gas_gap.plane_solid_gap_integral(
-                            c.radius_i, distance, lens, min_gap,
-                            ratio[c.material_i, c.material_j])
-                out.conductance += k_gas * value
-            else:
-                out.conductance += k_gas * gas_gap.plane_gap_integral(
-                    c.radius_i, distance, lens, min_gap)
-            return out
-
-        return gas_gap_wall
-
-
-class GasGapPair(_GasGap):
-    """Particle-fluid-particle conduction (Rong & Horio 1999 as extended by Musser 2011;
-    gas_gap.py): through the gas in the fluid lens around the pair, touching or not (pairs
-    up to ``lens`` radii of the larger sphere apart are handed to the law); isothermal
-    surfaces. The partner's share rides on the pair fields the contact conduction declares."""
-
-    name = "gas_gap_pair"
-    kinds = ("pair",)
-    pair_fields = Conduction.pair_fields
-
-    def allocate(self, ctx, tree):
-        if self._tabulate(ctx):
-            k = len(ctx.species)
-            self._allocate_tables(ctx, tree, "gas_gap_pair", (k, k))
-
-    def upload(self, ctx):
-        if self.species_tabulated is None:
-            return
-        _, lens, min_gap = self.parameters
-        ratio = self._ratios(ctx)
-        species = self.species_tabulated
-        n = len(species)
-        values = np.zeros((n, n, gas_gap.TABLE_NODES))
-        ranges = np.zeros((n, n, 3))
-        for a in range(n):
-            for b in range(a, n):
-                (ma, ra), (mb, rb) = species[a], species[b]
-                if ratio is None:
-                    v = gas_gap.pair_table(ra, rb, lens, min_gap, "isothermal")
-                else:
-                    v = gas_gap.pair_table(ra, rb, lens, min_gap, self.model,
-                                           ratio[ma], ratio[mb], self.porosity)
-                values[a, b] = values[b, a] = v
-                ranges[a, b] = ranges[b, a] = gas_gap.table_range(min(ra, rb), max(ra, rb),
-                                                                  lens, min_gap)
-        npf = np.float64 if ctx.real == ti.f64 else np.float32
-        self.table.from_numpy(values.astype(npf))
-        self.table_range.from_numpy(ranges.astype(npf))
-
-    def contact_func(self, ctx):
-        k_gas, lens, min_gap = self.parameters
-        solid = self.solid
-        voronoi = self.model == "voronoi"
-        porosity = self.porosity
-        ratio = ctx.table["gas_over_solid"] if solid else None
-        tabulated = self.species_tabulated is not None
-        species_of = self.species_func() if tabulated else None
-        table, table_range = (self.table, self.table_range) if tabulated else (None, None)
-        last = gas_gap.TABLE_NODES
-
-        @ti.func
-        def gas_gap_pair(c, out):
-            distance = c.radius_i + c.radius_j - c.normal_overlap
-            integrate = True
-            value = 0.0 * distance
-            if ti.static(tabulated):
-                a = species_of(c.material_i, c.radius_i)
-                b = species_of(c.material_j, c.radius_j)
-                if a >= 0 and b >= 0:
-                    index, fraction = gas_gap.table_position(
-                        -c.normal_overlap, table_range[a, b, 0], table_range[a, b, 1],
-                        table_range[a, b, 2], min_gap)
-                    if index >= 0:
-                        integrate = False
-                        if index < last:
-                            value = ((1.0 - fraction) * table[a, b, index]
-                                     + fraction * table[a, b, index + 1])
-            if integrate:
-                if ti.static(voronoi):
-                    value = gas_gap.pair_voronoi_gap_integral(
-                        c.radius_i, c.radius_j, distance, lens, min_gap,
-                        ratio[c.material_i, c.material_j], ratio[c.material_j, c.material_i],
-                        porosity)
-                elif ti.static(solid):
-                    value = gas_gap.pair_solid_gap_integral(
-                        c.radius_i, c.radius_j, distance, lens, min_gap,
-                        ratio[c.material_i, c.material_j], ratio[c.material_j, c.material_i])
-                else:
-                    value = gas_gap.pair_gap_integral(c.radius_i, c.radius_j, distance, lens,
-                                                      min_gap)
-            out.conductance += k_gas * value
-            return out
-
-        return gas_gap_pair
-
-
 class CoarseGrainedWall(Effect):
     """Particles that stand for a finer bed (``[materials.X] coarse_grained``) take heat from
     walls and bodies as that bed would: G = w A_p h(t), h(t) = alpha_WS erfcx(alpha_WS
@@ -367,7 +100,7 @@ class CoarseGrainedWall(Effect):
     stage = "contact"
     kinds = ("plane", "surface")
     tables = ("coarse_alpha_ws", "coarse_effusivity_sq", "coarse_area_over_r2")
-    particle_fields = {"wall_contact_steps": (False, "int"), "wall_touch": (False, "int")}
+    particle_fields = WALL_AGE_FIELDS
 
     def __init__(self, description, reach, time_scale):
         super().__init__(description)
@@ -375,45 +108,9 @@ class CoarseGrainedWall(Effect):
         self.margin = self.reach
         self.time_scale = float(time_scale)
 
-    @staticmethod
-    def reference_temperature(scene, material: str) -> float:
-        """K, for the gas's mean free path in alpha_WS: the mean of the heat-exchanging walls'
-        and bodies' mean temperature and the hottest temperature the material's particles
-        are filled or fed at."""
-        hot = [w.temperature for w in list(scene.walls) + list(scene.bodies)
-               if w.temperature is not None]
-        fed = [f.temperature for f in list(scene.fills) + list(scene.factories)
-               if f.material == material and f.temperature is not None]
-        wall = sum(hot) / len(hot)
-        return 0.5 * (wall + (max(fed) if fed else wall))
-
-    @staticmethod
-    def represented(scene) -> dict:
-        """{material name: coarse_grained.represented_bed(...) at its reference temperature}."""
-        th = scene.thermal
-        out = {}
-        for name, mat in scene.materials.items():
-            if mat.coarse_grained is not None:
-                out[name] = coarse.represented_bed(
-                    mat, mat.coarse_grained, th.gap_gas_conductivity,
-                    CoarseGrainedWall.reference_temperature(scene, name))
-        return out
-
-    @staticmethod
-    def tables_for(scene, tables) -> dict:
-        """(M, M) tables: [a, :] = alpha_WS (W/(m^2 K)) and e = rho_b c k_bed of material a's
-        represented bed and its wall area per particle A_p / R^2 = pi / phi_A, 0 where a is
-        not coarse-grained."""
-        beds = CoarseGrainedWall.represented(scene)
-        m = len(tables.names)
-        alpha, effusivity, area = np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m))
-        for a, name in enumerate(tables.names):
-            if name in beds:
-                alpha[a, :] = beds[name]["alpha_ws"]
-                effusivity[a, :] = beds[name]["effusivity_sq"]
-                area[a, :] = beds[name]["area_over_r2"]
-        return {"coarse_alpha_ws": alpha, "coarse_effusivity_sq": effusivity,
-                "coarse_area_over_r2": area}
+    reference_temperature = staticmethod(coarse.reference_temperature)
+    represented = staticmethod(coarse.represented)
+    tables_for = staticmethod(coarse.tables_for)
 
     def table_values(self, scene, tables):
         return self.tables_for(scene, tables)
@@ -722,13 +419,6 @@ class Temperature(Effect):
         return update_temperature
 
 
-MODEL_WORDS = {"isothermal": "isothermal surfaces (Rong & Horio / Musser; Morris et al.)",
-               "solid_resistance": "with the solid's resistance in series from the centre "
-                                   "planes (Zhou, Yu & Zulli)",
-               "voronoi": "with the solid's resistance in series from the Voronoi cones "
-                          "(Cheng, Yu & Zulli)"}
-
-
 def thermal_effects(scene) -> list:
     """The thermal effects ``scene`` calls for, in step order (none without [thermal])."""
     th = scene.thermal
@@ -739,17 +429,18 @@ def thermal_effects(scene) -> list:
               f"simulated time)") if th.time_scale != 1.0 else ""
     out = [Temperature("explicit temperature update, m c dT/dt = sum Q" + scaled, compensated,
                        th.time_scale)]
+    free_path = gas_gap_free_path(scene) if th.gas_gap and th.gas_gap_model == "schlunder" else 0.0
     if th.conduction:
         out.append(Conduction(f"particle-particle conduction (contact radius correction: "
                               f"{th.contact_radius_correction})"))
         if th.gas_gap and th.gas_gap_pairs:
             out.append(GasGapPair(
                 f"conduction through the gas gap between particles (fluid lens "
-                f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
+                f"{th.gas_gap_lens:g} R, {_gap_words(th, free_path)}, k_g "
                 f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]}; pairs "
                 f"within the lens are listed and handed to the contact law)",
                 th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model,
-                th.gas_gap_porosity))
+                th.gas_gap_porosity, free_path=free_path))
     hot = [w.name for w in list(scene.walls) + list(scene.bodies) if w.temperature is not None]
     coarse_names = sorted(n for n, m in scene.materials.items() if m.coarse_grained is not None)
     if th.wall_conduction and hot:
@@ -769,12 +460,18 @@ def thermal_effects(scene) -> list:
             out.append(WallContactAge("the time each coarse-grained particle has rested "
                                       "against a wall or body"))
         if th.gas_gap:
+            widened = th.gas_gap_model == "schlunder"
             out.append(GasGapWall(
                 f"conduction through the gas gap to {', '.join(hot)} (fluid lens "
-                f"{th.gas_gap_lens:g} R, minimum gap {th.gas_gap_min_gap:g} m, k_g "
+                f"{th.gas_gap_lens:g} R, {_gap_words(th, free_path)}, k_g "
                 f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]})",
                 th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model,
-                th.gas_gap_porosity, coarse_materials=bool(coarse_names)))
+                th.gas_gap_porosity, coarse_materials=bool(coarse_names),
+                free_path=free_path, time_scale=th.time_scale,
+                first_layer_ratios=first_layer_ratios(scene, free_path) if widened else None))
+            if widened and not coarse_names:
+                out.append(WallContactAge("the time each particle has rested against a wall "
+                                          "or body (the first layer's transient resistance)"))
     gas = th.gas
     if gas is not None and not gas.plug_flow:
         out.append(Convection(f"convection to a {gas.model} gas at {gas.temperature:g} K "

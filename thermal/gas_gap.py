@@ -262,6 +262,23 @@ def pair_voronoi_gap_integral(radius_i, radius_j, distance, lens, min_gap, gas_o
                               gas_over_solid_j, porosity):
     """The Voronoi-cone conductance integral of two spheres (m; times k_g: W/K); 0 beyond
     ``lens`` radii of the larger sphere (the neighbour list's reach)."""
+    return _pair_voronoi(radius_i, radius_j, distance, distance, lens, min_gap,
+                         gas_over_solid_i, gas_over_solid_j, porosity)
+
+
+@ti.func
+def pair_voronoi_widened_gap_integral(radius_i, radius_j, distance, lens, offset,
+                                      gas_over_solid_i, gas_over_solid_j, porosity):
+    """As :func:`pair_voronoi_gap_integral` with every gap widened by ``offset`` (m: max(gap,
+    0) + l + delta, the "schlunder" law) rather than clamped to a minimum gap."""
+    return _pair_voronoi(radius_i, radius_j, distance, distance + offset, lens, offset,
+                         gas_over_solid_i, gas_over_solid_j, porosity)
+
+
+@ti.func
+def _pair_voronoi(radius_i, radius_j, distance, gap_distance, lens, min_gap, gas_over_solid_i,
+                  gas_over_solid_j, porosity):
+    """The Voronoi-cone integral; the gap term max(gap_distance - u_i - u_j, min_gap)."""
     g_big, g_small = gas_over_solid_i, gas_over_solid_j
     if radius_j > radius_i:
         g_big, g_small = gas_over_solid_j, gas_over_solid_i
@@ -274,8 +291,8 @@ def pair_voronoi_gap_integral(radius_i, radius_j, distance, lens, min_gap, gas_o
         if distance < big + small:
             cos_in = (big * big - small * small + distance * distance) / (2.0 * big * distance)
             in2 = big * big * ti.max(1.0 - cos_in * cos_in, 0.0)
-        result = _solid_integral(in2, sf2, distance, big * big, small * small, g_big, g_small,
-                                 min_gap, c_big, c_small)
+        result = _solid_integral(in2, sf2, gap_distance, big * big, small * small, g_big,
+                                 g_small, min_gap, c_big, c_small)
     return result
 
 
@@ -296,8 +313,9 @@ def plane_voronoi_gap_integral(radius, distance, lens, min_gap, gas_over_solid, 
 
 def pair_voronoi_gap_integral_reference(radius_i, radius_j, distance, lens, min_gap,
                                         gas_over_solid_i, gas_over_solid_j, porosity,
-                                        panels=4000):
-    """The Voronoi-cone pair integral by brute-force quadrature in r (m); for tests, tables."""
+                                        panels=4000, widen=False):
+    """The Voronoi-cone pair integral by brute-force quadrature in r (m); for tests, tables.
+    ``widen``: gaps widened by ``min_gap`` rather than clamped to it."""
     if radius_j > radius_i:
         radius_i, radius_j = radius_j, radius_i
         gas_over_solid_i, gas_over_solid_j = gas_over_solid_j, gas_over_solid_i
@@ -316,7 +334,7 @@ def pair_voronoi_gap_integral_reference(radius_i, radius_j, distance, lens, min_
         uj = np.sqrt(np.maximum(small ** 2 - r ** 2, 0.0))
         return (gas_over_solid_i * np.maximum(ui - c_big * r, 0.0)
                 + gas_over_solid_j * np.maximum(uj - c_small * r, 0.0)
-                + np.maximum(distance - ui - uj, min_gap))
+                + np.maximum(distance + (min_gap if widen else 0.0) - ui - uj, min_gap))
     return _integrate(denominator, r_in, r_sf, panels)
 
 
@@ -334,6 +352,11 @@ def plane_voronoi_gap_integral_reference(radius, distance, lens, min_gap, gas_ov
         return (gas_over_solid * np.maximum(u - distance / face * r, 0.0)
                 + np.maximum(distance - u, min_gap))
     return _integrate(denominator, r_in, r_sf, panels)
+
+
+# The "schlunder" model's pair law is the Voronoi-cone one with every gap widened by l +
+# delta_i + delta_j (max(gap, 0) + l + delta, the Smoluchowski effect) rather than clamped
+# to a minimum gap; its wall law is thermal/first_layer.py's.
 
 
 # ---------------------------------------------------------------- references (numpy, slow)
@@ -470,6 +493,10 @@ def pair_table(radius_i, radius_j, lens, min_gap, model, gas_over_solid_i=0.0,
     porosity for "voronoi")."""
     small, big = min(radius_i, radius_j), max(radius_i, radius_j)
     s = table_separations(small, big, lens, min_gap)
+    if model == "schlunder":
+        return np.array([pair_voronoi_gap_integral_reference(
+            radius_i, radius_j, radius_i + radius_j + x, lens, min_gap, gas_over_solid_i,
+            gas_over_solid_j, porosity, TABLE_PANELS, widen=True) for x in s])
     if model == "voronoi":
         return np.array([pair_voronoi_gap_integral_reference(
             radius_i, radius_j, radius_i + radius_j + x, lens, min_gap, gas_over_solid_i,

@@ -23,9 +23,12 @@ GAS_MODELS = ("fixed", "axial_plug_flow")
 CORRELATIONS = ("ranz_marshall", "gunn")
 FLOWS = ("along_axis", "against_axis")
 RADIUS_CORRECTIONS = ("static", "collision", "none")
-GAS_GAP_MODELS = ("isothermal", "solid_resistance", "voronoi")
+GAS_GAP_MODELS = ("isothermal", "solid_resistance", "voronoi", "schlunder")
 GAS_GAP_KEYS = ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap", "gas_gap_pairs",
-                "gas_gap_model", "gas_gap_porosity")
+                "gas_gap_model", "gas_gap_porosity", "gas_pressure", "gas_gap_free_path")
+# the models that size a Voronoi cone (gas_gap_porosity) and that widen the gap by l + delta
+VORONOI_MODELS = ("voronoi", "schlunder")
+WIDENED_MODELS = ("schlunder",)
 
 _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
 
@@ -123,11 +126,20 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
     Key("gas_gap_pairs", "boolean", "the gas gap between particles too (with conduction on)",
         default=True, effect="gas_gap"),
     Key("gas_gap_model", "choice", "the solid's share of the path: \"solid_resistance\" (Cheng, "
-        "Yu & Zulli 1999), \"isothermal\" (Rong & Horio 1999), \"voronoi\" (the Voronoi cones)",
+        "Yu & Zulli 1999), \"isothermal\" (Rong & Horio 1999), \"voronoi\" (the Voronoi cones), "
+        "\"schlunder\" (walls: Schlünder's isothermal first layer; pairs: the Voronoi cones; "
+        "every gap widened by the mean free path and roughness)",
         default="solid_resistance", choices=GAS_GAP_MODELS, effect="gas_gap"),
-    Key("gas_gap_porosity", "quantity", "\"voronoi\" only: the porosity of the packing the "
-        "Voronoi cones are sized for", unit="dimensionless", default=0.4, minimum=0.2,
-        maximum=0.9, why="a packing's porosity, 0.2 to 0.9", effect="gas_gap"),
+    Key("gas_gap_porosity", "quantity", "\"voronoi\" and \"schlunder\": the porosity of the "
+        "packing the Voronoi cones are sized for", unit="dimensionless", default=0.4,
+        minimum=0.2, maximum=0.9, why="a packing's porosity, 0.2 to 0.9", effect="gas_gap"),
+    Key("gas_pressure", "quantity", "\"schlunder\": the gas's pressure, for its mean free path "
+        "(the Smoluchowski effect: lower pressure, wider effective gaps)", unit="pressure",
+        default=101325.0, **_P, effect="gas_gap"),
+    Key("gas_gap_free_path", "quantity", "\"schlunder\": the gas's modified mean free path l "
+        "(default: Schlünder's, of air at gas_pressure and the scene's mean wall/feed "
+        "temperature, with his accommodation coefficient)", unit="length", default=None, **_P,
+        effect="gas_gap"),
     Key("time_scale", "quantity", "heat capacities divided by this: heat moves S times faster "
         "than the mechanics (thermal time = S x simulated time)", unit="dimensionless",
         default=1.0, minimum=1.0, why="it divides heat capacities so that heat moves S times "
@@ -192,6 +204,8 @@ class ThermalSettings:
     gas_gap_pairs: bool = THERMAL.default("gas_gap_pairs")
     gas_gap_model: str = THERMAL.default("gas_gap_model")
     gas_gap_porosity: float = THERMAL.default("gas_gap_porosity")
+    gas_pressure: float = THERMAL.default("gas_pressure")
+    gas_gap_free_path: Optional[float] = None       # m; None: from the pressure, temperature
     time_scale: float = THERMAL.default("time_scale")
     gap_gas_conductivity: float = THERMAL.default("gap_gas_conductivity")
     gas_gap_lens: float = THERMAL.default("gas_gap_lens")
@@ -234,9 +248,22 @@ def parse_thermal(value: Any, ctx, fills, walls, bodies) -> ThermalSettings:
         kw.update(THERMAL.read(t, file, key, only=GAS_GAP_KEYS))
         if "gap_gas_conductivity" not in t and kw.get("gas") is not None:
             kw["gap_gas_conductivity"] = kw["gas"].conductivity
-        if "gas_gap_porosity" in t and kw.get("gas_gap_model") != "voronoi":
-            raise SceneError(file, f"{key}.gas_gap_porosity", "only the \"voronoi\" gas_gap_model "
-                                                              "uses it")
+        model = kw.get("gas_gap_model", THERMAL.default("gas_gap_model"))
+        if "gas_gap_porosity" in t and model not in VORONOI_MODELS:
+            raise SceneError(file, f"{key}.gas_gap_porosity", "only the \"voronoi\" and "
+                                                              "\"schlunder\" gas_gap_models use it")
+        for k in ("gas_pressure", "gas_gap_free_path"):
+            if k in t and model not in WIDENED_MODELS:
+                raise SceneError(file, f"{key}.{k}", "only the \"schlunder\" gas_gap_model uses "
+                                                     "it (the others clamp the gap to "
+                                                     "gas_gap_min_gap)")
+        if "gas_gap_min_gap" in t and model in WIDENED_MODELS:
+            raise SceneError(file, f"{key}.gas_gap_min_gap", "the \"schlunder\" gas_gap_model "
+                                                             "widens every gap by the gas's mean "
+                                                             "free path and the surfaces' "
+                                                             "roughness instead: set "
+                                                             "gas_gap_free_path or the materials' "
+                                                             "surface_roughness")
     settings = ThermalSettings(**kw)
     if settings.gas_gap:
         hot = [w.name for w in list(walls) + list(bodies) if w.temperature is not None]

@@ -62,6 +62,7 @@ class Material:
     emissivity: Optional[float] = None
     real_youngs_modulus: Optional[float] = None    # Pa, unsoftened (conduction correction)
     coarse_grained: Optional[CoarseGraining] = None  # heat to walls as the represented bed
+    surface_roughness: float = 0.0                 # m, Schlünder's delta (the gas gap's widening)
 
     @property
     def shear_modulus(self) -> float:

@@ -59,6 +59,8 @@ def scene_text(*, drum_radius=0.05, length=0.008, radius=1e-3, count=1000, rpm_m
               f"coarse_grained = {{ represented_diameter = {represented_diameter!r}, "
               f"bed_porosity = {PACKED_BED_POROSITY!r} }}\n")
     box = drum_radius * 1.05
+    # "schlunder" widens each gap by the gas's mean free path instead of clamping it
+    gap_line = "" if model == "schlunder" else f"gas_gap_min_gap = {min_gap!r}\n"
     return f"""
 [simulation]
 end_time = 1.0
@@ -113,8 +115,7 @@ contact_radius_correction = "static"
 gas_gap = true
 gap_gas_conductivity = {k_gas!r}
 gas_gap_lens = {lens!r}
-gas_gap_min_gap = {min_gap!r}
-gas_gap_model = "{model}"
+{gap_line}gas_gap_model = "{model}"
 time_scale = {time_scale!r}
 [output]
 interval = {output_interval!r}
@@ -244,12 +245,17 @@ PACKED_BED_POROSITY = 0.407
 
 
 def wall_particle_conductance(model, radius=1e-3, k_gas=0.0262, lens=0.2, min_gap=1e-6,
-                              k_solid=GLASS["k"]):
+                              k_solid=GLASS["k"], temperature=333.15):
     """The DEM's gas-gap conductance (W/K) of one bead just touching the shell (thermal/
     gas_gap.py's reference quadrature; the contact spot adds ~1 % and is left out)."""
     from thermal import gas_gap
     if model == "isothermal":
         return k_gas * gas_gap.plane_gap_integral_reference(radius, radius, lens, min_gap)
+    if model == "schlunder":
+        from thermal import first_layer
+        from thermal.correlations import modified_mean_free_path
+        return k_gas * first_layer.widened_gap_integral_reference(
+            radius, radius, first_layer.wall_reach(lens), modified_mean_free_path(temperature))
     if model == "voronoi":
         return k_gas * gas_gap.plane_voronoi_gap_integral_reference(
             radius, radius, lens, min_gap, k_gas / k_solid, 0.4)
@@ -282,7 +288,7 @@ def models(result, radius=1e-3, k_gas=0.0262, coverage=0.8):
     min_gap = 1e-6
     uncovered = 2.0 * k_gas / (math.sqrt(2.0) * d + 2.0 * min_gap)
     a_ws = coverage * g / (math.pi * radius ** 2) + (1.0 - coverage) * uncovered
-    k_b = PACKED_BED_K[model]
+    k_b = PACKED_BED_K.get(model, PACKED_BED_K["voronoi"])
     a_bed = c.penetration_coefficient(rho_b, GLASS["c"], k_b, physical["contact_time"])
     consistent = {"alpha_ws": a_ws, "alpha_bed": a_bed, "alpha": 1.0 / (1.0 / a_ws + 1.0 / a_bed),
                   "alpha_exact": c.penetration_with_contact_resistance(

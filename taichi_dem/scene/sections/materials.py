@@ -40,6 +40,9 @@ MATERIAL = register(Section("materials.*", "A material, [materials.NAME]", (
         unit="dimensionless", default=None, minimum=0.0, maximum=1.0),
     Key("real_youngs_modulus", "quantity", "the real (unsoftened) modulus: contact conduction "
         "corrected for the softening; >= youngs_modulus", unit="pressure", default=None, **_P),
+    Key("surface_roughness", "quantity", "the surface's roughness: the \"schlunder\" gas-gap "
+        "law widens every gap by it (Schlünder's delta; 0 smooth)", unit="length", default=0.0,
+        minimum=0.0),
     Key("coarse_grained", "table", "these particles stand for a finer bed (its heat law to "
         "walls): { represented_diameter, bed_porosity, surface_coverage, roughness }",
         default=None),
