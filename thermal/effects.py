@@ -440,7 +440,10 @@ def thermal_effects(scene) -> list:
                 f"{th.gap_gas_conductivity:g} W/(m K); {MODEL_WORDS[th.gas_gap_model]}; pairs "
                 f"within the lens are listed and handed to the contact law)",
                 th.gap_gas_conductivity, th.gas_gap_lens, th.gas_gap_min_gap, th.gas_gap_model,
-                th.gas_gap_porosity, free_path=free_path))
+                th.gas_gap_porosity, free_path=free_path,
+                solids={name: (m.thermal_conductivity, m.surface_roughness or 0.0)
+                        for name, m in scene.materials.items()
+                        if m.thermal_conductivity is not None}))
     hot = [w.name for w in list(scene.walls) + list(scene.bodies) if w.temperature is not None]
     coarse_names = sorted(n for n, m in scene.materials.items() if m.coarse_grained is not None)
     if th.wall_conduction and hot:

@@ -17,7 +17,8 @@ from taichi_dem.engine.tuning import MOST_SPECIES
 from . import coarse_grained as coarse
 from . import first_layer
 from . import gas_gap
-from .particle_transient import FIRST_TIME, LAST_TIME, RATIO_TIMES, conductance_ratio
+from .particle_transient import (FIRST_TIME, LAST_TIME, RATIO_TIMES, conductance_ratio,
+                                 half_pair_conductance)
 
 # the time each particle has rested against a heat-exchanging wall (WallContactAge counts it):
 # declared by the "schlunder" wall law and the coarse-grained one alike
@@ -59,9 +60,9 @@ def _gas_over_solid(scene, tables, k_gas):
     return out
 
 
-# the gas-gap models that put the particles' own resistance in series (their k_g / k_s table;
-# "schlunder": between particles only, its wall law is Schlünder's isothermal first layer)
-SOLID_MODELS = ("solid_resistance", "voronoi", "schlunder")
+# the gas-gap models that put the particles' own resistance in series along lines parallel to
+# the axis (their k_g / k_s table); "schlunder" resolves it once (particle_transient.py)
+SOLID_MODELS = ("solid_resistance", "voronoi")
 
 
 def _gap_offsets(scene, tables, free_path):
@@ -98,7 +99,7 @@ class _GasGap(Effect):
         self.free_path = float(free_path)        # l (m), the "schlunder" law's
         self.tables = ("gas_over_solid",) if self.solid else ()
         if self.widened:
-            self.tables = self.tables + ("gap_offset",)
+            self.tables = self.tables + ("gap_offset", "pair_solid_share")
         if self.skip_coarse:
             self.tables = self.tables + ("coarse_alpha_ws",)
         self.species_tabulated = None     # the species the tables are for (None: no tables)
@@ -109,6 +110,8 @@ class _GasGap(Effect):
             out["gas_over_solid"] = _gas_over_solid(scene, tables, self.parameters[0])
         if self.widened:
             out["gap_offset"] = _gap_offsets(scene, tables, self.free_path)
+            out["pair_solid_share"] = pair_solid_shares(scene, tables, self.free_path,
+                                                        self.porosity)
         return out
 
     def _offsets(self, ctx):
@@ -294,10 +297,45 @@ class GasGapPair(_GasGap):
     kinds = ("pair",)
     pair_fields = PAIR_SHARE
 
+    def __init__(self, *args, solids=None, **kwargs):
+        super().__init__(*args, **kwargs)
+        # "schlunder": (k_s W/(m K), delta m) of each material, in the tables' order once
+        # known ({name: ...} until then)
+        self.solids = solids or {}
+        self.materials = None
+
     def allocate(self, ctx, tree):
+        if self.widened:
+            self.materials = [self.solids.get(name) for name in ctx.material_names]
         if self._tabulate(ctx):
             k = len(ctx.species)
             self._allocate_tables(ctx, tree, "gas_gap_pair", (k, k))
+
+    def share_by_separation(self, separations, kind_a, kind_b):
+        """The solids' share of the pair's resistance at each surface separation (m): the
+        halves of each particle (particle_transient.half_pair_conductance, the gap to the
+        midplane widened by s / 2 + l / 2 + delta) in series, resolved at 16 separations and
+        interpolated in ln(1 + s / l); overlaps take the touching pair's."""
+        k_gas, lens, _ = self.parameters
+        (solid_a, radius_a), (solid_b, radius_b) = kind_a, kind_b
+        face = gas_gap.VORONOI_FACE * (1.0 - self.porosity) ** (-1.0 / 3.0)
+        reach_sin = face / math.sqrt(face * face + 1.0)
+        l = self.free_path
+        nodes = np.concatenate([[0.0], np.geomspace(0.1 * l, max(lens * max(radius_a, radius_b),
+                                                                  l), 15)])
+
+        def share(solid, radius, s):
+            if solid is None:
+                return 1.0
+            k_solid, roughness = solid
+            half, gas = half_pair_conductance(radius, k_solid, k_gas,
+                                              0.5 * (s + l) + roughness, reach_sin)
+            return half / gas
+
+        values = np.array([2.0 / (1.0 / share(solid_a, radius_a, s) + 1.0 / share(solid_b, radius_b, s))
+                           for s in nodes])
+        x = np.log1p(np.maximum(np.asarray(separations), 0.0) / l)
+        return np.interp(x, np.log1p(nodes / l), values)
 
     def upload(self, ctx):
         if self.species_tabulated is None:
@@ -314,7 +352,16 @@ class GasGapPair(_GasGap):
                 (ma, ra), (mb, rb) = species[a], species[b]
                 # "schlunder": the gap widened by l + delta_a + delta_b, the table's own
                 gap = offsets[ma, mb] if offsets is not None else min_gap
-                if ratio is None:
+                if self.widened:
+                    # isothermal, widened, within the Voronoi cone; times the solids' share
+                    # resolved at each separation (standing apart, the gas limits the pair more
+                    # and the solids less)
+                    v = gas_gap.pair_table(ra, rb, lens, gap, self.model, 0.0, 0.0,
+                                           self.porosity)
+                    v = v * self.share_by_separation(
+                        gas_gap.table_separations(min(ra, rb), max(ra, rb), lens, gap),
+                        (self.materials[ma], ra), (self.materials[mb], rb))
+                elif ratio is None:
                     v = gas_gap.pair_table(ra, rb, lens, gap, "isothermal")
                 else:
                     v = gas_gap.pair_table(ra, rb, lens, gap, self.model,
@@ -338,6 +385,7 @@ class GasGapPair(_GasGap):
         last = gas_gap.TABLE_NODES
         widened = self.widened
         offset = ctx.table["gap_offset"] if widened else None
+        share = ctx.table["pair_solid_share"] if widened else None
 
         @ti.func
         def gas_gap_pair(c, out):
@@ -360,8 +408,8 @@ class GasGapPair(_GasGap):
                 if ti.static(widened):
                     value = gas_gap.pair_voronoi_widened_gap_integral(
                         c.radius_i, c.radius_j, distance, lens,
-                        offset[c.material_i, c.material_j], ratio[c.material_i, c.material_j],
-                        ratio[c.material_j, c.material_i], porosity)
+                        offset[c.material_i, c.material_j], 0.0 * distance, 0.0 * distance,
+                        porosity)
                 elif ti.static(voronoi):
                     value = gas_gap.pair_voronoi_gap_integral(
                         c.radius_i, c.radius_j, distance, lens, min_gap,
@@ -374,6 +422,10 @@ class GasGapPair(_GasGap):
                 else:
                     value = gas_gap.pair_gap_integral(c.radius_i, c.radius_j, distance, lens,
                                                       min_gap)
+            if ti.static(widened):
+                if integrate:
+                    # (the tables hold the share by separation; here: the touching pair's)
+                    value *= share[c.material_i, c.material_j]
             out.conductance += k_gas * value
             return out
 
@@ -414,22 +466,51 @@ def _gap_words(th, free_path) -> str:
     return f"minimum gap {th.gas_gap_min_gap:g} m"
 
 
+def _material_radii(scene) -> dict:
+    """{particle material: the geometric mean of its smallest and largest radius (m)}: where
+    the resolved particle (particle_transient.py) is solved for it."""
+    radii: dict = {}
+    for source in list(scene.fills) + list(scene.factories):
+        lo, hi = source.smallest_radius, source.largest_radius
+        a, b = radii.get(source.material, (lo, hi))
+        radii[source.material] = (min(a, lo), max(b, hi))
+    return {name: math.sqrt(lo * hi) for name, (lo, hi) in radii.items()}
+
+
+def pair_solid_shares(scene, tables, free_path: float, porosity: float) -> np.ndarray:
+    """(M, M) table: the "schlunder" pair law's factor on the isothermal gas gap, the solids'
+    share of a pair's resistance resolved once: G_half / G_gas of each material's particle
+    (particle_transient.half_pair_conductance: steady heat through the sphere from the
+    midplane of one touching neighbour to the opposite one, the gas within the Voronoi cone,
+    gaps to the midplane widened by l / 2 + delta), combined in series for a pair (the harmonic
+    mean); 1 for materials that are not particles'."""
+    th = scene.thermal
+    face = gas_gap.VORONOI_FACE * (1.0 - porosity) ** (-1.0 / 3.0)   # r_ij / R
+    reach_sin = face / math.sqrt(face * face + 1.0)        # r_sf / R of two touching spheres
+    names = tables.names
+    radii = _material_radii(scene)
+    ratio = np.ones(len(names))
+    for a, name in enumerate(names):
+        if name in radii:
+            m = scene.materials[name]
+            half, gas = half_pair_conductance(radii[name], m.thermal_conductivity,
+                                              th.gap_gas_conductivity,
+                                              0.5 * free_path + (m.surface_roughness or 0.0),
+                                              reach_sin)
+            ratio[a] = half / gas
+    return 2.0 / (1.0 / ratio[:, None] + 1.0 / ratio[None, :])
+
+
 def first_layer_ratios(scene, free_path: float) -> dict:
     """{material: (a_s m^2/s, G(Fo)/G(0))}: the "schlunder" wall law's transient ratio
     (particle_transient.py) for each particle material, at the geometric mean of its smallest
     and largest radius (the ratio depends on the radius through Fo, which the kernel takes per
     particle, and weakly through l / R)."""
     th = scene.thermal
-    radii: dict = {}
-    for source in list(scene.fills) + list(scene.factories):
-        lo, hi = source.smallest_radius, source.largest_radius
-        a, b = radii.get(source.material, (lo, hi))
-        radii[source.material] = (min(a, lo), max(b, hi))
     reach = first_layer.wall_reach(th.gas_gap_lens)
     out = {}
-    for name, (lo, hi) in radii.items():
+    for name, radius in _material_radii(scene).items():
         m = scene.materials[name]
-        radius = math.sqrt(lo * hi)
         _, ratio, _ = conductance_ratio(radius, m.thermal_conductivity, m.density,
                                         m.heat_capacity, th.gap_gas_conductivity,
                                         free_path + (m.surface_roughness or 0.0), reach)

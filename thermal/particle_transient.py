@@ -79,29 +79,25 @@ def _gap_conductance(radius, phi_lo, phi_hi, reach_sin, offset, k_gas, samples=6
     return float(k_gas * 0.5 * (phi_hi - phi_lo) * np.sum(w * integrand))
 
 
-@functools.lru_cache(maxsize=64)
-def conductance_ratio(radius: float, k_solid: float, density: float, heat_capacity: float,
-                      k_gas: float, offset: float, reach: float, uniform_h: float = 0.0):
-    """(times (s), G(t) / G(0)) of a sphere of ``radius`` (m) and the solid's k (W/(m K)),
-    rho (kg/m^3), c (J/(kg K)) touching a wall through the gas (k_g W/(m K), gaps widened by
-    ``offset`` m, within ``reach`` radii). ``uniform_h`` > 0 instead puts that h (W/(m^2 K))
-    on the whole surface (the check against the exact series). Also returns G(0) (W/K)."""
-    diffusivity = k_solid / (density * heat_capacity)
-    tau = radius * radius / diffusivity
+def _sphere_system(radius, k_solid, k_gas, offset, reach_sin, uniform_h=0.0, upto=math.pi):
+    """The finite-volume system of the sphere (polar angle phi from the contact point up to
+    ``upto``): (conductance matrix with the surface's gap on its diagonal, cell volumes, the
+    surface conductance to the wall of each cell, the conductance of each cell of the last
+    polar row to the face phi = upto, the gas's own conductance summed over the faces)."""
+    from scipy.sparse import coo_matrix, diags
     # mesh: depth from the surface (fine there), polar angle from the contact (fine there)
     depth = _graded_edges(radius, 2e-3 * radius, 1.15, 0.06 * radius)
     r_edges = radius - depth[::-1]
     if uniform_h > 0.0:
-        phi_edges = np.linspace(0.0, math.pi, 25)
+        phi_edges = np.linspace(0.0, upto, 25)
     else:
-        phi_edges = _graded_edges(math.pi, 2e-3, 1.15, 0.08)
+        phi_edges = _graded_edges(upto, 2e-3, 1.15, 0.08)
     nr, nt = len(r_edges) - 1, len(phi_edges) - 1
     rc = 0.5 * (r_edges[:-1] + r_edges[1:])
     pc = 0.5 * (phi_edges[:-1] + phi_edges[1:])
     cos_e = np.cos(phi_edges)
     band = 2.0 * math.pi * (cos_e[:-1] - cos_e[1:])                      # solid angle
     volume = np.outer((r_edges[1:] ** 3 - r_edges[:-1] ** 3) / 3.0, band)  # (nr, nt)
-    capacity = density * heat_capacity * volume
 
     def index(i, j):
         return i * nt + j
@@ -126,11 +122,15 @@ def conductance_ratio(radius: float, k_solid: float, density: float, heat_capaci
         g = k_solid * area / (rc * (pc[j + 1] - pc[j]))
         for i in range(nr):
             link(index(i, j), index(i, j + 1), g[i])
+    # the last polar row to the face phi = upto (a fixed temperature there, when it is used)
+    end = np.zeros(nr * nt)
+    area = math.pi * math.sin(upto) * (r_edges[1:] ** 2 - r_edges[:-1] ** 2)
+    for i in range(nr):
+        end[index(i, nt - 1)] = k_solid * area[i] / (rc[i] * (upto - pc[-1]))
     # the surface: the gap in series with the outer half cell
-    # a touching sphere's disc within the reach: r_out^2 = ((1 + reach)^2 - 1) R^2, at most R^2
-    reach_sin = min(math.sqrt((1.0 + reach) ** 2 - 1.0), 1.0)
     half = radius - rc[-1]
     boundary = np.zeros(nr * nt)
+    gas = 0.0
     for j in range(nt):
         area = radius * radius * band[j]
         if uniform_h > 0.0:
@@ -139,15 +139,52 @@ def conductance_ratio(radius: float, k_solid: float, density: float, heat_capaci
             g_gap = _gap_conductance(radius, phi_edges[j], phi_edges[j + 1], reach_sin, offset,
                                      k_gas)
         if g_gap > 0.0:
+            gas += g_gap
             g_solid = k_solid * area / half
             boundary[index(nr - 1, j)] = 1.0 / (1.0 / g_gap + 1.0 / g_solid)
-    from scipy.sparse import coo_matrix, diags
-    from scipy.sparse.linalg import splu
     laplacian = (coo_matrix((vals, (rows, cols)), shape=(nr * nt, nr * nt)).tocsc()
                  + diags(diag + boundary).tocsc())
-    cap = capacity.ravel()
+    return laplacian, volume.ravel(), boundary, end, gas
+
+
+@functools.lru_cache(maxsize=256)
+def half_pair_conductance(radius: float, k_solid: float, k_gas: float, offset: float,
+                          reach_sin: float):
+    """(G_half, G_gas) (W/K): the steady conductance from a sphere's centre plane to the plane
+    midway to a touching neighbour, heat crossing it from one contact to the opposite one (a
+    chain: the centre plane is then at the sphere's mean temperature), and the gas's own
+    conductance over the same faces (isothermal surfaces). Gaps (to the midplane) widened by
+    ``offset`` m, conducting where the projected radius is within ``reach_sin`` R (the Voronoi
+    face of the pair law). Their ratio is the particle's share of a pair's resistance."""
+    from scipy.sparse import diags
+    from scipy.sparse.linalg import spsolve
+    laplacian, _, boundary, end, gas = _sphere_system(radius, k_solid, k_gas, offset,
+                                                      reach_sin, upto=0.5 * math.pi)
+    # the midplane at 1, the centre plane (phi = pi/2, by the chain's antisymmetry) at 0
+    temperature = spsolve((laplacian + diags(end)).tocsc(), boundary)
+    heat = float(np.sum(boundary * (1.0 - temperature)))
+    return heat, gas
+
+
+@functools.lru_cache(maxsize=64)
+def conductance_ratio(radius: float, k_solid: float, density: float, heat_capacity: float,
+                      k_gas: float, offset: float, reach: float, uniform_h: float = 0.0):
+    """(times (s), G(t) / G(0)) of a sphere of ``radius`` (m) and the solid's k (W/(m K)),
+    rho (kg/m^3), c (J/(kg K)) touching a wall through the gas (k_g W/(m K), gaps widened by
+    ``offset`` m, within ``reach`` radii). ``uniform_h`` > 0 instead puts that h (W/(m^2 K))
+    on the whole surface (the check against the exact series). Also returns G(0) (W/K)."""
+    from scipy.sparse import diags
+    from scipy.sparse.linalg import splu
+    diffusivity = k_solid / (density * heat_capacity)
+    tau = radius * radius / diffusivity
+    # a touching sphere's disc within the reach: r_out^2 = ((1 + reach)^2 - 1) R^2, at most R^2
+    reach_sin = min(math.sqrt((1.0 + reach) ** 2 - 1.0), 1.0)
+    laplacian, volume, boundary, _, _ = _sphere_system(radius, k_solid, k_gas, offset,
+                                                       reach_sin, uniform_h)
+    capacity = density * heat_capacity * volume
+    cap = capacity
     g0 = float(boundary.sum())
-    temperature = np.zeros(nr * nt)
+    temperature = np.zeros(len(cap))
     times = tau * np.geomspace(FIRST_TIME, LAST_TIME, RATIO_TIMES)
     out = np.empty(RATIO_TIMES)
     t, dt, k = 0.0, 1e-7 * tau, 0
@@ -168,4 +205,4 @@ def conductance_ratio(radius: float, k_solid: float, density: float, heat_capaci
     return times, out, g0
 
 
-__all__ = ["conductance_ratio", "RATIO_TIMES"]
+__all__ = ["conductance_ratio", "half_pair_conductance", "RATIO_TIMES"]

@@ -29,6 +29,10 @@ GAS_GAP_KEYS = ("gap_gas_conductivity", "gas_gap_lens", "gas_gap_min_gap", "gas_
 # the models that size a Voronoi cone (gas_gap_porosity) and that widen the gap by l + delta
 VORONOI_MODELS = ("voronoi", "schlunder")
 WIDENED_MODELS = ("schlunder",)
+# the "schlunder" model's default lens (radii): its packed beds of glass, steel and a low-
+# conductivity solid come within 10 % of Zehner-Bauer-Schlünder at 0.4, 9-18 % below at 0.2
+# (tests/verification/test_packed_bed.py, docs/verification/first_layer.md)
+SCHLUNDER_LENS = 0.4
 
 _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
 
@@ -118,8 +122,10 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
     Key("gap_gas_conductivity", "quantity", "the gap gas's conductivity (default: [thermal.gas]"
         " conductivity, else air's)", unit="thermal_conductivity", default=air.CONDUCTIVITY,
         **_P, effect="gas_gap"),
-    Key("gas_gap_lens", "quantity", "the fluid lens's thickness, in particle radii",
-        unit="dimensionless", default=0.2, minimum=0.0, maximum=1.0, exclusive_minimum=True,
+    Key("gas_gap_lens", "quantity", "the fluid lens's thickness, in particle radii (default "
+        "0.4 with the \"schlunder\" model, whose packed beds it brings within 10 % of "
+        "Zehner-Bauer-Schlünder; 0.2 with the others)", unit="dimensionless", default=0.2,
+        minimum=0.0, maximum=1.0, exclusive_minimum=True,
         why="at most 1: a lens one radius thick", effect="gas_gap"),
     Key("gas_gap_min_gap", "quantity", "gaps narrower than this count as it (the roughness "
         "scale)", unit="length", default=1.0e-6, **_P, effect="gas_gap"),
@@ -129,7 +135,7 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
         "Yu & Zulli 1999), \"isothermal\" (Rong & Horio 1999), \"voronoi\" (the Voronoi cones), "
         "\"schlunder\" (walls: Schlünder's isothermal first layer; pairs: the Voronoi cones; "
         "every gap widened by the mean free path and roughness)",
-        default="solid_resistance", choices=GAS_GAP_MODELS, effect="gas_gap"),
+        default="schlunder", choices=GAS_GAP_MODELS, effect="gas_gap"),
     Key("gas_gap_porosity", "quantity", "\"voronoi\" and \"schlunder\": the porosity of the "
         "packing the Voronoi cones are sized for", unit="dimensionless", default=0.4,
         minimum=0.2, maximum=0.9, why="a packing's porosity, 0.2 to 0.9", effect="gas_gap"),
@@ -249,6 +255,9 @@ def parse_thermal(value: Any, ctx, fills, walls, bodies) -> ThermalSettings:
         if "gap_gas_conductivity" not in t and kw.get("gas") is not None:
             kw["gap_gas_conductivity"] = kw["gas"].conductivity
         model = kw.get("gas_gap_model", THERMAL.default("gas_gap_model"))
+        kw["gas_gap_model"] = model
+        if model in WIDENED_MODELS and "gas_gap_lens" not in t:
+            kw["gas_gap_lens"] = SCHLUNDER_LENS
         if "gas_gap_porosity" in t and model not in VORONOI_MODELS:
             raise SceneError(file, f"{key}.gas_gap_porosity", "only the \"voronoi\" and "
                                                               "\"schlunder\" gas_gap_models use it")

@@ -747,7 +747,9 @@ def test_gas_gap_and_time_scale_keys_load():
     d["thermal"].update(gas_gap_model="isothermal", gas_gap_pairs=False, time_scale=50.0)
     th = load(d).thermal
     assert (th.gas_gap_model, th.gas_gap_pairs, th.time_scale) == ("isothermal", False, 50.0)
-    assert load(_thermal_base()).thermal.gas_gap_model == "solid_resistance"
+    default = load(_thermal_base()).thermal
+    assert (default.gas_gap_model, default.gas_gap_lens) == ("schlunder", 0.4)
+    assert default.gas_pressure == 101325.0 and default.gas_gap_free_path is None
     d = _thermal_base()
     d["thermal"].update(gas_gap_model="voronoi", gas_gap_porosity=0.45)
     th = load(d).thermal
@@ -757,7 +759,7 @@ def test_gas_gap_and_time_scale_keys_load():
 
 
 @pytest.mark.parametrize("key, value, frag", [
-    ("gas_gap_model", "lumped", "\"solid_resistance\" or \"voronoi\""),
+    ("gas_gap_model", "lumped", "\"voronoi\" or \"schlunder\""),
     ("time_scale", 0.5, "at least 1"),
     ("time_scale", -2.0, "must be > 0"),
     ("gas_gap_pairs", "yes", "true or false"),
@@ -771,12 +773,34 @@ def test_gas_gap_and_time_scale_errors(key, value, frag):
 @pytest.mark.parametrize("model, value, frag", [
     ("voronoi", 0.05, "0.2 to 0.9"),
     ("voronoi", "high", "number"),
-    ("solid_resistance", 0.4, "only the \"voronoi\" gas_gap_model"),
+    ("solid_resistance", 0.4, "only the \"voronoi\" and \"schlunder\" gas_gap_models"),
 ])
 def test_gas_gap_porosity_errors(model, value, frag):
     d = _thermal_base()
     d["thermal"].update(gas_gap_model=model, gas_gap_porosity=value)
     error(d, "thermal.gas_gap_porosity", frag)
+
+
+@pytest.mark.parametrize("model, key, value, frag", [
+    ("schlunder", "gas_gap_min_gap", 1e-6, "widens every gap"),
+    ("voronoi", "gas_pressure", 1e4, "only the \"schlunder\" gas_gap_model"),
+    ("isothermal", "gas_gap_free_path", 1e-7, "only the \"schlunder\" gas_gap_model"),
+    ("schlunder", "gas_pressure", -1.0, "must be > 0"),
+])
+def test_schlunder_keys_refused_where_they_do_nothing(model, key, value, frag):
+    d = _thermal_base()
+    d["thermal"].update({"gas_gap_model": model, key: value})
+    error(d, f"thermal.{key}", frag)
+
+
+def test_schlunder_keys_load():
+    d = _thermal_base()
+    d["thermal"].update(gas_pressure="50 kPa", gas_gap_free_path="0.5 um", gas_gap_lens=0.3)
+    d["materials"][d["particles"][0]["material"]]["surface_roughness"] = "2 um"
+    scene = load(d)
+    th = scene.thermal
+    assert (th.gas_pressure, th.gas_gap_free_path, th.gas_gap_lens) == (5e4, 5e-7, 0.3)
+    assert scene.materials[d["particles"][0]["material"]].surface_roughness == pytest.approx(2e-6)
 
 
 def test_gas_gap_keys_without_gas_gap():

@@ -50,7 +50,7 @@ def scene_text(*, drum_radius=0.05, length=0.008, radius=1e-3, count=1000, rpm_m
                lens=0.2, min_gap=1e-6, k_gas=0.0262, model="solid_resistance",
                friction=0.5, wall_friction=0.5, rolling_friction=0.02, restitution=0.5,
                output_interval=0.05, rayleigh_fraction=0.3, dt=None, seed=1,
-               represented_diameter=None) -> str:
+               represented_diameter=None, flights=0, flight_height=None) -> str:
     g, s = GLASS, STEEL
     step = "" if dt is None else f"dt = {dt!r}\n"
     # coarse graining: the beads stand for finer ones (thermal/coarse_grained.py), the bed's
@@ -61,6 +61,9 @@ def scene_text(*, drum_radius=0.05, length=0.008, radius=1e-3, count=1000, rpm_m
     box = drum_radius * 1.05
     # "schlunder" widens each gap by the gas's mean free path instead of clamping it
     gap_line = "" if model == "schlunder" else f"gas_gap_min_gap = {min_gap!r}\n"
+    # low lifters (a fraction of a bead high) keep the bed from slipping on the smooth shell
+    lifters = (f", flights = {int(flights)}, flight_height = {flight_height!r}, flight_thickness = "
+               f"{0.5 * flight_height!r}") if flights else ""
     return f"""
 [simulation]
 end_time = 1.0
@@ -99,7 +102,7 @@ rolling_friction = {rolling_friction!r}
 [[bodies]]
 name = "drum"
 material = "steel"
-mesh = {{ builder = "drum", radius = {drum_radius!r}, length = {length!r}, end_walls = false, segments = {segments} }}
+mesh = {{ builder = "drum", radius = {drum_radius!r}, length = {length!r}, end_walls = false, segments = {segments}{lifters} }}
 motion = {{ rotate = {{ axis_point = [0, 0, 0], axis_direction = [1, 0, 0], speed = "{rpm_mech!r} rpm" }} }}
 temperature = {t_wall!r}
 [[particles]]
@@ -149,7 +152,8 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
                    time_scale=1.0, settle=1.0, startup=None, measure=None, t_wall=373.15,
                    t_bed=293.15, model="solid_resistance", softened_modulus=5e6,
                    rolling_friction=0.02, segments=72, output_interval=0.05, threads=1,
-                   dt=None, seed=1, verbose=False, represented_diameter=None) -> dict:
+                   dt=None, seed=1, verbose=False, represented_diameter=None, flights=0,
+                   flight_height=None) -> dict:
     """Run the experiment at thermal speed ``rpm`` (the mechanics turn at time_scale x rpm).
 
     settle: s of simulated time rolling before the bed is made cold; startup: s after that
@@ -170,7 +174,8 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
                       rpm_mech=rpm_mech, t_wall=t_wall, softened_modulus=softened_modulus,
                       segments=segments, time_scale=time_scale, model=model,
                       rolling_friction=rolling_friction, output_interval=output_interval,
-                      dt=dt, seed=seed, represented_diameter=represented_diameter)
+                      dt=dt, seed=seed, represented_diameter=represented_diameter,
+                      flights=flights, flight_height=flight_height)
     t0 = _time.perf_counter()
     with taichi_dem.Simulation.from_text(text, precision="f64", threads=threads) as sim:
         sim.run(settle)
@@ -182,7 +187,7 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
         first = len(sim.series["time"])
         sim.run(settle + startup)
         start = len(sim.series["time"])
-        angles, first_layer, first_count = [], [], []
+        angles, first_layer, first_count, ride = [], [], [], []
         while sim.time < settle + startup + measure - 1e-9:
             sim.step(sim.output_every)
             p = sim.particles()
@@ -190,6 +195,12 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
             near = first_layer_mask(p["position"], radius, drum_radius, segments)
             first_layer.append(float(np.mean(p["temperature"][near])))
             first_count.append(int(np.count_nonzero(near)))
+            # does the first layer ride with the shell? its speed about the axis over the
+            # shell's at its radius (1: rides; a bed rolling on a slipping layer: ~0.5)
+            y, z = p["position"][near, 1], p["position"][near, 2]
+            vy, vz = p["velocity"][near, 1], p["velocity"][near, 2]
+            r2 = y * y + z * z
+            ride.append(float(np.mean((y * vz - z * vy) / (omega_mech * r2))))
         series = sim.series
         h = np.asarray(series["bodies/drum/heat_transfer_coefficient"])[start:]
         area = np.asarray(series["bodies/drum/covered_area"])[start:]
@@ -226,6 +237,7 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
         "h_contact": float(np.mean(-q / (area * (t_wall - np.asarray(first_layer))))),
         "h_bed": float(np.mean(-q / (area * (np.asarray(first_layer) - tb_window)))),
         "wetted_angle": angle,
+        "ride": float(np.mean(ride)),
         "wetted_angle_from_area": float(np.mean(area)) / (drum_radius * length),
         "wetted_angle_guess": guess,
         "contact_time": angle / omega,

@@ -27,12 +27,16 @@ MATERIALS = {
     # name: (density kg/m^3, real Young's modulus Pa, Poisson, conductivity W/(m K), c J/(kg K))
     "glass": (2500.0, 63e9, 0.22, 1.0, 840.0),
     "steel": (7800.0, 200e9, 0.3, 45.0, 480.0),
+    # sintered alumina (k 30) and a low-conductivity ash-like solid (k_s / k_g = 11.5)
+    "alumina": (3900.0, 370e9, 0.22, 30.0, 880.0),
+    "ash": (2300.0, 20e9, 0.25, 0.3, 800.0),
 }
 
 
 def scene_text(material: str, radius: float, count: int, width: float, lens: float,
                k_gas: float, time_scale: float, softened_modulus: float,
-               model: str = "solid_resistance") -> str:
+               model: str = "solid_resistance", friction: float = 0.3,
+               pressure: float | None = None) -> str:
     density, youngs, poisson, k_s, c = MATERIALS[material]
     height = 60.0 * radius
     return f"""
@@ -61,7 +65,7 @@ heat_capacity = 480.0
 [[interactions]]
 pair = ["bead", "bead"]
 restitution = 0.3
-friction = 0.3
+friction = {friction!r}
 [[interactions]]
 pair = ["bead", "plate"]
 restitution = 0.3
@@ -85,6 +89,7 @@ gas_gap = true
 gap_gas_conductivity = {k_gas!r}
 gas_gap_lens = {lens!r}
 gas_gap_model = "{model}"
+{"" if pressure is None else f"gas_pressure = {pressure!r}"}
 time_scale = {time_scale!r}
 [output]
 interval = 0.01
@@ -95,12 +100,13 @@ def packed_bed_conductivity(material: str = "glass", radius: float = 1e-3, count
                             width_diameters: float = 8.0, lens: float = 0.2,
                             k_gas: float = 0.0262, time_scale: float = 1e5,
                             softened_modulus: float = 5e7, settle: float = 0.15,
-                            heat: float = 0.15, model: str = "solid_resistance") -> dict:
+                            heat: float = 0.15, model: str = "solid_resistance",
+                            friction: float = 0.3, pressure: float | None = None) -> dict:
     """Run the experiment; returns k_eff (W/(m K)), the core porosity, the Zehner-Schlünder
     value at that porosity, the plate's and the sinks' heat flows (W) and the fit's r^2."""
     width = width_diameters * 2.0 * radius
     text = scene_text(material, radius, count, width, lens, k_gas, time_scale, softened_modulus,
-                      model)
+                      model, friction, pressure)
     with taichi_dem.Simulation.from_text(text, precision="f64") as sim:
         sim.run(settle)
         s = sim.engine.state

@@ -1,107 +1,122 @@
 """Wall-to-bed heat transfer in a rotating drum of 2 mm glass beads in air against the
-Schlünder-Mollekopf penetration model (issue 10 item 5; thermal/correlations.py; the experiment
-is tests/verification/drum_wall_heat.py, the figures docs/verification/drum_wall_heat.md).
+Schlünder-Mollekopf penetration model (issue 10 item 5, issue 32 item 2; thermal/correlations.py;
+the experiment is tests/verification/drum_wall_heat.py, the figures
+docs/verification/drum_wall_heat.md and docs/verification/first_layer.md).
 
 A small version of the documented experiment: a 0.1 m drum slice 5 mm (2.5 bead diameters) long,
-periodic along its axis, 10 % fill, a 72-sided smooth shell at 100 C, the bed switched to 20 C
-once it rolls. The mechanics turn at 12 rpm (Froude 0.008, rolling) with thermal time scaling
-S = 12/n, so the thermal contact time is the one of n = 2 and 6 rpm (the module's docstring
-says why the drum must turn S times faster under time scaling). dt 2.5e-5 s (about 15 steps
-per contact at the bed's impact speeds; the drum tradeoffs measured outputs within 2.6 % up
-to 8 steps per contact, docs/tradeoffs/small_drum).
+periodic along its axis, 10 and 20 % fill, a 72-sided shell at 100 C with 16 lifters 1 mm (half a
+bead) high, the bed switched to 20 C once it rolls. The mechanics turn at 12 rpm (Froude 0.008,
+rolling) with thermal time scaling S = 12/n, so the thermal contact time is the one of n = 2 and
+6 rpm (drum_wall_heat.py says why the drum must turn S times faster under time scaling). dt
+2.5e-5 s (about 15 steps per contact at the bed's impact speeds; the drum tradeoffs measured
+outputs within 2.6 % up to 8 steps per contact, docs/tradeoffs/small_drum).
 
-Measured in the documented (15 % fill, 8 mm) runs, W/(m^2 K): the default gas-gap model
-(particle's resistance in series, "solid_resistance") 73 at 2 rpm and 84 at 6 rpm, against the
-model's 108 and 148 (contact part 302, bed part 167 and 290, Zehner-Schlünder k_bed 0.165): the
-DEM is 0.57-0.68 x the model. The cause is the first layer: that gas-gap law gives one bead
-touching the shell 3.6e-4 W/K, 0.31 x Schlünder's isothermal-sphere alpha_WP (1.17e-3 W/K per
-bead at l = 0.3 um), so the DEM's contact part is ~96 W/(m^2 K) instead of ~300 and it limits
-the whole coefficient (the same law gives the packed bed half the ZBS conductivity). That is
-the xfail: DEM within 25 % of the model at both speeds. The 25 %: the model's own uncertainty
-(coverage phi_A 0.7-0.9 moves alpha_WS by ~12 %, ZBS's fit to its data ~25 % in k_bed, i.e.
-~12 % in alpha_bed, the simple against the exact series form 5 %) and the DEM's (sub-window
-scatter 3-5 %, covered triangles against the wetted arc 5-7 %), added in quadrature ~20 %.
-The isothermal-surface gas-gap law, the upper bound, gives 196 at 6 rpm (1.32 x; not run
-here, to keep the test short). What does agree, and is asserted:
+The lifters: on the smooth shell the bed does not ride with the drum - the beads touching the
+shell move at 0.46 of its speed (median 0.58: they roll on it like a bearing; wall friction 1.0
+or rolling friction 0.1 do not change that), and the penetration model assumes a wall element
+covered by a bed at rest on it. With the lifters the first layer rides at 0.93 (median 1.00).
 
-1. The DEM's contact part - the heat flow over (covered area x (T_wall - T_first layer)) -
-   is the first-layer beads' count times the gas-gap law's conductance of one bead touching
-   the shell, per covered area, within 15 % (beads standing off the facets by up to 0.1 R
-   conduct less; the gas-gap integral at contact is thermal/gas_gap.py's quadrature).
-2. The coefficient rises with the speed, but less than sqrt(n) (the penetration-only limit:
-   the contact resistance is in series): 1.03 < h(6)/h(2) < sqrt(3) (documented runs 1.15,
-   the model 1.37, penetration alone 1.73). Both runs have one thread and the same seed, so
-   the same mechanics: every sub-window of the average compares the same packings and must
-   show the rise on its own.
+The default gas-gap law ("schlunder": thermal/first_layer.py, particle_transient.py) gives a bead
+touching the shell Schlünder's first-layer conductance alpha_WP pi d^2/4 at the start of its
+contact, falling to ~0.54 of it as the glass behind the gap warms (the resolved sphere).
+Measured (W/(m^2 K); fill, thermal rpm: DEM / model):
+
+    0.1, 2: 117.1 / 108.9 (1.08)     0.1, 6: 132.7 / 149.2 (0.89)
+    0.2, 2: 104.9 / 105.9 (0.99)     0.2, 6: 120.6 / 145.9 (0.83)
+
+The former default ("solid_resistance", smooth shell, 15 % fill) gave 0.68 and 0.57 x. Asserted:
+within 15 % of the model (the issue's tolerance; the model's own uncertainty is of that order:
+phi_A 0.7-0.9 moves alpha_WS by ~12 %, ZBS's fit ~25 % in k_bed, i.e. ~12 % in alpha_bed), except
+20 % fill at 6 rpm, which misses it (0.83 x): a strict xfail. The DEM's coefficient rises less
+with the speed than the model's (1.13-1.15 x from 2 to 6 rpm against 1.37-1.38 x): the lumped
+first layer stores the heat a continuum would conduct inward, so the particle's own resistance,
+not the bed's penetration, sets the DEM's figure at these sub-particle penetration depths
+(sqrt(a_bed t_c) = 0.6 mm at 6 rpm).
+
+Also asserted:
+1. The bed rides with the shell (mean speed of the first layer > 0.85 of the shell's).
+2. The DEM's contact part - heat flow over (covered area x (T_wall - T_first layer)) - lies
+   between the first layer's quasi-steady and fresh conductances per covered area (count x G /
+   area; the resolved sphere's limits of G).
+3. The coefficient rises with the speed, but less than sqrt(n) (penetration alone): 1.03 <
+   h(6)/h(2) < sqrt(3). Both runs of a fill have one thread and the same seed, so the same
+   mechanics: every sub-window of the average compares the same packings and must show the rise.
 """
 import math
 
 import numpy as np
 import pytest
 
-from drum_wall_heat import drum_wall_heat, models, wall_particle_conductance
+from drum_wall_heat import GLASS, drum_wall_heat, models, wall_particle_conductance
 
-SMALL = dict(fill=0.1, length=0.005, settle=0.4, startup=0.6, measure=0.3, dt=2.5e-5,
-             output_interval=0.025, threads=1)
+SMALL = dict(length=0.005, settle=0.4, startup=0.6, measure=0.3, dt=2.5e-5,
+             output_interval=0.025, threads=1, flights=16, flight_height=1e-3,
+             model="schlunder")
 MECHANICS_RPM = 12.0
-TOLERANCE = 0.25
+TOLERANCE = 0.15
+_RUNS = {}
 
 
-@pytest.fixture(scope="module")
-def runs():
-    out = {}
-    law = "solid_resistance"
-    for rpm in (2.0, 6.0):
-        r = drum_wall_heat(rpm=rpm, time_scale=MECHANICS_RPM / rpm, model=law, **SMALL)
-        r["kwargs"] = {"model": law}
-        out[rpm] = r
+def run(fill, rpm):
+    """The experiment at ``fill`` and thermal ``rpm`` (cached for the module)."""
+    if (fill, rpm) not in _RUNS:
+        r = drum_wall_heat(rpm=rpm, fill=fill, time_scale=MECHANICS_RPM / rpm, **SMALL)
+        r["kwargs"] = {"model": "schlunder"}
         m = models(r)["physical"]
-        print(f"\n  {rpm:g} rpm, {law}: DEM {r['h']:.1f} (arc {r['h_arc']:.1f}) W/(m^2 K), contact part "
-              f"{r['h_contact']:.0f}, bed part {r['h_bed']:.0f}; model {m['alpha']:.1f} (contact "
-              f"{m['alpha_ws']:.0f}, bed {m['alpha_bed']:.0f}); wetted angle "
+        print(f"\n  fill {fill:g}, {rpm:g} rpm: DEM {r['h']:.1f} (arc {r['h_arc']:.1f}) W/(m^2 K), "
+              f"contact part {r['h_contact']:.0f}, bed part {r['h_bed']:.0f}; model "
+              f"{m['alpha']:.1f} (contact {m['alpha_ws']:.0f}, bed {m['alpha_bed']:.0f}), "
+              f"{r['h'] / m['alpha']:.2f} x; rides at {r['ride']:.2f}; wetted angle "
               f"{math.degrees(r['wetted_angle']):.0f} deg, t_c {r['contact_time']:.2f} s, "
-              f"window scatter {r['h_std_window']:.1f}, {r['wall_seconds']:.0f} s wall")
-    return out
+              f"{r['wall_seconds']:.0f} s wall")
+        _RUNS[(fill, rpm)] = r
+    return _RUNS[(fill, rpm)]
 
 
 @pytest.mark.slow
-def test_rolling_bed_keeps_its_beads_and_rolls(runs):
-    for r in runs.values():
+@pytest.mark.parametrize("fill, rpm", [
+    (0.1, 2.0), (0.1, 6.0), (0.2, 2.0),
+    pytest.param(0.2, 6.0, marks=pytest.mark.xfail(strict=True, reason=(
+        "measured 0.83 x Schlünder-Mollekopf: the DEM's coefficient rises less with the speed "
+        "than the model's (docs/verification/first_layer.md)")))])
+def test_coefficient_matches_schlunder_mollekopf(fill, rpm):
+    r = run(fill, rpm)
+    assert r["h"] == pytest.approx(models(r)["physical"]["alpha"], rel=TOLERANCE)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("fill", [0.1, 0.2])
+def test_rolling_bed_rides_with_the_shell_and_keeps_its_beads(fill):
+    for rpm in (2.0, 6.0):
+        r = run(fill, rpm)
         assert r["lost"] == 0
         assert r["froude_mech"] < 0.01
+        assert r["ride"] > 0.85
         # the bed covers the shell over about the flat-surface segment's angle
-        assert r["wetted_angle"] == pytest.approx(r["wetted_angle_guess"], rel=0.15)
-        # covered triangles and the beads' angular span agree on the wetted area
-        assert r["wetted_angle_from_area"] == pytest.approx(r["wetted_angle"], rel=0.15)
+        assert r["wetted_angle"] == pytest.approx(r["wetted_angle_guess"], rel=0.2)
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason=(
-    "the default (solid_resistance) gas-gap law gives a bead touching the shell 0.31 x "
-    "Schlünder's isothermal-sphere conductance, so the DEM's contact part is ~96 instead of ~300 "
-    "W/(m^2 K) and limits the coefficient: documented runs 73 / 84 W/(m^2 K) at 2 / 6 rpm "
-    "against the model's 108 / 148 (0.68 / 0.57 x); docs/verification/drum_wall_heat.md"))
-def test_coefficient_matches_schlunder_mollekopf(runs):
-    for r in runs.values():
-        model = models(r)["physical"]["alpha"]
-        assert r["h"] == pytest.approx(model, rel=TOLERANCE)
+def test_contact_part_is_between_the_first_layers_limits():
+    from thermal import correlations, first_layer
+    from thermal.particle_transient import conductance_ratio
+    free_path = correlations.modified_mean_free_path(333.15)
+    _, ratio, _ = conductance_ratio(1e-3, GLASS["k"], GLASS["density"], GLASS["c"], 0.0262,
+                                    free_path, first_layer.REACH)
+    fresh = wall_particle_conductance("schlunder")
+    for rpm in (2.0, 6.0):
+        r = run(0.1, rpm)
+        per_area = r["first_layer_count"] / r["covered_area"]
+        print(f"\n  {rpm:g} rpm: contact part {r['h_contact']:.0f}, limits "
+              f"{per_area * fresh * ratio[-1]:.0f} - {per_area * fresh:.0f} W/(m^2 K)")
+        # beads standing off the facets conduct less than touching ones: 0.85 of the lower limit
+        assert 0.85 * per_area * fresh * ratio[-1] < r["h_contact"] < per_area * fresh
 
 
 @pytest.mark.slow
-def test_contact_part_is_the_first_layer_conductance(runs):
-    for r in runs.values():
-        g = wall_particle_conductance(r["kwargs"]["model"])
-        expected = r["first_layer_count"] * g / r["covered_area"]
-        assert r["h_contact"] == pytest.approx(expected, rel=0.15)
-        assert r["h_contact"] < expected * 1.02        # standing off only lowers it
-
-
-@pytest.mark.slow
-def test_coefficient_rises_with_speed_slower_than_penetration_alone(runs):
-    slow, fast = runs[2.0], runs[6.0]
+def test_coefficient_rises_with_speed_slower_than_penetration_alone():
+    slow, fast = run(0.1, 2.0), run(0.1, 6.0)
     ratio = fast["h"] / slow["h"]
-    # one thread and one seed: both runs move the beads identically (the heat does not act on
-    # the mechanics), so each sub-window compares the same packings and must show the rise
     windows = np.array(fast["h_windows"]) / np.array(slow["h_windows"])
     print(f"\n  h(6 rpm) / h(2 rpm) = {ratio:.3f}, by sub-window {np.round(windows, 3)} "
           f"(penetration alone: {math.sqrt(3):.3f})")
