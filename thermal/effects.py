@@ -458,8 +458,8 @@ def thermal_effects(scene) -> list:
             out.append(CoarseGrainedWall(
                 f"coarse-grained particles to {', '.join(hot)} as the bed they stand for: "
                 f"Schlünder's contact coefficient in series with penetration for the time each "
-                f"has rested on the wall ({words}; reach {th.gas_gap_lens:g} R)",
-                th.gas_gap_lens, th.time_scale))
+                f"has rested on the wall ({words}; reach {th.coarse_reach:g} R)",
+                th.coarse_reach, th.time_scale))
             out.append(WallContactAge("the time each coarse-grained particle has rested "
                                       "against a wall or body"))
         if th.gas_gap:

@@ -215,6 +215,15 @@ class ThermalSettings:
     time_scale: float = THERMAL.default("time_scale")
     gap_gas_conductivity: float = THERMAL.default("gap_gas_conductivity")
     gas_gap_lens: float = THERMAL.default("gas_gap_lens")
+    # the lens came from the "schlunder" model's default, not the scene (the coarse-grained
+    # wall law's reach keeps the key's own default then: its calibration is the lens's 0.2)
+    gas_gap_lens_defaulted: bool = False
+
+    @property
+    def coarse_reach(self) -> float:
+        """The coarse-grained wall law's reach (radii): gas_gap_lens as the scene gives it, else
+        the key's default 0.2."""
+        return THERMAL.default("gas_gap_lens") if self.gas_gap_lens_defaulted else self.gas_gap_lens
     gas_gap_min_gap: float = THERMAL.default("gas_gap_min_gap")
 
 
@@ -258,6 +267,7 @@ def parse_thermal(value: Any, ctx, fills, walls, bodies) -> ThermalSettings:
         kw["gas_gap_model"] = model
         if model in WIDENED_MODELS and "gas_gap_lens" not in t:
             kw["gas_gap_lens"] = SCHLUNDER_LENS
+            kw["gas_gap_lens_defaulted"] = True
         if "gas_gap_porosity" in t and model not in VORONOI_MODELS:
             raise SceneError(file, f"{key}.gas_gap_porosity", "only the \"voronoi\" and "
                                                               "\"schlunder\" gas_gap_models use it")

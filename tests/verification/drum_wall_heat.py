@@ -47,7 +47,7 @@ def fill_count(drum_radius, length, fill, radius, packing=0.6):
 
 def scene_text(*, drum_radius=0.05, length=0.008, radius=1e-3, count=1000, rpm_mech=10.0,
                t_wall=373.15, softened_modulus=5e6, segments=72, time_scale=1.0,
-               lens=0.2, min_gap=1e-6, k_gas=0.0262, model="solid_resistance",
+               lens=None, min_gap=1e-6, k_gas=0.0262, model="solid_resistance",
                friction=0.5, wall_friction=0.5, rolling_friction=0.02, restitution=0.5,
                output_interval=0.05, rayleigh_fraction=0.3, dt=None, seed=1,
                represented_diameter=None, flights=0, flight_height=None) -> str:
@@ -61,6 +61,8 @@ def scene_text(*, drum_radius=0.05, length=0.008, radius=1e-3, count=1000, rpm_m
     box = drum_radius * 1.05
     # "schlunder" widens each gap by the gas's mean free path instead of clamping it
     gap_line = "" if model == "schlunder" else f"gas_gap_min_gap = {min_gap!r}\n"
+    # the lens: the model's default unless given (0.4 R with "schlunder", 0.2 R otherwise)
+    lens_line = "" if lens is None else f"gas_gap_lens = {lens!r}\n"
     # low lifters (a fraction of a bead high) keep the bed from slipping on the smooth shell
     lifters = (f", flights = {int(flights)}, flight_height = {flight_height!r}, flight_thickness = "
                f"{0.5 * flight_height!r}") if flights else ""
@@ -117,8 +119,7 @@ wall_conduction = true
 contact_radius_correction = "static"
 gas_gap = true
 gap_gas_conductivity = {k_gas!r}
-gas_gap_lens = {lens!r}
-{gap_line}gas_gap_model = "{model}"
+{lens_line}{gap_line}gas_gap_model = "{model}"
 time_scale = {time_scale!r}
 [output]
 interval = {output_interval!r}
