@@ -154,19 +154,31 @@ def penetration_with_contact_resistance(alpha_ws: float, density: float, heat_ca
     return e / (alpha_ws * time) * (float(erfcx(b)) - 1.0 + 2.0 * b / math.sqrt(math.pi))
 
 
-def zehner_schlunder(k_solid: float, k_gas: float, porosity: float) -> float:
+def zehner_schlunder(k_solid: float, k_gas: float, porosity: float, free_path: float = 0.0,
+                     diameter: float = 1.0) -> float:
     """Zehner-Bauer-Schlünder effective conductivity (W/(m K)) of a packed bed of spheres
-    without radiation, flattening or the Smoluchowski effect (VDI Heat Atlas D6.3: B = 1.25
-    ((1 - eps)/eps)^(10/9), kappa = k_s/k_g, N = 1 - B/kappa, k_c = (2/N) [B (kappa - 1)/(N^2
-    kappa) ln(kappa/B) - (B + 1)/2 - (B - 1)/N], k_eff = k_g [1 - sqrt(1 - eps) + sqrt(1 - eps)
-    k_c])."""
+    without radiation or flattening (VDI Heat Atlas D6.3), with the Smoluchowski effect when
+    ``free_path`` l (m, Schlünder's modified mean free path) and the particle ``diameter`` d (m)
+    are given: kappa_G = k_G / k_g = 1 / (1 + l / d),
+
+        B = 1.25 ((1 - eps) / eps)^(10/9),  kappa = k_s / k_g
+        N = (1 / kappa_G) (1 - B kappa_G / kappa) - B (1 / kappa_G - 1)
+        k_c = (2 / N) [B (kappa - 1) / (N^2 kappa_G kappa) ln(kappa / (B (kappa_G + (1 -
+              kappa_G) kappa))) - (B + 1) / 2 - (B - 1) / (N kappa_G)]
+        k_eff = k_g [(1 - sqrt(1 - eps)) eps / (eps - 1 + 1 / kappa_G) + sqrt(1 - eps) k_c]
+
+    (radiation and flattening set to 0 in the VDI form; written from that form and checked
+    against an independent implementation of it; l = 0 gives the plain model: N = 1 - B /
+    kappa, the void term (1 - sqrt(1 - eps)))."""
     lam = k_solid / k_gas
     b = 1.25 * ((1.0 - porosity) / porosity) ** (10.0 / 9.0)
-    n = 1.0 - b / lam
-    k_c = 2.0 / n * (b * (lam - 1.0) / (n * n * lam) * math.log(lam / b)
-                     - (b + 1.0) / 2.0 - (b - 1.0) / n)
+    kg = 1.0 / (1.0 + free_path / diameter)
+    n = (1.0 - b * kg / lam) / kg - b * (1.0 / kg - 1.0)
+    k_c = 2.0 / n * (b * (lam - 1.0) / (n * n * kg * lam)
+                     * math.log(lam / (b * (kg + (1.0 - kg) * lam)))
+                     - (b + 1.0) / 2.0 - (b - 1.0) / (n * kg))
     root = math.sqrt(1.0 - porosity)
-    return k_gas * ((1.0 - root) + root * k_c)
+    return k_gas * ((1.0 - root) * porosity / (porosity - 1.0 + 1.0 / kg) + root * k_c)
 
 
 def schlunder_mollekopf(*, rpm: float, wetted_angle: float, diameter: float, k_gas: float,

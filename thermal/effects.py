@@ -34,7 +34,7 @@ from .gas_gap_effects import (MODEL_WORDS, PAIR_SHARE, WALL_AGE_FIELDS, GasGapPa
                               _skips_coarse, first_layer_ratios, gas_gap_free_path)
 from . import moisture as drying
 from . import radiation as radiative
-from .conduction import contact_conductance
+from .conduction import contact_conductance, micro_coefficient, rough_contact_conductance
 
 
 class Conduction(Effect):
@@ -48,21 +48,48 @@ class Conduction(Effect):
     # the partner's share, stored at the owner's entry: heat W, conductance W/K
     pair_fields = PAIR_SHARE
 
+    def __init__(self, description, rough=False):
+        super().__init__(description)
+        # rough spots (conduction.py): the asperities' resistance in series, compiled only
+        # for a scene whose materials give surface_roughness, surface_slope and microhardness
+        self.rough = bool(rough)
+        if self.rough:
+            self.tables = type(self).tables + ("spot_youngs", "spot_micro")
+
     def table_values(self, scene, tables):
-        from taichi_dem.setup.pair_tables import conduction_tables
+        from taichi_dem.setup.pair_tables import conduction_tables, effective_youngs_modulus
         factor, correction = conduction_tables(scene, tables.names)
-        return {"conductance_factor": factor, "radius_correction": correction}
+        out = {"conductance_factor": factor, "radius_correction": correction}
+        if self.rough:
+            names = tables.names
+            mats = [scene.materials[n] for n in names]
+            out["spot_youngs"] = np.array([[effective_youngs_modulus(a, b) for b in mats]
+                                           for a in mats])
+            out["spot_micro"] = np.array([[micro_coefficient(
+                a.thermal_conductivity, b.thermal_conductivity, a.surface_roughness,
+                b.surface_roughness, a.surface_slope, b.surface_slope, a.microhardness,
+                b.microhardness) for b in mats] for a in mats])
+        return out
 
     def contact_func(self, ctx):
         factor, correction = ctx.table["conductance_factor"], ctx.table["radius_correction"]
         skip_coarse = _skips_coarse(self, ctx)
+        rough = self.rough
+        youngs = ctx.table["spot_youngs"] if rough else None
+        micro = ctx.table["spot_micro"] if rough else None
 
         @ti.func
         def conduction(c, out):
             if c.normal_overlap > 0.0 and skip_coarse(c) == 0:
-                out.conductance += contact_conductance(
-                    factor[c.material_i, c.material_j], correction[c.material_i, c.material_j],
-                    c.r_eff, c.normal_overlap)
+                if ti.static(rough):
+                    out.conductance += rough_contact_conductance(
+                        factor[c.material_i, c.material_j],
+                        correction[c.material_i, c.material_j], c.r_eff, c.normal_overlap,
+                        youngs[c.material_i, c.material_j], micro[c.material_i, c.material_j])
+                else:
+                    out.conductance += contact_conductance(
+                        factor[c.material_i, c.material_j],
+                        correction[c.material_i, c.material_j], c.r_eff, c.normal_overlap)
             return out
 
         return conduction
@@ -76,11 +103,11 @@ class WallConduction(Conduction):
     kinds = ("plane", "triangle")
     pair_fields = {}
 
-    def __init__(self, description, coarse_materials=False):
-        super().__init__(description)
+    def __init__(self, description, coarse_materials=False, rough=False):
+        super().__init__(description, rough)
         self.skip_coarse = bool(coarse_materials)
         if self.skip_coarse:
-            self.tables = Conduction.tables + ("coarse_alpha_ws",)
+            self.tables = self.tables + ("coarse_alpha_ws",)
 
     def table_values(self, scene, tables):
         out = super().table_values(scene, tables)
@@ -430,9 +457,11 @@ def thermal_effects(scene) -> list:
     out = [Temperature("explicit temperature update, m c dT/dt = sum Q" + scaled, compensated,
                        th.time_scale)]
     free_path = gas_gap_free_path(scene) if th.gas_gap and th.gas_gap_model == "schlunder" else 0.0
+    rough = any(m.microhardness is not None for m in scene.materials.values())
+    spot = "; rough spots: the asperities in series (Yovanovich)" if rough else ""
     if th.conduction:
         out.append(Conduction(f"particle-particle conduction (contact radius correction: "
-                              f"{th.contact_radius_correction})"))
+                              f"{th.contact_radius_correction}{spot})", rough))
         if th.gas_gap and th.gas_gap_pairs:
             out.append(GasGapPair(
                 f"conduction through the gas gap between particles (fluid lens "
@@ -448,8 +477,8 @@ def thermal_effects(scene) -> list:
     coarse_names = sorted(n for n, m in scene.materials.items() if m.coarse_grained is not None)
     if th.wall_conduction and hot:
         but = (f" (not for {', '.join(coarse_names)}: coarse-grained)") if coarse_names else ""
-        out.append(WallConduction("conduction to isothermal " + ", ".join(hot) + but,
-                                  coarse_materials=bool(coarse_names)))
+        out.append(WallConduction("conduction to isothermal " + ", ".join(hot) + but + spot,
+                                  coarse_materials=bool(coarse_names), rough=rough))
         if coarse_names:
             words = "; ".join(
                 f"{n} for {scene.materials[n].coarse_grained.represented_diameter * 1e6:g} um "

@@ -63,6 +63,8 @@ class Material:
     real_youngs_modulus: Optional[float] = None    # Pa, unsoftened (conduction correction)
     coarse_grained: Optional[CoarseGraining] = None  # heat to walls as the represented bed
     surface_roughness: float = 0.0                 # m, Schlünder's delta (the gas gap's widening)
+    surface_slope: Optional[float] = None          # RMS asperity slope (rough contact spots)
+    microhardness: Optional[float] = None          # Pa (rough contact spots)
 
     @property
     def shear_modulus(self) -> float:

@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 import taichi_dem
+from thermal.correlations import modified_mean_free_path
 from thermal.correlations import zehner_schlunder  # re-exported: drum_wall_heat.py imports it here
 
 MATERIALS = {
@@ -141,6 +142,11 @@ def packed_bed_conductivity(material: str = "glass", radius: float = 1e-3, count
     porosity = 1.0 - solid / (width * width * (hi - lo))
     k_eff = q_plate / (width * width) / abs(slope)
     k_s = MATERIALS[material][3]
+    # the Smoluchowski form at the gas's modified mean free path as the scene's "schlunder" law
+    # takes it (air at the pressure and the mean of the plate's 400 K and the fill's 300 K)
+    free_path = modified_mean_free_path(350.0, pressure or 101325.0, k_gas)
     return {"k_eff": k_eff, "porosity": porosity, "zehner_schlunder": zehner_schlunder(k_s, k_gas, porosity),
+            "zehner_schlunder_smoluchowski": zehner_schlunder(k_s, k_gas, porosity, free_path,
+                                                              2.0 * radius),
             "plate_heat_flow": q_plate, "r2": float(r2), "core_particles": int(np.sum(core)),
             "bed_height": top + radius}

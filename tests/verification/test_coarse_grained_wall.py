@@ -295,46 +295,51 @@ def test_coarse_grained_without_a_hot_wall_is_refused(tmp_path):
         taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path))
 
 
-# --- a rotating drum of coarse-grained glass beads against Schlünder-Mollekopf -------------
+# --- a rotating drum of coarse-grained glass beads against the real-size one --------------
 #
-# The experiment of tests/verification/drum_wall_heat.py (0.1 m drum slice, periodic, 15 %
-# fill, a 72-sided shell at 100 C, the bed switched to 20 C once it rolls, mechanics at 12 rpm
-# with time_scale 2: the thermal contact time of 6 rpm), with 4 mm beads that stand for 2 mm
-# ones (coarse graining x2). The model for 2 mm glass beads (the same function and inputs as
-# test_drum_wall_heat.py) gives 147 W/(m^2 K) at the run's measured wetted angle; without the
-# law, the default gas-gap law gives the real 2 mm beads 0.57 x of it (test_drum_wall_heat.py).
+# The experiment of tests/verification/drum_wall_heat.py (0.1 m drum slice, periodic, 15 % fill,
+# a 72-sided shell at 100 C with 16 lifters half a bead high so that the bed rides with it, the
+# bed switched to 20 C once it rolls, mechanics at 12 rpm with time_scale 2: the thermal contact
+# time of 6 rpm), twice: with the real 2 mm beads (the default gas-gap law,
+# test_drum_wall_heat.py) and with 4 mm beads that stand for them (coarse graining x2; 2 mm
+# lifters). The wall-to-bed coefficient is compared over the wetted arc (the heat flow over the
+# arc of the measured angle): the covered-triangle area under-reads for the coarse beads, which
+# leave ~27 % of the triangles under the bed untouched at a sample.
 #
-# Measured (docs/verification/drum_wall_heat.md "Coarse-grained beads"): 117.7 W/(m^2 K) over the
-# wetted arc (0.80 x), 163.4 over the touched triangles (1.11 x; the 4 mm beads leave 27 % of
-# the triangles under the bed untouched at a sample, so that area under-reads here). Asserted:
-# both within 25 % of the model (the same budget as test_drum_wall_heat.py: the model's own
-# uncertainty ~20 %; here the coarse bed adds that beads arrive at the wall from a bed only ~4
-# beads deep, warmer than its mean, and the lumped first layer: at 6 rpm the penetration depth
-# sqrt(pi a t_c) = 1.1 mm is half a bead's radius). At 2 rpm (t_c 9 s: a depth of 2 mm, the bead's
-# radius, where the law's lumping limit bites) the arc value is 0.73 x: documented, not asserted.
+# Measured (2026-12-04, docs/verification/first_layer.md): over the arc, coarse 140.2 and real
+# 134.8 W/(m^2 K), 1.04 x (both ride at 0.95-0.96); Schlünder-Mollekopf 148-149, so coarse 0.95 x,
+# real 0.91 x. Over the covered triangles: coarse 185.7 (1.46 x the real 126.8). Asserted: the
+# arc figures within 10 % of each other (the tolerance for the coarse-grained law
+# against the real-size drum) and the coarse one within 25 % of the model (the model's own
+# uncertainty, test_drum_wall_heat.py).
 
 
 @pytest.fixture(scope="module")
-def coarse_drum():
+def coarse_and_real_drums():
     from drum_wall_heat import drum_wall_heat, models
-    r = drum_wall_heat(rpm=6.0, time_scale=2.0, radius=0.002, length=0.016, fill=0.15,
-                       settle=0.8, startup=1.2, measure=0.6, represented_diameter=0.002)
-    r["kwargs"] = {"model": "solid_resistance"}
-    model = models(r, radius=1e-3)["physical"]
-    print(f"\n  coarse-grained drum, 6 rpm: DEM {r['h']:.1f} (arc {r['h_arc']:.1f}) W/(m^2 K), "
-          f"model {model['alpha']:.1f}; wetted angle {math.degrees(r['wetted_angle']):.0f} deg, "
-          f"t_c {r['contact_time']:.2f} s, {r['wall_seconds']:.0f} s wall")
-    return r, model
+    coarse = drum_wall_heat(rpm=6.0, time_scale=2.0, radius=0.002, length=0.016, fill=0.15,
+                            settle=0.8, startup=1.2, measure=0.6, represented_diameter=0.002,
+                            flights=16, flight_height=2e-3, model="schlunder")
+    real = drum_wall_heat(rpm=6.0, time_scale=2.0, fill=0.15, length=0.005, settle=0.4,
+                          startup=0.6, measure=0.3, dt=2.5e-5, output_interval=0.025,
+                          threads=1, flights=16, flight_height=1e-3, model="schlunder")
+    for r in (coarse, real):
+        r["kwargs"] = {"model": "schlunder"}
+    model = models(coarse, radius=1e-3)["physical"]
+    print(f"\n  coarse-grained drum, 6 rpm: {coarse['h']:.1f} (arc {coarse['h_arc']:.1f}) W/(m^2 K), "
+          f"rides at {coarse['ride']:.2f}; real-size {real['h']:.1f} (arc {real['h_arc']:.1f}), "
+          f"rides at {real['ride']:.2f}; model {model['alpha']:.1f}; "
+          f"{coarse['wall_seconds'] + real['wall_seconds']:.0f} s wall")
+    return coarse, real, model
 
 
 @pytest.mark.slow
-def test_coarse_grained_drum_against_schlunder_mollekopf(coarse_drum):
-    r, model = coarse_drum
-    assert r["lost"] == 0 and r["froude_mech"] < 0.01
-    assert r["h_arc"] == pytest.approx(model["alpha"], rel=0.25)
-    assert r["h"] == pytest.approx(model["alpha"], rel=0.25)
-    # the first layer barely warms (the law's premise): its bed part is > 10 x its contact part
-    assert r["h_bed"] > 10.0 * r["h_contact"]
+def test_coarse_grained_drum_against_the_real_size_one(coarse_and_real_drums):
+    coarse, real, model = coarse_and_real_drums
+    for r in (coarse, real):
+        assert r["lost"] == 0 and r["froude_mech"] < 0.01 and r["ride"] > 0.85
+    assert coarse["h_arc"] == pytest.approx(real["h_arc"], rel=0.10)
+    assert coarse["h_arc"] == pytest.approx(model["alpha"], rel=0.25)
 
 
 def test_an_inserted_particle_starts_with_no_wall_contact_age(tmp_path):

@@ -161,3 +161,51 @@ def test_bead_on_a_plate_starts_at_schlunders_first_layer(tmp_path):
                                                              free_path)
     assert late == pytest.approx(gas * expected_ratio, rel=0.02)
     assert late < 0.8 * early
+
+
+# --- rough contact spots (thermal/conduction.py: Yovanovich's asperities in series) ----------
+
+def _spot_scene(tmp_path, roughness):
+    text = _scene(tmp_path, 1e-5, 1e-4).replace("gas_gap = true\n", "gas_gap = false\n")
+    text = "\n".join(x for x in text.splitlines() if not x.startswith(("gap_gas", "gas_gap_model")))
+    if roughness:
+        # glass on steel: sigma 1 um each, slopes 0.1, microhardness 6 / 3 GPa
+        text = text.replace("thermal_conductivity = 1.0\n", "thermal_conductivity = 1.0\n"
+                            "surface_roughness = 1e-6\nsurface_slope = 0.1\nmicrohardness = 6e9\n")
+        text = text.replace("thermal_conductivity = 45.0\n", "thermal_conductivity = 45.0\n"
+                            "surface_roughness = 1e-6\nsurface_slope = 0.1\nmicrohardness = 3e9\n")
+    return text.replace("gravity = [0.0, 0.0, 0.0]", "gravity = [0.0, 0.0, -9.81]")
+
+
+def test_rough_spot_is_the_asperities_in_series_with_the_hertz_spot(tmp_path):
+    from taichi_dem.scene.model import Material
+    from taichi_dem.setup.pair_tables import effective_youngs_modulus
+    from thermal.conduction import micro_coefficient, rough_contact_conductance_reference
+    out = {}
+    for rough in (False, True):
+        with taichi_dem.Simulation.from_text(_spot_scene(tmp_path, rough)) as sim:
+            sim.run(0.05)                   # the bead settles onto the plate
+            out[rough] = (_conductance(sim), R - float(sim.particles()["position"][0][2]))
+            names = [e.description for e in sim.effects]
+    assert any("Yovanovich" in d for d in names)
+    (smooth, overlap_s), (rough, overlap_r) = out[False], out[True]
+    sim_e = effective_youngs_modulus(Material("g", 2500.0, 5e7, 0.22), Material("s", 7800.0, 5e7, 0.3))
+    real_e = effective_youngs_modulus(Material("g", 2500.0, 63e9, 0.22), Material("s", 7800.0, 200e9, 0.3))
+    correction = (sim_e / real_e) ** (1.0 / 3.0)
+    micro = micro_coefficient(1.0, 45.0, 1e-6, 1e-6, 0.1, 0.1, 6e9, 3e9)
+    expected_smooth = rough_contact_conductance_reference(1.0, 45.0, correction, R, overlap_s,
+                                                          sim_e, 0.0)
+    expected_rough = rough_contact_conductance_reference(1.0, 45.0, correction, R, overlap_r,
+                                                         sim_e, micro)
+    print(f"\n  spot: smooth {smooth:.4e} W/K, rough {rough:.4e} W/K ({rough / smooth:.3f} x)")
+    assert smooth == pytest.approx(expected_smooth, rel=1e-3)
+    assert rough == pytest.approx(expected_rough, rel=1e-3)
+    assert rough < 0.9 * smooth                      # the asperities add a resistance
+
+
+def test_rough_spot_keys_come_together(tmp_path):
+    from taichi_dem.errors import SceneError
+    text = _spot_scene(tmp_path, False).replace(
+        "thermal_conductivity = 1.0\n", "thermal_conductivity = 1.0\nmicrohardness = 6e9\n")
+    with pytest.raises(SceneError, match="materials.glass.microhardness.*surface_roughness, surface_slope"):
+        taichi_dem.Simulation.from_text(text)

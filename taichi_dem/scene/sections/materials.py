@@ -43,6 +43,11 @@ MATERIAL = register(Section("materials.*", "A material, [materials.NAME]", (
     Key("surface_roughness", "quantity", "the surface's roughness: the \"schlunder\" gas-gap "
         "law widens every gap by it (Schlünder's delta; 0 smooth)", unit="length", default=0.0,
         minimum=0.0),
+    Key("surface_slope", "quantity", "the RMS slope of the surface's asperities: with "
+        "surface_roughness and microhardness, the contact spot conducts through them "
+        "(Yovanovich)", unit="dimensionless", default=None, **_P),
+    Key("microhardness", "quantity", "the surface's microhardness (rough contact spots, "
+        "Yovanovich)", unit="pressure", default=None, **_P),
     Key("coarse_grained", "table", "these particles stand for a finer bed (its heat law to "
         "walls): { represented_diameter, bed_porosity, surface_coverage, roughness }",
         default=None),
@@ -81,6 +86,13 @@ class MaterialSections:
                 raise self.err(f"{key}.real_youngs_modulus",
                                f"the real (unsoftened) modulus {kw['real_youngs_modulus']:g} Pa "
                                f"must be >= youngs_modulus = {kw['youngs_modulus']:g} Pa")
+            spot = [k for k in ("surface_slope", "microhardness") if k in m]
+            if spot and (len(spot) < 2 or not kw.get("surface_roughness")):
+                missing = [k for k in ("surface_roughness", "surface_slope", "microhardness")
+                           if not kw.get(k)]
+                raise self.err(f"{key}.{spot[0]}",
+                               f"a rough contact spot needs surface_roughness, surface_slope and "
+                               f"microhardness together; missing: {', '.join(missing)}")
             if "coarse_grained" in m:
                 kw["coarse_grained"] = self.parse_coarse_grained(m["coarse_grained"],
                                                                  f"{key}.coarse_grained")
