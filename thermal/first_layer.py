@@ -46,6 +46,7 @@ import math
 import numpy as np
 import taichi as ti
 
+from . import gas_gap
 from .coarse_grained import erfcx
 from .correlations import erfcx as erfcx_reference
 
@@ -128,20 +129,14 @@ def transient_gap_integral_reference(radius, distance, reach, offset, gas_over_s
         return 0.0
     r_out = math.sqrt(min(reach_radius ** 2 - distance ** 2, radius ** 2))
     r_in = math.sqrt(max(radius ** 2 - distance ** 2, 0.0))
-    if r_out <= r_in:
-        return 0.0
-    x, wts = np.polynomial.legendre.leggauss(8)
-    edges = r_in + (r_out - r_in) * np.linspace(0.0, 1.0, panels + 1) ** 3
-    lo, hi = edges[:-1, None], edges[1:, None]
-    r = 0.5 * (hi - lo) * x[None, :] + 0.5 * (hi + lo)
-    u = np.sqrt(np.maximum(radius ** 2 - r ** 2, 0.0))
-    d = np.maximum(distance - u, 0.0) + offset
-    if depth > 0.0:
-        transient = np.vectorize(erfcx_reference)(depth / d) / d
-    else:
-        transient = 1.0 / d
-    local = np.maximum(transient, 1.0 / (d + gas_over_solid * u))
-    return float(np.sum(0.5 * (hi - lo) * wts[None, :] * 2.0 * math.pi * r * local))
+
+    def effective_gap(r):
+        """D_eff(r) = 1 / max(erfcx(beta / D) / D, 1 / (D + g u)) (m)."""
+        u = np.sqrt(np.maximum(radius ** 2 - r ** 2, 0.0))
+        d = np.maximum(distance - u, 0.0) + offset
+        transient = (np.vectorize(erfcx_reference)(depth / d) / d) if depth > 0.0 else 1.0 / d
+        return 1.0 / np.maximum(transient, 1.0 / (d + gas_over_solid * u))
+    return gas_gap._integrate(effective_gap, r_in, r_out, panels)
 
 
 def penetration_depth(k_gas: float, time: float, density: float, heat_capacity: float,

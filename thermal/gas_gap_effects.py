@@ -135,6 +135,17 @@ class _GasGap(Effect):
             return None
         return ctx.table["gas_over_solid"].to_numpy()[:, 0].astype(np.float64)
 
+    def _kernel_inputs(self, ctx):
+        """What both contact laws close over: (solid, voronoi, porosity, the k_g/k_s table,
+        tabulated, species_of, table, table_range, the table's node count)."""
+        solid = self.solid
+        tabulated = self.species_tabulated is not None
+        return (solid, self.model == "voronoi", self.porosity,
+                ctx.table["gas_over_solid"] if solid else None, tabulated,
+                self.species_func() if tabulated else None,
+                self.table if tabulated else None, self.table_range if tabulated else None,
+                gas_gap.TABLE_NODES)
+
     def species_func(self):
         """ti.func (material, radius) -> the kind's index in the tables, -1 if none."""
         species = self.species_tabulated
@@ -209,14 +220,8 @@ class GasGapWall(_GasGap):
 
     def contact_func(self, ctx):
         k_gas, lens, min_gap = self.parameters
-        solid = self.solid
-        voronoi = self.model == "voronoi"
-        porosity = self.porosity
-        ratio = ctx.table["gas_over_solid"] if solid else None
-        tabulated = self.species_tabulated is not None
-        species_of = self.species_func() if tabulated else None
-        table, table_range = (self.table, self.table_range) if tabulated else (None, None)
-        last = gas_gap.TABLE_NODES
+        solid, voronoi, porosity, ratio, tabulated, species_of, table, table_range, last = \
+            self._kernel_inputs(ctx)
 
         skip_coarse = _skips_coarse(self, ctx)
         widened = self.widened
@@ -375,14 +380,8 @@ class GasGapPair(_GasGap):
 
     def contact_func(self, ctx):
         k_gas, lens, min_gap = self.parameters
-        solid = self.solid
-        voronoi = self.model == "voronoi"
-        porosity = self.porosity
-        ratio = ctx.table["gas_over_solid"] if solid else None
-        tabulated = self.species_tabulated is not None
-        species_of = self.species_func() if tabulated else None
-        table, table_range = (self.table, self.table_range) if tabulated else (None, None)
-        last = gas_gap.TABLE_NODES
+        solid, voronoi, porosity, ratio, tabulated, species_of, table, table_range, last = \
+            self._kernel_inputs(ctx)
         widened = self.widened
         offset = ctx.table["gap_offset"] if widened else None
         share = ctx.table["pair_solid_share"] if widened else None
