@@ -1,5 +1,6 @@
 """``taichi-dem export``: a results file's series or one particle frame as CSV (issue 33 item
-4), for a spreadsheet, pandas or EDEM Analyst habits.
+4), for a spreadsheet, pandas or EDEM Analyst habits; or, with ``--xdmf``, an XDMF file that
+opens its frames in ParaView (app/xdmf.py).
 
 - ``--series``: one row per output sample, a column per /series dataset (a vector series gives
   one column per component, ``name[0]`` ...); the header names each column with its unit,
@@ -101,9 +102,13 @@ def add_arguments(p) -> None:
                       help="every /series dataset, one row per sample, units in the header")
     what.add_argument("--frame", type=int, metavar="K",
                       help="particle frame K (-1: the last), one row per particle")
+    what.add_argument("--xdmf", action="store_true",
+                      help="an XDMF file describing every frame, for ParaView (the data stay "
+                           "in the results file: keep the two together)")
     p.add_argument("--out", default=None,
                    help="the CSV file (default: <results stem>_series.csv or "
-                        "<results stem>_frame<K>.csv beside the results; '-' for stdout)")
+                        "<results stem>_frame<K>.csv beside the results; '-' for stdout), or "
+                        "the XDMF file (default: <results stem>.xdmf beside the results)")
 
 
 def cmd_export(args) -> int:
@@ -116,6 +121,12 @@ def cmd_export(args) -> int:
         h5py.File(path, "r").close()
     except OSError:
         raise SceneError(str(path), "", "not an HDF5 results file") from None
+    if args.xdmf:
+        from .xdmf import write_xdmf
+        target, frames = write_xdmf(path, None if args.out in (None, "-") else args.out)
+        print(f"wrote {target} ({frames} frames; open it in ParaView beside {path.name})",
+              file=sys.stderr)
+        return 0
     if args.out == "-":
         stream, target = sys.stdout, None
     else:

@@ -71,3 +71,37 @@ def test_not_a_results_file_is_refused(tmp_path, capsys):
     assert main(["export", str(bad), "--series"]) == 2
     assert "not an HDF5 results file" in capsys.readouterr().err
     assert main(["export", str(tmp_path / "none.h5"), "--series"]) == 2
+
+
+def test_xdmf_describes_every_frame_for_paraview(results, tmp_path):
+    import xml.etree.ElementTree as ET
+    assert main(["export", str(results), "--xdmf"]) == 0
+    path = results.with_suffix(".xdmf")
+    root = ET.parse(path).getroot()
+    grids = root.findall("./Domain/Grid/Grid")
+    assert root.find("./Domain/Grid").get("CollectionType") == "Temporal"
+    assert [float(g.find("Time").get("Value")) for g in grids] == [0.0, 1.0]
+    with h5py.File(results, "r") as f:
+        for g in grids:
+            topology = g.find("Topology")
+            assert topology.get("TopologyType") == "Polyvertex"
+            assert topology.get("NumberOfElements") == "2"
+            items = g.findall(".//DataItem")
+            names = {a.get("Name") for a in g.findall("Attribute")}
+            assert names == {"id", "radius"}                 # no unit attribute: bare names
+            for item in items:
+                file_name, dataset = item.text.split(":")
+                assert file_name == "run.h5"                 # relative: beside the XDMF file
+                data = f[dataset]
+                assert item.get("Dimensions") == " ".join(map(str, data.shape))
+                assert int(item.get("Precision")) == data.dtype.itemsize
+        # the geometry is each frame's positions
+        assert grids[1].find("./Geometry/DataItem").text == "run.h5:/frames/1/position"
+
+
+def test_xdmf_of_a_file_without_frames_is_refused(tmp_path, capsys):
+    path = tmp_path / "empty.h5"
+    with h5py.File(path, "w") as f:
+        f.create_group("series").create_dataset("time", data=[0.0])
+    assert main(["export", str(path), "--xdmf"]) == 2
+    assert "frames" in capsys.readouterr().err
