@@ -1,6 +1,6 @@
 """``taichi-dem export``: a results file's series or one particle frame as CSV (issue 33 item
 4), for a spreadsheet, pandas or EDEM Analyst habits; or, with ``--xdmf``, an XDMF file that
-opens its frames in ParaView (app/xdmf.py).
+opens its frames in ParaView (recorders/xdmf.py).
 
 - ``--series``: one row per output sample, a column per /series dataset (a vector series gives
   one column per component, ``name[0]`` ...); the header names each column with its unit,
@@ -122,7 +122,7 @@ def cmd_export(args) -> int:
     except OSError:
         raise SceneError(str(path), "", "not an HDF5 results file") from None
     if args.xdmf:
-        from .xdmf import write_xdmf
+        from ..recorders.xdmf import write_xdmf
         target, frames = write_xdmf(path, None if args.out in (None, "-") else args.out)
         print(f"wrote {target} ({frames} frames; open it in ParaView beside {path.name})",
               file=sys.stderr)

@@ -110,6 +110,12 @@ class HDF5Recorder:
         self.file.flush()
 
     def close(self):
+        """Close the file; with frames in it, write its XDMF description beside it (same
+        stem, .xdmf: ParaView opens the frames from it, recorders/xdmf.py)."""
         if self.file:
+            frames = self.frame_count
             self.file.close()
             self.file = None
+            if frames:
+                from .xdmf import write_xdmf
+                write_xdmf(self.path)

@@ -105,3 +105,37 @@ def test_xdmf_of_a_file_without_frames_is_refused(tmp_path, capsys):
         f.create_group("series").create_dataset("time", data=[0.0])
     assert main(["export", str(path), "--xdmf"]) == 2
     assert "frames" in capsys.readouterr().err
+
+
+def test_a_runs_xdmf_opens_in_vtks_xdmf_reader(tmp_path):
+    """The XDMF a run writes beside its results file, read back by VTK's XDMF reader (the
+    reader ParaView's "Xdmf Reader" is): every frame a time step, its points the frame's
+    positions, its arrays the per-particle datasets."""
+    import taichi_dem as td
+    from resume_scene import scene_text
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
+    from vtkmodules.vtkIOXdmf2 import vtkXdmfReader
+    h5 = tmp_path / "beads.h5"
+    with td.Simulation.from_text(scene_text(), precision="f64", h5=str(h5)) as sim:
+        sim.run(0.1)
+    xdmf = h5.with_suffix(".xdmf")
+    assert xdmf.is_file()                            # written when the recorder closed
+    reader = vtkXdmfReader()
+    reader.SetFileName(str(xdmf))
+    reader.UpdateInformation()
+    steps = reader.GetOutputInformation(0).Get(vtkStreamingDemandDrivenPipeline.TIME_STEPS())
+    with h5py.File(h5, "r") as f:
+        keys = sorted(f["frames"], key=int)
+        times = [float(f["frames"][k].attrs["time"]) for k in keys]
+        assert list(steps) == pytest.approx(times)
+        last = f["frames"][keys[-1]]
+        reader.UpdateTimeStep(steps[-1])
+        grid = reader.GetOutputDataObject(0)
+        points = vtk_to_numpy(grid.GetPoints().GetData())
+        np.testing.assert_array_equal(points, last["position"][()])
+        data = grid.GetPointData()
+        arrays = {data.GetArrayName(i) for i in range(data.GetNumberOfArrays())}
+        assert {"temperature [K]", "velocity [m/s]", "radius [m]"} <= arrays
+        np.testing.assert_array_equal(vtk_to_numpy(data.GetArray("temperature [K]")),
+                                      last["temperature"][()])

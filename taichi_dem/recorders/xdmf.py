@@ -1,5 +1,6 @@
-"""``taichi-dem export RESULTS.h5 --xdmf``: an XDMF 3 file beside a results file, so that
-ParaView (or VisIt) opens the particle frames as a time series of points (issue 33 item 3).
+"""An XDMF 3 file beside a results file, so that ParaView (or VisIt) opens the particle frames
+as a time series of points (issue 33 item 4): written when a run's recorder closes, and by
+``taichi-dem export RESULTS.h5 --xdmf``.
 
 The XDMF file holds no data: it describes each /frames/<k> group of the HDF5 file as a grid of
 N points (Polyvertex topology, the ``position`` dataset as XYZ geometry) at the frame's time,
