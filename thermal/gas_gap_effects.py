@@ -473,7 +473,10 @@ def _material_radii(scene) -> dict:
         lo, hi = source.smallest_radius, source.largest_radius
         a, b = radii.get(source.material, (lo, hi))
         radii[source.material] = (min(a, lo), max(b, hi))
-    return {name: math.sqrt(lo * hi) for name, (lo, hi) in radii.items()}
+    # (a source with no particles, e.g. an empty CSV, reports an infinite radius: left out,
+    # its material then keeps the isothermal ratio 1)
+    return {name: math.sqrt(lo * hi) for name, (lo, hi) in radii.items()
+            if math.isfinite(lo) and math.isfinite(hi) and lo > 0.0}
 
 
 def pair_solid_shares(scene, tables, free_path: float, porosity: float) -> np.ndarray:
