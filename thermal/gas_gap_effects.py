@@ -99,7 +99,7 @@ class _GasGap(Effect):
         self.free_path = float(free_path)        # l (m), the "schlunder" law's
         self.tables = ("gas_over_solid",) if self.solid else ()
         if self.widened:
-            self.tables = self.tables + ("gap_offset", "pair_solid_share")
+            self.tables = self.tables + ("gap_offset",)
         if self.skip_coarse:
             self.tables = self.tables + ("coarse_alpha_ws",)
         self.species_tabulated = None     # the species the tables are for (None: no tables)
@@ -110,8 +110,6 @@ class _GasGap(Effect):
             out["gas_over_solid"] = _gas_over_solid(scene, tables, self.parameters[0])
         if self.widened:
             out["gap_offset"] = _gap_offsets(scene, tables, self.free_path)
-            out["pair_solid_share"] = pair_solid_shares(scene, tables, self.free_path,
-                                                        self.porosity)
         return out
 
     def _offsets(self, ctx):
@@ -304,6 +302,8 @@ class GasGapPair(_GasGap):
 
     def __init__(self, *args, solids=None, **kwargs):
         super().__init__(*args, **kwargs)
+        if self.widened:
+            self.tables = self.tables + ("pair_solid_share",)
         # "schlunder": (k_s W/(m K), delta m) of each material, in the tables' order once
         # known ({name: ...} until then)
         self.solids = solids or {}
@@ -315,6 +315,13 @@ class GasGapPair(_GasGap):
         if self._tabulate(ctx):
             k = len(ctx.species)
             self._allocate_tables(ctx, tree, "gas_gap_pair", (k, k))
+
+    def table_values(self, scene, tables):
+        out = super().table_values(scene, tables)
+        if self.widened:
+            out["pair_solid_share"] = pair_solid_shares(scene, tables, self.free_path,
+                                                        self.porosity)
+        return out
 
     def share_by_separation(self, separations, kind_a, kind_b):
         """The solids' share of the pair's resistance at each surface separation (m): the
