@@ -12,9 +12,9 @@ import sys
 import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-from thermal import correlations, first_layer  # noqa: E402
-from thermal.gas_gap import VORONOI_FACE  # noqa: E402
-from thermal.particle_transient import conductance_ratio, half_pair_conductance  # noqa: E402
+from taichi_dem.thermal import correlations, first_layer  # noqa: E402
+from taichi_dem.thermal.gas_gap import VORONOI_FACE  # noqa: E402
+from taichi_dem.thermal.particle_transient import conductance_ratio, half_pair_conductance  # noqa: E402
 
 R, K_GAS = 1e-3, 0.0262
 SOLIDS = {  # k W/(m K), rho kg/m^3, c J/(kg K)

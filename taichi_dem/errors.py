@@ -5,7 +5,7 @@
 belongs to the standalone ``geometry`` package (plain numpy and trimesh) and is re-exported
 here; the loader turns it into a ``SceneError`` naming the scene file and key.
 """
-from geometry.mesh import GeometryError
+from taichi_dem.geometry.mesh import GeometryError
 
 __all__ = ["SceneError", "GeometryError", "BackendError", "DivergenceError",
            "StaleSimulationError", "CheckpointError", "WindowError"]

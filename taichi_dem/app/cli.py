@@ -1,4 +1,4 @@
-"""Command line: ``taichi-dem run|check|resume|demo|bench|sweep|tradeoffs|plot`` (CONTRACT.md).
+"""taichi-dem: discrete element simulations of drums, dryers and coolers, with heat transfer.
 
 Exit status: 0 success; 2 bad input (one paragraph naming file, key and reason, never a
 traceback); 3 the simulation diverged; ``sweep``: 1 when some of its runs failed (the table
@@ -30,8 +30,10 @@ def _common_outputs(p: argparse.ArgumentParser):
     p.add_argument("--spawn", action="store_true", help="stream to a rerun viewer")
     p.add_argument("--every-nth", type=int, default=1, metavar="N",
                    help="rerun: draw every Nth particle only (default 1: all)")
-    p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"])
-    p.add_argument("--precision", choices=["f32", "f64"])
+    p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"],
+                   help="where the kernels run: cpu, or a GPU backend (gpu picks one; default cpu)")
+    p.add_argument("--precision", choices=["f32", "f64"],
+                   help="floating-point precision of the state (default: the scene's [simulation] precision, else f32)")
     p.add_argument("--threads", type=int, help="CPU threads (default: all cores)")
     p.add_argument("--parallel-from", type=int, metavar="N", dest="parallel_from",
                    help="particles from which the CPU runs the step on all threads; below, one "
@@ -49,26 +51,29 @@ def _common_outputs(p: argparse.ArgumentParser):
 
 def _parser() -> argparse.ArgumentParser:
     from .._version import __version__
-    p = argparse.ArgumentParser(prog="taichi-dem", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="taichi-dem", description=__doc__.splitlines()[0] + "\n\n"
+                                + "\n".join(__doc__.splitlines()[2:5]))
     p.add_argument("--version", action="version", version=f"taichi-dem {__version__}")
-    sub = p.add_subparsers(dest="command", required=True)
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                           help="one of the commands below; `taichi-dem COMMAND --help` for its options")
     r = sub.add_parser("run", help="run a scene")
-    r.add_argument("scene")
+    r.add_argument("scene", help="the scene file (TOML)")
     _common_outputs(r)
     c = sub.add_parser("check", help="validate a scene and print derived figures")
-    c.add_argument("scene", nargs="?")
+    c.add_argument("scene", nargs="?", help="the scene file (TOML) to validate")
     c.add_argument("--builders", action="store_true", help="list the mesh builders")
     rs = sub.add_parser("resume", help="continue from a checkpoint")
-    rs.add_argument("checkpoint")
+    rs.add_argument("checkpoint", help="a checkpoint (<scene stem>.checkpoint.h5) a run wrote beside its results")
     _common_outputs(rs)
     d = sub.add_parser("demo", help="run a bundled demo (no NAME: list them)")
-    d.add_argument("name", nargs="?")
+    d.add_argument("name", nargs="?", help="the demo to run (leave out to list them)")
     _common_outputs(d)
     b = sub.add_parser("bench", help="the chute performance benchmark")
-    b.add_argument("--steps", type=int, default=1000)
+    b.add_argument("--steps", type=int, default=1000, help="time steps per timed run (default 1000)")
     b.add_argument("--copies", type=float, default=1.0, help="chute size in units of 32k particles")
-    b.add_argument("--threads", type=int)
-    b.add_argument("--precision", default="f32", choices=["f32", "f64"])
+    b.add_argument("--threads", type=int, help="CPU threads (default: all cores)")
+    b.add_argument("--precision", default="f32", choices=["f32", "f64"],
+                   help="floating-point precision (default f32, as the LAMMPS peer)")
     from . import sweep, tradeoffs
     sw = sub.add_parser("sweep", help="many runs of a scene with keys changed, on Dask")
     sweep.add_arguments(sw)
@@ -95,7 +100,39 @@ def _parser() -> argparse.ArgumentParser:
     from . import export
     ex = sub.add_parser("export", help="a results file's series or one particle frame as CSV")
     export.add_arguments(ex)
+    p.epilog = "examples:\n  taichi-dem demo pile\n  taichi-dem check my_drum.toml\n" \
+               "  taichi-dem run my_drum.toml --out results\n\n" \
+               "`taichi-dem COMMAND --help` shows each command's options and examples."
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
+    for name, command in sub.choices.items():
+        command.epilog = "examples:\n" + "\n".join(f"  {line}" for line in EXAMPLES[name])
+        command.formatter_class = argparse.RawDescriptionHelpFormatter
     return p
+
+
+# shown under each command's --help (tests/unit/test_cli_help.py runs every one through the parser)
+EXAMPLES = {
+    "run": ["taichi-dem run demos/pile.toml --out results",
+            "taichi-dem run drum.toml --until 2 --precision f64 --rrd drum.rrd",
+            "taichi-dem run cooler.toml --arch gpu --quiet"],
+    "check": ["taichi-dem check drum.toml", "taichi-dem check --builders"],
+    "resume": ["taichi-dem resume out/pile.checkpoint.h5 --until 1.0"],
+    "demo": ["taichi-dem demo", "taichi-dem demo pile", "taichi-dem demo paddle_cooler --until 10 --no-plots"],
+    "bench": ["taichi-dem bench --steps 500", "taichi-dem bench --copies 0.25 --precision f64"],
+    "sweep": ["taichi-dem sweep drum.toml --set \"bodies.0.speed=2 rpm,6 rpm\" --seeds 2 --out sweep",
+              "taichi-dem sweep drum.toml --set simulation.dt=2e-5,4e-5 --scheduler tcp://10.0.0.5:8786"],
+    "tradeoffs": ["taichi-dem tradeoffs demos/small_drum.toml --duration 1 --out tradeoffs",
+                  "taichi-dem tradeoffs cooler.toml --knobs precision timestep --seeds 3"],
+    "schema": ["taichi-dem schema > scene.schema.json", "taichi-dem schema --keys | grep thermal"],
+    "map": ["taichi-dem map demos/cooler_slice.toml --holdup \"10 %\" \"25 %\" --time 10 --out map",
+            "taichi-dem map slice.toml --holdup \"30 kg/m\" \"60 kg/m\" --time 8 --incline 5 2 --dask"],
+    "machine": ["taichi-dem machine map --length \"6 m\" --feed \"4.6 t/h\" \"6.5 t/h\"",
+                "taichi-dem machine map --length \"6 m\" --feed \"5 t/h\" --incline 5 --inlet-temperature \"450 C\""],
+    "plot": ["taichi-dem plot out/paddle_cooler.h5", "taichi-dem plot results.h5 --out figures --dpi 150"],
+    "export": ["taichi-dem export out/pile.h5 --series --out pile_series.csv",
+               "taichi-dem export out/pile.h5 --frame -1 --out last_frame.csv",
+               "taichi-dem export out/pile.h5 --xdmf   # then open out/pile.xdmf in ParaView"],
+}
 
 
 def main(argv=None) -> int:
@@ -243,7 +280,7 @@ def narrow_gap_notes(scene, largest_radius: float) -> list:
     """Warnings for each pair of bodies, one turning about an axis the other shares or is
     swept round, whose narrowest radial gap (geometry/gaps.py) the largest sphere cannot pass:
     spheres wedge between paddle tips and the shell there (a jam, a torque spike)."""
-    from geometry.gaps import radial_gap, surface_points
+    from taichi_dem.geometry.gaps import radial_gap, surface_points
     notes = []
     bodies = list(scene.bodies)
     for i, a in enumerate(bodies):
@@ -280,7 +317,7 @@ def narrow_gap_notes(scene, largest_radius: float) -> list:
 
 def cmd_check(args) -> int:
     if args.builders:
-        import geometry
+        from taichi_dem import geometry
         print(geometry.describe_builders())
         if not args.scene:
             return 0

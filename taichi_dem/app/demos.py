@@ -20,9 +20,12 @@ from typing import Optional
 import numpy as np
 
 from . import analysis
+from .. import demos as _demo_scenes
 from ..scene.units import parse_quantity
 
-DEMOS_DIR = Path(__file__).resolve().parents[2] / "demos"
+# the scenes are package data of taichi_dem.demos (the checkout's demos/ folder, or the copy a
+# wheel installs), so an installed taichi_dem finds them from any working directory
+DEMOS_DIR = Path(_demo_scenes.__file__).resolve().parent
 
 
 def _scene_toml(sim) -> dict:

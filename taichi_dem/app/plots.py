@@ -507,7 +507,7 @@ def plot_results(h5_path: str, out_dir: Optional[str] = None, dpi: int = 100) ->
 def add_arguments(p) -> None:
     p.add_argument("results", help="a results file (HDF5, as --h5 writes)")
     p.add_argument("--out", help="directory for the PNGs (default: <results stem>_plots/ beside it)")
-    p.add_argument("--dpi", type=int, default=100)
+    p.add_argument("--dpi", type=int, default=100, help="resolution of the PNGs, dots per inch (default 100)")
 
 
 def cmd_plot(args) -> int:

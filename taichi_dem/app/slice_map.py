@@ -518,7 +518,8 @@ def add_arguments(p) -> None:
                    help="a scene key changed for every slice (one value; repeatable), e.g. "
                         "simulation.precision=f64 or particles.0.radius=0.012: the map of a "
                         "modelling choice, to set beside the scene's own")
-    p.add_argument("--arch", default="cpu")
+    p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"],
+                   help="where the kernels run: cpu, or a GPU backend (gpu picks one; default cpu)")
     p.add_argument("--dask", action="store_true",
                    help="run the slices as tasks on Dask workers (a LocalCluster here, or "
                         "--scheduler) instead of one after another in this process")

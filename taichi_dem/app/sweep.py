@@ -452,7 +452,7 @@ def write_table(records: list[dict], out_dir: str, title: str, command: str) -> 
 
 # ------------------------------------------------------------------------------ CLI
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene")
+    p.add_argument("scene", help="the base scene file (TOML); each run changes keys of it")
     p.add_argument("--set", action="append", default=[], metavar="KEY=V1,V2,...", dest="sets",
                    help="a dotted scene key and its values, e.g. interactions.0.friction=0.3,0.5 "
                         "(repeat for more keys: their cross product is run)")
@@ -471,7 +471,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=int, metavar="N", help="LocalCluster workers (default: cores)")
     p.add_argument("--threads", type=int, metavar="N",
                    help="CPU threads per run (default cores / workers, at least 1)")
-    p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"])
+    p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"],
+                   help="where the kernels run: cpu, or a GPU backend (gpu picks one; default cpu)")
     p.add_argument("--timeout", type=float, metavar="S", help="wall-clock limit per run, s")
     p.add_argument("--quiet", action="store_true", help="no progress output")
 

@@ -455,7 +455,7 @@ def plot(out_dir: str, ref: Row, rows: list[Row], scatter: dict, tolerance: floa
 
 # ------------------------------------------------------------------------------ CLI
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene")
+    p.add_argument("scene", help="the scene file (TOML) whose knobs are measured")
     p.add_argument("--knobs", nargs="+", metavar="KNOB",
                    help=f"knobs to vary (default all): {', '.join(KNOB_NAMES)}")
     p.add_argument("--out", default="tradeoffs", help="directory (default tradeoffs)")
@@ -468,12 +468,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "the scene reports, e.g. drum/axial_torque particles/kinetic_energy)")
     p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
                    help=f"relative error a recommended setting may have (default {DEFAULT_TOLERANCE})")
-    p.add_argument("--scheduler", metavar="tcp://HOST:PORT")
-    p.add_argument("--workers", type=int, metavar="N")
-    p.add_argument("--threads", type=int, metavar="N")
-    p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"])
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                   help="an existing Dask scheduler (default: a LocalCluster on this machine)")
+    p.add_argument("--workers", type=int, metavar="N", help="LocalCluster workers (default: cores)")
+    p.add_argument("--threads", type=int, metavar="N", help="CPU threads per run (default cores / workers, at least 1)")
+    p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"],
+                   help="where the kernels run: cpu, or a GPU backend (gpu picks one; default cpu)")
     p.add_argument("--timeout", type=float, metavar="S", help="wall-clock limit per run, s")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
 
 
 def run_tradeoffs(scene_path: str, out_dir: str, knobs: list[str], seeds: int,

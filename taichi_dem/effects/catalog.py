@@ -7,7 +7,7 @@ the Section a ``reader`` (the loader then keeps the result in ``Scene.settings``
 [gas] and [mobility] predate that and keep their own Scene fields (``scene.thermal``,
 ``scene.drag``, ``scene.mobility``), read by the loader in a fixed order (drag after thermal).
 """
-from thermal import settings as thermal_settings  # noqa: F401
+from taichi_dem.thermal import settings as thermal_settings  # noqa: F401
 
 from .drag import settings as drag_settings  # noqa: F401
 from .mobility import settings as mobility_settings  # noqa: F401

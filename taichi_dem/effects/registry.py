@@ -46,7 +46,7 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
         effects.extend(getattr(importlib.import_module(module), function)(scene, settings))
     if scene.thermal is not None:
         # the thermal package registers its effects here, and only here
-        from thermal.effects import thermal_effects
+        from taichi_dem.thermal.effects import thermal_effects
         effects.extend(thermal_effects(scene))
     for f in scene.factories:
         effects.append(Effect(f"factory '{f.name}': {f.material} at "

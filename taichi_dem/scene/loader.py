@@ -18,7 +18,7 @@ import re
 import tomllib
 from pathlib import Path
 
-from thermal.settings import parse_thermal
+from taichi_dem.thermal.settings import parse_thermal
 
 from ..effects.drag.settings import parse as parse_drag
 from ..effects.mobility.settings import parse as parse_mobility

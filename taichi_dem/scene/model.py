@@ -13,7 +13,7 @@ from typing import Optional
 import numpy as np
 
 # the effects' own settings, declared with their keys where the effect lives
-from thermal.settings import GasSettings, ThermalSettings  # noqa: F401
+from taichi_dem.thermal.settings import GasSettings, ThermalSettings  # noqa: F401
 from ..effects.drag.settings import DragSettings  # noqa: F401
 from ..effects.mobility.settings import MobilitySettings  # noqa: F401
 

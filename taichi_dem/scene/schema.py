@@ -15,7 +15,7 @@ import json
 import math
 from typing import Any
 
-from geometry.builders import BUILDERS, COMMON, KINDS as BUILDER_KINDS, REQUIRED as BUILDER_REQUIRED
+from taichi_dem.geometry.builders import BUILDERS, COMMON, KINDS as BUILDER_KINDS, REQUIRED as BUILDER_REQUIRED
 
 from .keys import REQUIRED, Key, Section, effect_sections, registered
 from .units import DIMENSIONS, units_for

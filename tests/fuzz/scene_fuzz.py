@@ -39,11 +39,11 @@ ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from geometry.builders import BUILDERS, COMMON, REQUIRED  # noqa: E402
+from taichi_dem.geometry.builders import BUILDERS, COMMON, REQUIRED  # noqa: E402
 from taichi_dem.scene import loader as _loader  # noqa: E402
 from taichi_dem.scene.keys import registered as _registered  # noqa: E402
 from taichi_dem.scene.sections.regions import CYLINDER as _CYLINDER  # noqa: E402
-from thermal.settings import PLUG_FLOW_REQUIRED as _PLUG_FLOW_REQUIRED  # noqa: E402
+from taichi_dem.thermal.settings import PLUG_FLOW_REQUIRED as _PLUG_FLOW_REQUIRED  # noqa: E402
 
 CATEGORIES = ("wrong_type", "missing_key", "bad_number", "wrong_unit", "unknown_key",
               "bad_choice", "bad_name", "empty_region", "absurd_size", "overfull", "broken_mesh",

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from thermal import correlations as c
+from taichi_dem.thermal import correlations as c
 
 GLASS_BED = dict(density=1500.0, heat_capacity=800.0, conductivity=0.165)
 D, K_G = 2e-3, 0.0262

@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from geometry.gaps import radial_gap, surface_points
-from geometry import build
+from taichi_dem.geometry.gaps import radial_gap, surface_points
+from taichi_dem.geometry import build
 
 ROOT = Path(__file__).resolve().parents[2]
 

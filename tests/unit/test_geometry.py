@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-import geometry
-from geometry import BUILDERS, GeometryError, TriMesh, build, build_mesh, load_mesh
-from geometry.builders import default_segments, helicoid_area
+from taichi_dem import geometry
+from taichi_dem.geometry import BUILDERS, GeometryError, TriMesh, build, build_mesh, load_mesh
+from taichi_dem.geometry.builders import default_segments, helicoid_area
 
 
 def polygon_perimeter(r, n):

@@ -134,7 +134,7 @@ def test_rotate_axis_defaults_to_the_builder_axis():
 
 
 def test_list_of_meshes_merges_into_one_body():
-    import geometry
+    from taichi_dem import geometry
     a = {"builder": "paddle_shaft", "length": 3.0, "shaft_radius": 0.05, "start": 1.0,
          "rows": 4, "paddles_per_row": 2, "paddle_length": 0.2, "paddle_width": 0.1}
     b = {"builder": "screw", "length": 0.9, "shaft_radius": 0.05, "outer_radius": 0.25,
@@ -237,7 +237,7 @@ def test_rotate_needs_speed():
 
 
 def test_file_mesh_rotation_needs_an_axis(tmp_path):
-    import geometry
+    from taichi_dem import geometry
     import trimesh
     m = geometry.build("box", {"min": [0.0, -0.1, -0.1], "max": [0.5, 0.1, 0.1]})
     trimesh.Trimesh(m.vertices, m.faces, process=False).export(tmp_path / "part.stl")

@@ -449,7 +449,7 @@ def test_body_check_is_needed_for_that_fill():
 
 
 def test_body_check_with_a_built_mesh_and_file_fill(tmp_path):
-    import geometry
+    from taichi_dem import geometry
     m = geometry.build_mesh({"builder": "paddle_shaft", "length": 1.0, "shaft_radius": 0.05,
                              "rows": 3, "paddles_per_row": 2, "paddle_length": 0.15,
                              "paddle_width": 0.1})

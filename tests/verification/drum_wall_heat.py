@@ -166,7 +166,7 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
     rpm_mech = rpm * time_scale
     omega_mech = rpm_mech * 2.0 * math.pi / 60.0
     # a first guess of the wetted angle from the fill degree: 2 eps - sin 2 eps = 2 pi f
-    from thermal.correlations import wetted_angle_from_fill
+    from taichi_dem.thermal.correlations import wetted_angle_from_fill
     guess = wetted_angle_from_fill(fill)
     t_c_mech = guess / omega_mech
     startup = t_c_mech if startup is None else startup
@@ -261,12 +261,12 @@ def wall_particle_conductance(model, radius=1e-3, k_gas=0.0262, lens=0.2, min_ga
                               k_solid=GLASS["k"], temperature=333.15):
     """The DEM's gas-gap conductance (W/K) of one bead just touching the shell (thermal/
     gas_gap.py's reference quadrature; the contact spot adds ~1 % and is left out)."""
-    from thermal import gas_gap
+    from taichi_dem.thermal import gas_gap
     if model == "isothermal":
         return k_gas * gas_gap.plane_gap_integral_reference(radius, radius, lens, min_gap)
     if model == "schlunder":
-        from thermal import first_layer
-        from thermal.correlations import modified_mean_free_path
+        from taichi_dem.thermal import first_layer
+        from taichi_dem.thermal.correlations import modified_mean_free_path
         return k_gas * first_layer.widened_gap_integral_reference(
             radius, radius, first_layer.wall_reach(lens), modified_mean_free_path(temperature))
     if model == "voronoi":
@@ -282,7 +282,7 @@ def models(result, radius=1e-3, k_gas=0.0262, coverage=0.8):
     beads, Zehner-Bauer-Schlünder bed conductivity at the packed bed's porosity) and
     'dem_consistent' (the first-layer conductance of the DEM's own gas-gap law per projected
     area, the DEM's minimum gap as l + delta, the DEM's packed-bed conductivity)."""
-    from thermal import correlations as c
+    from taichi_dem.thermal import correlations as c
     from packed_bed import zehner_schlunder
     model = result["kwargs"].get("model", "solid_resistance") if "kwargs" in result else \
         result.get("model", "solid_resistance")

@@ -21,8 +21,8 @@ import math
 import numpy as np
 
 import taichi_dem
-from thermal.correlations import modified_mean_free_path
-from thermal.correlations import zehner_schlunder  # re-exported: drum_wall_heat.py imports it here
+from taichi_dem.thermal.correlations import modified_mean_free_path
+from taichi_dem.thermal.correlations import zehner_schlunder  # re-exported: drum_wall_heat.py imports it here
 
 MATERIALS = {
     # name: (density kg/m^3, real Young's modulus Pa, Poisson, conductivity W/(m K), c J/(kg K))

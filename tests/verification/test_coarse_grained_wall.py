@@ -26,8 +26,8 @@ import pytest
 
 import taichi_dem
 from taichi_dem.errors import SceneError
-from thermal import coarse_grained as cg
-from thermal import correlations
+from taichi_dem.thermal import coarse_grained as cg
+from taichi_dem.thermal import correlations
 
 R = 0.01
 RHO, C, K_S, K_G = 870.0, 800.0, 0.3, 0.04

@@ -98,8 +98,8 @@ def test_rolling_bed_rides_with_the_shell_and_keeps_its_beads(fill):
 
 @pytest.mark.slow
 def test_contact_part_is_between_the_first_layers_limits():
-    from thermal import correlations, first_layer
-    from thermal.particle_transient import conductance_ratio
+    from taichi_dem.thermal import correlations, first_layer
+    from taichi_dem.thermal.particle_transient import conductance_ratio
     free_path = correlations.modified_mean_free_path(333.15)
     _, ratio, _ = conductance_ratio(1e-3, GLASS["k"], GLASS["density"], GLASS["c"], 0.0262,
                                     free_path, first_layer.REACH)

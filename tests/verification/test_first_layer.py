@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 import taichi_dem
-from thermal import correlations, first_layer
-from thermal.particle_transient import FIRST_TIME, LAST_TIME, RATIO_TIMES, conductance_ratio
+from taichi_dem.thermal import correlations, first_layer
+from taichi_dem.thermal.particle_transient import FIRST_TIME, LAST_TIME, RATIO_TIMES, conductance_ratio
 
 R = 1e-3
 GLASS = dict(k=1.0, density=2500.0, c=840.0)
@@ -180,7 +180,7 @@ def _spot_scene(tmp_path, roughness):
 def test_rough_spot_is_the_asperities_in_series_with_the_hertz_spot(tmp_path):
     from taichi_dem.scene.model import Material
     from taichi_dem.setup.pair_tables import effective_youngs_modulus
-    from thermal.conduction import micro_coefficient, rough_contact_conductance_reference
+    from taichi_dem.thermal.conduction import micro_coefficient, rough_contact_conductance_reference
     out = {}
     for rough in (False, True):
         with taichi_dem.Simulation.from_text(_spot_scene(tmp_path, rough)) as sim:

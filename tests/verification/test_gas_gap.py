@@ -22,7 +22,7 @@ import pytest
 import taichi as ti
 
 from taichi_dem.engine import backend
-from thermal import gas_gap
+from taichi_dem.thermal import gas_gap
 
 
 class _Owner:

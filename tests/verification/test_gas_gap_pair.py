@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import taichi_dem
-from thermal import gas_gap
+from taichi_dem.thermal import gas_gap
 
 R = 0.01
 K_P, K_G = 0.3, 0.026

@@ -18,7 +18,7 @@ import pytest
 
 import taichi_dem
 import taichi_dem.run.simulation as simulation_module
-from thermal import gas_gap
+from taichi_dem.thermal import gas_gap
 
 from test_gas_gap_pair import _heat_flows, R
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import taichi_dem
-from thermal import gas_gap
+from taichi_dem.thermal import gas_gap
 
 R = 0.01
 K_P, K_W, K_G = 0.3, 45.0, 0.026

@@ -23,7 +23,7 @@ import math
 import numpy as np
 import pytest
 
-import geometry
+from taichi_dem import geometry
 import taichi_dem
 import dem_helpers as h
 

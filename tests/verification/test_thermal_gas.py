@@ -105,8 +105,8 @@ def test_plug_flow_profile_at_one_particle_temperature(tmp_path, monkeypatch, su
     """Both ways of summing per cell: per-block rows (CPU) and atomic adds (the GPU path,
     forced here on the CPU)."""
     if sums == "atomics":
-        import thermal.plug_flow
-        monkeypatch.setattr(thermal.plug_flow, "BLOCKS", 0)
+        from taichi_dem.thermal import plug_flow
+        monkeypatch.setattr(plug_flow, "BLOCKS", 0)
     tp = 350.0
     g_cell = 2 * _ranz_marshall_hA(MDOT / (AIR["density"] * AREA))
     ntu = g_cell / (MDOT * AIR["heat_capacity"])

@@ -115,7 +115,7 @@ class SurfaceSections:
 
     def parse_mesh(self, spec: Any, key: str):
         """Build (and validate) a body's ``mesh`` through :mod:`geometry`."""
-        import geometry
+        from taichi_dem import geometry
         try:
             mesh = geometry.build_mesh(spec, key=key, base_dir=self.base_dir)
             return mesh.validate(key)
@@ -177,7 +177,7 @@ class SurfaceSections:
     def builder_axis(self, spec: Any, key: str):
         """The placed +x axis ``(point, direction)`` of the first mesh of ``spec`` when a
         builder makes it, else None (an imported file has no axis of its own)."""
-        import geometry
+        from taichi_dem import geometry
         body_axis = getattr(geometry, "body_axis", None)
         first = spec[0] if isinstance(spec, list) and spec else spec
         if body_axis is None or not isinstance(first, dict) or "builder" not in first \
