@@ -3,6 +3,9 @@
 
     python3 tasks.py demo    create .venv, install taichi_dem, run the main demo
     python3 tasks.py test    create .venv, install taichi_dem with test extras, run the tests
+    python3 tasks.py docs    create .venv, install with test and docs extras, build the
+                             documentation into docs/_build/html (warnings are errors; the
+                             pages' executed examples run during the build)
     python3 tasks.py setup   only create .venv and install
 """
 import os
@@ -51,6 +54,15 @@ def main(argv):
             # tests/conftest.py makes slowest first (xdist's default goes by test count)
             run(PY, "-m", "pytest", "-q", "-n", "auto", "--dist", "loadfile",
                 "--no-loadscope-reorder", *argv[2:])
+        elif task == "docs":
+            setup("test,docs")
+            # the reference pages are generated and the {exec-python} examples run while
+            # Sphinx reads the pages (docs/_ext/); -W: a warning (a broken link, a page in no
+            # table of contents, an example that raises) fails the build
+            os.environ.setdefault("TI_OFFLINE_CACHE_FILE_PATH",
+                                  str(ROOT / "docs" / "_build" / "ticache"))
+            run(PY, "-m", "sphinx", "-W", "--keep-going", "-b", "html", "docs",
+                "docs/_build/html", *argv[2:])
         else:
             print(__doc__)
             return 2

@@ -10,7 +10,7 @@ docs/verification/drum_wall_heat.md for what was and was not checked).
 
 A wall element under the bed first sees the particles of the first layer (a contact
 resistance 1/alpha_WS), then, for the time t_c it stays covered, heat penetrates the bed as
-into a semi-infinite body of the bed's effective properties. In series (the simple form):
+into a semi-infinite body of the bed's effective properties. In series (the simple form)::
 
     1/alpha = 1/alpha_WS + 1/alpha_bed                                          [W/(m^2 K)]
 
@@ -25,7 +25,7 @@ into a semi-infinite body of the bed's effective properties. In series (the simp
 alpha_WP is the gas conductance of one isothermal sphere touching an isothermal plane, with the
 gap everywhere widened by l + delta, per projected area pi d^2/4 (integrate k_g 2 pi r dr /
 (R - sqrt(R^2 - r^2) + l + delta) over 0 < r < R); phi_A ~ 0.8 the surface coverage of the
-wall by the first layer; delta the surface roughness; l the modified mean free path of the gas
+wall by the first layer; delta the surface roughness; l the modified mean free path of the gas::
 
     l = 2 (2 - gamma)/gamma * Lambda,   Lambda = sqrt(2 pi R_u T / M) k_g / (p (2 c_p - R_u / M))
     log10(1/gamma - 1) = 0.6 - (1000 K / T + 1) / C_A,   C_A = 2.8 for air
@@ -159,7 +159,7 @@ def zehner_schlunder(k_solid: float, k_gas: float, porosity: float, free_path: f
     """Zehner-Bauer-Schlünder effective conductivity (W/(m K)) of a packed bed of spheres
     without radiation or flattening (VDI Heat Atlas D6.3), with the Smoluchowski effect when
     ``free_path`` l (m, Schlünder's modified mean free path) and the particle ``diameter`` d (m)
-    are given: kappa_G = k_G / k_g = 1 / (1 + l / d),
+    are given: kappa_G = k_G / k_g = 1 / (1 + l / d)::
 
         B = 1.25 ((1 - eps) / eps)^(10/9),  kappa = k_s / k_g
         N = (1 / kappa_G) (1 - B kappa_G / kappa) - B (1 / kappa_G - 1)

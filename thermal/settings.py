@@ -39,7 +39,7 @@ _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
 # the series the heat effects write besides the sensors' (taichi_dem/sensors/series.py)
 SERIES = (
     Series("particles/evaporated_mass", "kg", "drying: water evaporated so far"),
-    Series("gas/temperature", "K", "plug flow: the gas leaving each cell"),
+    Series("gas/temperature", "K", "plug flow: the gas leaving each cell", "(cells,)"),
     Series("gas/outlet_temperature", "K", "plug flow: the gas leaving the stream"),
     Series("gas/heat_flow", "W", "plug flow: from the gas to the particles"),
     Series("gas/transferred_heat", "J", "plug flow: from the gas to the particles so far"),

@@ -18,10 +18,30 @@ def _label(ds, name: str) -> None:
         ds.attrs["units"] = unit
 
 
+# the per-particle frame datasets, /frames/<k>/<name>: name -> (unit, shape, description);
+# N is the number of particles alive at the sample, in id order (the reference in docs/ is
+# generated from this declaration)
+FRAME_DATASETS = {
+    "id": ("1", "(N,)", "the particle's id (integer), ascending"),
+    "position": ("m", "(N, 3)", "centre position"),
+    "velocity": ("m/s", "(N, 3)", "translational velocity"),
+    "angular_velocity": ("rad/s", "(N, 3)", "angular velocity"),
+    "radius": ("m", "(N,)", "radius"),
+    "mass": ("kg", "(N,)", "mass"),
+    "temperature": ("K", "(N,)", "temperature; with [thermal] only"),
+    "moisture": ("1", "(N,)", "kg water per kg dry solid; with moisture only"),
+    "material": ("1", "(N,)", "material index, in the order of the scene's [materials]"),
+}
 # the units of the per-particle frame datasets and the residence records (CONTRACT.md)
-FRAME_UNITS = {"id": "1", "position": "m", "velocity": "m/s", "angular_velocity": "rad/s",
-               "radius": "m", "temperature": "K", "mass": "kg", "moisture": "1",
-               "material": "1"}
+FRAME_UNITS = {name: unit for name, (unit, _shape, _description) in FRAME_DATASETS.items()}
+# the results file's root attributes: name -> description (written by HDF5Recorder.__init__)
+ROOT_ATTRIBUTES = {
+    "taichi_dem_version": "the taichi_dem version that wrote the file",
+    "scene": "the scene file's text (TOML), as run",
+    "dt": "the time step, s",
+    "arch": "where the kernels ran (cpu, cuda, vulkan, metal)",
+    "precision": "floating-point precision of the state: f32 or f64",
+}
 RESIDENCE_UNITS = {"id": "1", "t_in": "s", "t_out": "s"}
 
 

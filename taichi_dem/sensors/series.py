@@ -15,10 +15,13 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class Series:
-    """One series: its name pattern, its SI unit ("1": a count or a ratio) and what it is."""
+    """One series: its name pattern, its SI unit ("1": a count or a ratio), what it is and
+    the shape of one sample ("": a number; "(3,)": a vector; the dataset adds the samples
+    axis in front)."""
     name: str
     unit: str
     description: str
+    shape: str = ""
 
 
 SERIES = (
@@ -33,15 +36,15 @@ SERIES = (
            "while no particle is inside"),
     Series("particles/mean_moisture", "1", "kg water per kg dry solid, mean; NaN while no "
            "particle is inside"),
-    Series("bodies/*/force", "N", "on the body from the particles"),
-    Series("bodies/*/torque", "N m", "about the body's rotation axis point"),
+    Series("bodies/*/force", "N", "on the body from the particles", "(3,)"),
+    Series("bodies/*/torque", "N m", "about the body's rotation axis point", "(3,)"),
     Series("bodies/*/axial_torque", "N m", "the component along its rotation axis"),
     Series("bodies/*/angular_speed", "rad/s", "its prescribed angular speed"),
     Series("bodies/*/power", "W", "drive power, -axial_torque x angular_speed"),
     Series("bodies/*/heat_flow", "W", "into the body (an isothermal body)"),
     Series("bodies/*/covered_area", "m^2", "the area of its triangles the particles touch"),
     Series("bodies/*/heat_transfer_coefficient", "W/(m^2 K)", "wall to bed"),
-    Series("walls/*/force", "N", "on the wall from the particles"),
+    Series("walls/*/force", "N", "on the wall from the particles", "(3,)"),
     Series("walls/*/heat_flow", "W", "into the wall (an isothermal wall)"),
     Series("sensors/*/mass_flow", "kg/s", "through the sensor's plane over the interval"),
     Series("sensors/*/crossings", "1", "particles that crossed the plane in the interval"),

@@ -27,7 +27,8 @@ SECTION = register(Section("gas", "A gas that drags the particles (one-way coupl
 # the series this effect writes (sensors/series.py)
 from ...sensors.series import Series  # noqa: E402
 
-SERIES = (Series("gas/drag_force", "N", "the gas's pull on all particles in the last step"),)
+SERIES = (Series("gas/drag_force", "N", "the gas's pull on all particles in the last step",
+                 "(3,)"),)
 
 
 @dataclass(frozen=True)
