@@ -116,8 +116,9 @@ def reference_temperature(scene, material: str) -> float:
     are filled or fed at."""
     hot = [w.temperature for w in list(scene.walls) + list(scene.bodies)
            if w.temperature is not None]
-    fed = [f.temperature for f in list(scene.fills) + list(scene.factories)
-           if f.material == material and f.temperature is not None]
+    fed = [getattr(f, "hottest_temperature", f.temperature)
+           for f in list(scene.fills) + list(scene.factories) if f.material == material]
+    fed = [t for t in fed if t is not None]
     wall = sum(hot) / len(hot)
     return 0.5 * (wall + (max(fed) if fed else wall))
 

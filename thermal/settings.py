@@ -244,7 +244,9 @@ def parse_thermal(value: Any, ctx, fills, walls, bodies) -> ThermalSettings:
             raise SceneError(file, f"{key}.{k}", "given but radiation is off; set radiation = true")
     if kw.get("radiation"):
         kw.update(parse_radiation(t, ctx, key, kw.get("gas"), fills, walls, bodies))
-    kw["moisture"] = any(f.moisture is not None for f in fills)
+    # the sources' moisture (fills and factories), or a fill's particles' from a results file
+    kw["moisture"] = any(f.moisture is not None or (getattr(f, "moistures", None) is not None
+                                                    and f.moistures.any()) for f in fills)
     kw.update(THERMAL.read(t, file, key, only=("evaporation_temperature", "latent_heat",
                                                "water_heat_capacity", "gas_gap")))
     if "time_scale" in t:
@@ -301,8 +303,10 @@ def parse_thermal(value: Any, ctx, fills, walls, bodies) -> ThermalSettings:
             if getattr(mat, k) is None:
                 raise SceneError(file, f"materials.{f.material}.{k}",
                                  f"required when [thermal] is present (particles of '{f.material}')")
-        if f.temperature is None:
-            raise SceneError(file, f"{f.key}.temperature", "required when [thermal] is present")
+        if f.temperature is None and getattr(f, "temperatures", None) is None:
+            raise SceneError(file, f"{f.key}.temperature", "required when [thermal] is present"
+                             + (" (the results file's frame has no temperatures)"
+                                if getattr(f, "frame", None) is not None else ""))
     if settings.wall_conduction:
         for w in list(walls) + list(bodies):
             if w.temperature is not None and ctx.materials[w.material].thermal_conductivity is None:

@@ -405,6 +405,10 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
     # beside the results, or in --out DIR (CONTRACT.md); also where a divergence leaves the
     # last good state
     sim.checkpointer.path = default_path(scene, h5, args.out)
+    if summary is None and (scene.factories or scene.outlets or scene.sensors):
+        # a process scene of the user's own gets the engineer's numbers the process demos print
+        from .summaries import process_summary
+        summary = process_summary
     return _drive(sim, args, scene_path, rrd, h5, t0, summary, setup)
 
 
@@ -477,6 +481,9 @@ def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> in
                 return _fail(str(err), 2)
         else:
             sim.run(until, progress=not args.quiet)
+        # a sample at the run's last instant: the report below reads the final state and the
+        # series, which must describe the same moment (the last regular sample may be earlier)
+        sim.sample_now()
     except DivergenceError as err:
         sim.close()
         return _fail(str(err), 3)
@@ -504,12 +511,9 @@ def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> in
     for w in scene.walls:
         f = s[f"walls/{w.name}/force"][-1]
         print(f"wall {w.name}: force [{f[0]:.4g}, {f[1]:.4g}, {f[2]:.4g}] N")
-    for b in scene.bodies:
-        half = max(len(s["time"]) // 2, 1)
-        tq = s[f"bodies/{b.name}/axial_torque"][half:]
-        pw = s[f"bodies/{b.name}/power"][half:]
-        print(f"body {b.name}: axial torque {np.mean(tq):.4g} N m, drive power {np.mean(pw):.4g} W "
-              f"(means over the second half of the run)")
+    # one torque per body, over the window every summary figure uses (the last quarter)
+    from .summaries import body_torque_lines
+    body_torque_lines(sim)
     if summary:
         summary(sim)
     if h5:

@@ -84,6 +84,10 @@ def export_frame(h5_path, index: int, out) -> int:
         order = [n for n in ("id", "position", "velocity", "angular_velocity", "radius",
                              "temperature", "mass", "moisture", "material") if n in frame]
         order += [n for n in frame if n not in order]
+        # per-particle datasets only (a frame's bodies/ group holds the bodies' poses)
+        count = frame["id"].shape[0] if "id" in frame else None
+        order = [n for n in order if isinstance(frame[n], h5py.Dataset)
+                 and (count is None or (frame[n].shape and frame[n].shape[0] == count))]
         header, columns = _columns(frame, order)
     out.write(f"# frame {keys[index]}, time {time!r} s\n")
     writer = csv.writer(out)

@@ -12,6 +12,42 @@ def _tail(a: np.ndarray, frac: float = 0.25) -> np.ndarray:
     return a[-max(1, int(len(a) * frac)):]
 
 
+def window_of(t: np.ndarray, frac: float = 0.25) -> tuple[float, float]:
+    """(start, end) in s of the simulated time the last ``frac`` of the samples cover: each
+    sample stands for the interval that ends at it, so the window opens at the sample before
+    the tail (at 0 when the tail is every sample)."""
+    t = np.asarray(t, float)
+    n = max(1, int(len(t) * frac))
+    return (float(t[-n - 1]) if len(t) > n else 0.0), float(t[-1])
+
+
+def window_words(t: np.ndarray, frac: float = 0.25) -> str:
+    """"mean over t = a - b s": the label every time-averaged figure of a summary carries."""
+    a, b = window_of(t, frac)
+    return f"mean over t = {a:.4g} - {b:.4g} s"
+
+
+def body_torque_lines(sim, frac: float = 0.25) -> dict:
+    """Print one line per body: its mean axial torque (N m) and drive power (W; 0 for a body at
+    rest, whose torque is the load its mounting takes) over
+    the last ``frac`` of the samples (the window every summary figure uses); return them as
+    {"<body>/axial_torque": N m, "<body>/power": W}."""
+    s = sim.series
+    out: dict = {}
+    if not len(s.get("time", ())):
+        return out
+    words = window_words(s["time"], frac)
+    for b in sim.scene.bodies:
+        if f"bodies/{b.name}/axial_torque" not in s:
+            continue
+        tq = float(np.mean(_tail(s[f"bodies/{b.name}/axial_torque"], frac)))
+        pw = float(np.mean(_tail(s[f"bodies/{b.name}/power"], frac)))
+        out[f"{b.name}/axial_torque"] = tq
+        out[f"{b.name}/power"] = pw
+        print(f"body {b.name}: axial torque {tq:.4g} N m, drive power {pw:.4g} W ({words})")
+    return out
+
+
 def process_summary(sim, window: float = 0.25) -> dict:
     """Print and return the key numbers of a run: per body the mean axial torque (N m) and
     drive power (W) over the last ``window`` fraction of the run; per residence sensor the
@@ -21,16 +57,16 @@ def process_summary(sim, window: float = 0.25) -> dict:
     s = sim.series
     out: dict = {}
     t = s["time"]
-    span = t[-1] - _tail(t, window)[0]
+    start, end = window_of(t, window)
+    span = end - start
+    words = window_words(t, window)
+    # the bodies' torque and power: computed here by the same window, printed once per body
+    # by the run report (cli._drive: body_torque_lines), so no body has two torques
     for b in sim.scene.bodies:
         if b.motion.speed is None:
             continue
-        tq = float(np.mean(_tail(s[f"bodies/{b.name}/axial_torque"], window)))
-        pw = float(np.mean(_tail(s[f"bodies/{b.name}/power"], window)))
-        out[f"{b.name}/axial_torque"] = tq
-        out[f"{b.name}/power"] = pw
-        print(f"summary: {b.name}: axial torque {tq:.4g} N m, drive power {pw:.4g} W "
-              f"(mean of the last {span:.3g} s)")
+        out[f"{b.name}/axial_torque"] = float(np.mean(_tail(s[f"bodies/{b.name}/axial_torque"], window)))
+        out[f"{b.name}/power"] = float(np.mean(_tail(s[f"bodies/{b.name}/power"], window)))
     for x in sim.scene.sensors:
         if x.kind == "residence_time":
             rec = sim.residence_times(x.name)
@@ -48,17 +84,17 @@ def process_summary(sim, window: float = 0.25) -> dict:
             mf = float(np.mean(_tail(s[f"sensors/{x.name}/mass_flow"], window)))
             out[f"{x.name}/mass_flow"] = mf
             print(f"summary: mass flow through '{x.name}': {mf * 3.6:.3g} t/h "
-                  f"(mean of the last {span:.3g} s)")
+                  f"({words})")
         elif x.kind == "contact_count":
             cc = float(np.mean(_tail(s[f"sensors/{x.name}/contact_count"], window)))
             out[f"{x.name}/contact_count"] = cc
-            print(f"summary: particles touching '{x.body}': {cc:.4g} (mean of the last {span:.3g} s)")
+            print(f"summary: particles touching '{x.body}': {cc:.4g} ({words})")
     for o in sim.scene.outlets:
         p = f"outlets/{o.name}/"
         flow = float(np.mean(_tail(s[p + "mass_flow"], window)))
         out[f"{o.name}/mass_flow"] = flow
-        line = (f"summary: outlet '{o.name}': {s[p + 'mass'][-1]:.4g} kg removed, "
-                f"{flow * 3.6:.3g} t/h over the last {span:.3g} s")
+        line = (f"summary: outlet '{o.name}': {s[p + 'mass'][-1]:.4g} kg removed by t = {end:.4g} s, "
+                f"{flow * 3.6:.3g} t/h ({words})")
         if p + "mean_temperature" in s:
             temps = _tail(s[p + "mean_temperature"], window)
             flows = _tail(s[p + "mass_flow"], window)
@@ -81,11 +117,14 @@ def process_summary(sim, window: float = 0.25) -> dict:
         q = float(np.mean(_tail(s["gas/heat_flow"], window)))
         out["gas/outlet_temperature"] = tg
         print(f"summary: gas leaves at {tg:.4g} K ({tg - 273.15:.4g} C), giving the solids "
-              f"{q / 1e3:.3g} kW (mean of the last {span:.3g} s)")
+              f"{q / 1e3:.3g} kW ({words})")
     if "particles/evaporated_mass" in s:
         ev = s["particles/evaporated_mass"]
-        rate = (ev[-1] - _tail(ev, window)[0]) / span if span > 0 else 0.0
-        print(f"summary: water evaporated: {ev[-1]:.4g} kg in all, {rate * 3.6:.3g} t/h lately")
+        n = len(_tail(ev, window))
+        before = float(ev[-n - 1]) if len(ev) > n else 0.0      # at the window's start
+        rate = (ev[-1] - before) / span if span > 0 else 0.0
+        print(f"summary: water evaporated: {ev[-1]:.4g} kg by t = {end:.4g} s, {rate * 3.6:.3g} t/h "
+              f"({words})")
     if "thermal/particle_heat_loss" in s and len(s["time"]) > 1:
         loss = float(s["thermal/particle_heat_loss"][-1])
         walls = float(s["thermal/wall_heat"][-1])
@@ -120,12 +159,12 @@ def process_summary(sim, window: float = 0.25) -> dict:
                     print(f"summary: {b.name}: {q:.4g} W into it, wall-to-bed heat transfer "
                           f"coefficient {mean_h:.4g} W/(m^2 K) over "
                           f"{float(np.mean(_tail(s[f'bodies/{b.name}/covered_area'], window))):.3g} "
-                          f"m^2 covered (mean of the last {span:.3g} s)")
+                          f"m^2 covered ({words})")
     for f in sim.scene.factories:
         fed = float(s[f"factories/{f.name}/mass"][-1])
         behind = float(s[f"factories/{f.name}/behind"][-1])
         out[f"{f.name}/fed"] = fed
-        print(f"summary: factory '{f.name}': {fed:.4g} kg fed"
+        print(f"summary: factory '{f.name}': {fed:.4g} kg fed by t = {end:.4g} s"
               + (f", {behind:.4g} kg behind schedule (the inlet chokes)" if behind > 0.01 * max(fed, 1e-30) else ""))
     if sim.factories is not None and sim.wall_seconds > 0:
         print(f"summary: factories placed and inserted particles in "

@@ -250,6 +250,7 @@ def _run_here(run_dir: str) -> int:
     sim.after_sample.append(after_sample)
     try:
         sim.run(spec["until"])
+        sim.sample_now()         # as `taichi-dem run`: the results end at the run's last instant
     except DivergenceError as err:
         sim.close()
         print(f"taichi-dem: {err}", file=sys.stderr)

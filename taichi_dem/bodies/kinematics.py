@@ -62,6 +62,15 @@ class BodyKinematics:
                 row = r
         return row[2] + row[1] * (time - row[0])
 
+    def pose(self, k: int, time: float) -> tuple[np.ndarray, np.ndarray]:
+        """(R, T) of body k at ``time``: a vertex given at x0 in the scene is at R x0 + T (R a
+        3x3 rotation, T in m): the turn by its angle about its axis, then its translation."""
+        m = self.bodies[k].motion
+        axis = np.asarray(m.axis_direction, float)
+        point = np.asarray(m.axis_point, float)
+        rot = rotation_matrix(axis, self.angle(k, time))
+        return rot, point - rot @ point + np.asarray(m.velocity, float) * time
+
     def set_speed(self, k: int, time: float, speed: float):
         """From ``time`` on, body k turns at ``speed`` rad/s (later scheduled points dropped)."""
         rows = [r for r in self.schedules[k] if r[0] < time]

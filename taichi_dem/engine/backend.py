@@ -102,7 +102,11 @@ def acquire(owner, arch: str = "cpu", precision: str = "f32", threads: int | Non
         clear_stale_cache_lock()
         frontend.apply()
         kwargs = dict(arch=_ARCHES[arch](), default_fp=real_type(precision), default_ip=ti.i32,
-                      log_level=ti.WARN, offline_cache=True)
+                      log_level=ti.WARN, offline_cache=True,
+                      # the state transfer (transfer.py) unrolls over the fields on purpose:
+                      # one kernel copies them all; without this Taichi warns on every scene
+                      # with more than 32 fields (a SyntaxWarning on the user's stderr)
+                      unrolling_limit=0)
         if threads:
             kwargs["cpu_max_num_threads"] = threads
         ti.init(**kwargs)

@@ -30,7 +30,19 @@ FRAME_DATASETS = {
     "mass": ("kg", "(N,)", "mass"),
     "temperature": ("K", "(N,)", "temperature; with [thermal] only"),
     "moisture": ("1", "(N,)", "kg water per kg dry solid; with moisture only"),
-    "material": ("1", "(N,)", "material index, in the order of the scene's [materials]"),
+    "material": ("1", "(N,)", "material index: the position of its name in the root attribute "
+                              "materials"),
+}
+# each body's pose in a frame, /frames/<k>/bodies/<name>/<dataset>, and its mesh as the scene
+# gives it, /bodies/<name>/<dataset>: name -> (unit, shape, description); V vertices, F faces
+FRAME_BODY_DATASETS = {
+    "rotation": ("1", "(3, 3)", "R of the pose: a vertex given at x0 in the scene is at R x0 + T"),
+    "translation": ("m", "(3,)", "T of the pose"),
+    "vertices": ("m", "(V, 3)", "the vertices at this pose (bodies that move only)"),
+}
+BODY_DATASETS = {
+    "vertices": ("m", "(V, 3)", "the mesh's vertices as the scene gives them (t = 0)"),
+    "faces": ("1", "(F, 3)", "triangles as vertex indices"),
 }
 # the units of the per-particle frame datasets and the residence records (CONTRACT.md)
 FRAME_UNITS = {name: unit for name, (unit, _shape, _description) in FRAME_DATASETS.items()}
@@ -41,8 +53,15 @@ ROOT_ATTRIBUTES = {
     "dt": "the time step, s",
     "arch": "where the kernels ran (cpu, cuda, vulkan, metal)",
     "precision": "floating-point precision of the state: f32 or f64",
+    "materials": "the material names, in the order of the frames' material index",
 }
 RESIDENCE_UNITS = {"id": "1", "t_in": "s", "t_out": "s"}
+
+
+def moves(body) -> bool:
+    """Whether a body turns or translates (its frames then carry its posed vertices)."""
+    m = body.motion
+    return m.speed is not None or bool(np.any(np.asarray(m.velocity, float) != 0.0))
 
 
 class HDF5Recorder:
@@ -116,7 +135,32 @@ class HDF5Recorder:
             ds.resize(n + len(records), axis=0)
             ds[n:] = records[:, col].astype(dtype)
 
-    def append_frame(self, time: float, arrays: dict[str, np.ndarray]):
+    def write_bodies(self, bodies, materials=()) -> None:
+        """The bodies' meshes as the scene gives them (t = 0): /bodies/<name>/vertices (V, 3; m)
+        and faces (F, 3; vertex indices), with the axis they turn about as attributes; and the
+        material names (root attribute ``materials``, in the order of the frames' ``material``
+        index). Written once; a continued file keeps what it has."""
+        if len(materials) and "materials" not in self.file.attrs:
+            self.file.attrs["materials"] = [str(m) for m in materials]
+        if "bodies" in self.file or not bodies:
+            return
+        group = self.file.create_group("bodies")
+        for body in bodies:
+            g = group.create_group(body.name)
+            g.create_dataset("vertices", data=np.asarray(body.vertices, np.float64))
+            g.create_dataset("faces", data=np.asarray(body.faces, np.int32))
+            for key in g:
+                g[key].attrs["units"] = BODY_DATASETS[key][0]
+            g.attrs["axis_point"] = np.asarray(body.motion.axis_point, float)
+            g.attrs["axis_direction"] = np.asarray(body.motion.axis_direction, float)
+            g.attrs["moves"] = moves(body)
+
+    def append_frame(self, time: float, arrays: dict[str, np.ndarray],
+                     poses: dict[str, tuple[np.ndarray, np.ndarray]] | None = None):
+        """One frame: per-particle ``arrays`` (/frames/<k>/<name>) and each body's pose
+        (/frames/<k>/bodies/<name>/rotation (3, 3) and translation (3,; m): a scene vertex x0 is
+        at rotation @ x0 + translation), with, for a body that moves, its vertices at that
+        pose (V, 3; m) so a viewer draws it without computing."""
         g = self.frames.create_group(str(self.frame_count))
         g.attrs["time"] = time
         g.attrs["time_units"] = "s"
@@ -124,6 +168,18 @@ class HDF5Recorder:
             ds = g.create_dataset(name, data=arr)
             if name in FRAME_UNITS:
                 ds.attrs["units"] = FRAME_UNITS[name]
+        if poses:
+            posed = g.create_group("bodies")
+            meshes = self.file.get("bodies")
+            for name, (rotation, translation) in poses.items():
+                b = posed.create_group(name)
+                b.create_dataset("rotation", data=np.asarray(rotation, np.float64))
+                b.create_dataset("translation", data=np.asarray(translation, np.float64))
+                if meshes is not None and name in meshes and meshes[name].attrs.get("moves"):
+                    x0 = meshes[name]["vertices"][()]
+                    b.create_dataset("vertices", data=x0 @ np.asarray(rotation).T + translation)
+                for key in b:
+                    b[key].attrs["units"] = FRAME_BODY_DATASETS[key][0]
         self.frame_count += 1
 
     def flush(self):

@@ -6,8 +6,11 @@ The XDMF file holds no data: it describes each /frames/<k> group of the HDF5 fil
 N points (Polyvertex topology, the ``position`` dataset as XYZ geometry) at the frame's time,
 with every other per-particle dataset as a point attribute (scalars: temperature, radius, mass,
 moisture, material, id; 3-vectors: velocity, angular_velocity), named with its unit
-("temperature [K]"). The data stay in the HDF5 file, referenced by its name relative to the
-XDMF file: keep the two side by side. Standard library XML and h5py only.
+("temperature [K]"). A file with bodies (/bodies/<name>: the meshes) gets, at each time, a
+spatial collection of the particles' grid and one triangle grid per body at its pose: the posed
+vertices of the frame for a body that moves, the scene's vertices for one that does not. The
+data stay in the HDF5 file, referenced by its name relative to the XDMF file: keep the two side
+by side. Standard library XML and h5py only.
 """
 from __future__ import annotations
 
@@ -31,6 +34,20 @@ def _data_item(parent, h5_name: str, path: str, dataset) -> None:
     item.text = f"{h5_name}:{path}"
 
 
+def _body_grid(parent, h5_name: str, f, name: str, key: str) -> None:
+    """A triangle grid for body ``name`` in frame ``key``: its posed vertices when the frame
+    has them (a body that moves), else the scene's."""
+    posed = f"frames/{key}/bodies/{name}/vertices"
+    vertices = posed if posed in f else f"bodies/{name}/vertices"
+    faces = f[f"bodies/{name}/faces"]
+    grid = ET.SubElement(parent, "Grid", Name=name, GridType="Uniform")
+    topology = ET.SubElement(grid, "Topology", TopologyType="Triangle",
+                             NumberOfElements=str(faces.shape[0]))
+    _data_item(topology, h5_name, f"/bodies/{name}/faces", faces)
+    geometry = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
+    _data_item(geometry, h5_name, "/" + vertices, f[vertices])
+
+
 def write_xdmf(h5_path, xdmf_path=None) -> tuple[Path, int]:
     """Write the XDMF description of ``h5_path``'s frames (default: beside it, same stem,
     ``.xdmf``); returns (its path, the frames described)."""
@@ -47,7 +64,7 @@ def write_xdmf(h5_path, xdmf_path=None) -> tuple[Path, int]:
     with h5py.File(h5_path, "r") as f:
         if "frames" not in f or not len(f["frames"]):
             raise SceneError(str(h5_path), "frames", "the results file holds no particle frames "
-                                                     "(set [output] frames, or a frame interval)")
+                                                     "(a run writes them when it has an HDF5 results file)")
         keys = sorted(f["frames"], key=int)
         for key in keys:
             frame = f["frames"][key]
@@ -55,15 +72,26 @@ def write_xdmf(h5_path, xdmf_path=None) -> tuple[Path, int]:
                 raise SceneError(str(h5_path), f"frames/{key}/position", "missing: a frame "
                                                                          "needs the positions")
             count = frame["position"].shape[0]
-            grid = ET.SubElement(series, "Grid", Name=f"frame {key}", GridType="Uniform")
-            ET.SubElement(grid, "Time", Value=repr(float(frame.attrs.get("time", float(key)))))
+            time = repr(float(frame.attrs.get("time", float(key))))
+            meshes = f["bodies"] if "bodies" in f else None
+            if meshes is None:
+                grid = ET.SubElement(series, "Grid", Name=f"frame {key}", GridType="Uniform")
+                ET.SubElement(grid, "Time", Value=time)
+            else:
+                at = ET.SubElement(series, "Grid", Name=f"frame {key}", GridType="Collection",
+                                   CollectionType="Spatial")
+                ET.SubElement(at, "Time", Value=time)
+                for name in sorted(meshes):
+                    _body_grid(at, h5_name, f, name, key)
+                grid = ET.SubElement(at, "Grid", Name="particles", GridType="Uniform")
             ET.SubElement(grid, "Topology", TopologyType="Polyvertex",
                           NumberOfElements=str(count), NodesPerElement="1")
             geometry = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
             _data_item(geometry, h5_name, f"/frames/{key}/position", frame["position"])
             for name in sorted(frame):
                 data = frame[name]
-                if name == "position" or not data.shape or data.shape[0] != count:
+                if name == "position" or not hasattr(data, "shape") or not data.shape \
+                        or data.shape[0] != count:
                     continue
                 if data.ndim == 1:
                     kind = "Scalar"

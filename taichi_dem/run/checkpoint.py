@@ -57,7 +57,7 @@ KEEP_LAST_GOOD = False
 # host attributes saved and restored by name, (owner, attribute); a missing one is skipped
 HOST_ATTRIBUTES = (
     ("sim", "time"), ("sim", "step_count"), ("sim", "_warned_thermal"), ("sim", "_warned_speed"),
-    ("sim", "_last_sample_time"),
+    ("sim", "_last_sample_time"), ("sim", "_next_frame_time"),
     ("engine", "time"), ("engine", "count"),
     ("broadphase", "rebuilds"), ("broadphase", "entries"),
     ("mesh", "binned_time"), ("mesh", "interval_steps"),
@@ -376,6 +376,7 @@ def resume(path: str, *, build, arch: Optional[str] = None, threads: Optional[in
         sim.recorder = HDF5Recorder.continue_at(h5, sim.time, sim.dt, sim._series,
                                                 scene_text=scene.text, arch=sim.arch,
                                                 precision=sim.precision)
+        sim.recorder.write_bodies(scene.bodies, sim.tables.names)
     return sim
 
 

@@ -209,6 +209,9 @@ class Simulation:
         self.time = 0.0
         self._last_sample_time = 0.0
         self.output_every = max(1, int(round(scene.output.interval / self.dt)))
+        # the simulated time from which the next sample writes a particle frame ([output]
+        # frame_interval; every sample without it)
+        self._next_frame_time = 0.0
         self.factories = None
         self.accounts = None
         if scene.factories:
@@ -235,6 +238,7 @@ class Simulation:
             from ..recorders.hdf5 import HDF5Recorder
             self.recorder = HDF5Recorder(h5, scene_text=scene.text, dt=self.dt, arch=arch,
                                          precision=self.precision)
+            self.recorder.write_bodies(scene.bodies, self.tables.names)
         self.wall_seconds = 0.0
         # What runs at every output sample besides the sensors, in order (_sample): ``checks``,
         # check(measured) before anything is taken from the state (may raise DivergenceError);
@@ -302,7 +306,10 @@ class Simulation:
             if self.engine.moisture:
                 # X per particle from its fill (dry where the fill gives none); the water's heat
                 # capacity counts in the thermal mass m (c + X c_w)
-                x = np.array([f.moisture or 0.0 for f in self.scene.fills])[placed.fill] \
+                x = np.concatenate([np.asarray(f.moistures, float)
+                                    if f.moisture is None and f.moistures is not None
+                                    else np.full(np.count_nonzero(placed.fill == i), f.moisture or 0.0)
+                                    for i, f in enumerate(self.scene.fills)]) \
                     if len(self.scene.fills) else np.zeros(n)
                 arrays["moisture"] = x
                 thermal_mass = mass * (heat_capacity + x * self.scene.thermal.water_heat_capacity)
@@ -396,8 +403,43 @@ class Simulation:
             print(file=sys.stderr)
         self.progress_particle_steps = particle_steps
 
+    def sample_now(self) -> bool:
+        """Take an output sample at the current time unless the last one was taken here (True
+        when it took one). Samples fall every ``output_every`` steps; a run that stops between
+        two (``end_time`` not a whole number of sample steps: 70 s at dt 1.2e-4 s and a 0.5 s
+        interval ends 4,166 steps after its last regular sample) closes with this one, so its
+        series, frames and summary describe the same instant as the final state. Its interval
+        is the shorter time since the previous sample (the sensors' rates use it)."""
+        self._check_alive()
+        if self.time <= self._last_sample_time + 0.5 * self.dt:
+            return False
+        self._sample(frame=True)
+        return True
+
+    def body_poses(self, time: Optional[float] = None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """{body name: (R, T)} at ``time`` (s; default now): a vertex the scene gives at x0 is at
+        R x0 + T (R 3x3, T in m)."""
+        kin = getattr(self.engine, "kinematics", None)
+        t = self.time if time is None else float(time)
+        if kin is None:
+            return {}
+        return {b.name: kin.pose(k, t) for k, b in enumerate(self.scene.bodies)}
+
+    def _frame_due(self) -> bool:
+        """Whether this sample writes a particle frame: every sample, or with [output]
+        frame_interval F the first sample at or after each multiple of F (samples fall every
+        output_every steps, so within half a sample interval of it)."""
+        every = self.scene.output.frame_interval
+        if every is None:
+            return True
+        slack = 0.5 * self.output_every * self.dt
+        if self.time < self._next_frame_time - slack:
+            return False
+        self._next_frame_time = (math.floor((self.time + slack) / every) + 1) * every
+        return True
+
     # ---------------------------------------------------------------- observing
-    def _sample(self):
+    def _sample(self, frame: bool = False):
         """One output sample: the checks, then each sensor adds its /series values, then the
         series are stored, the observers see them, the results file gets them (with a frame
         and the residence records completed since the last sample), and the after-sample
@@ -422,11 +464,12 @@ class Simulation:
             self.recorder.append_series(values)
             for name, rec in residence.items():
                 self.recorder.append_residence(name, rec)
-            arrays = self.particles()
-            self.recorder.append_frame(self.time, {k: arrays[k] for k in (
-                "id", "position", "velocity", "angular_velocity", "radius", "mass", "temperature",
-                "moisture")
-                if k in arrays})
+            if self._frame_due() or frame:
+                arrays = self.particles()
+                self.recorder.append_frame(self.time, {k: arrays[k] for k in (
+                    "id", "position", "velocity", "angular_velocity", "radius", "mass", "material",
+                    "temperature", "moisture")
+                    if k in arrays}, poses=self.body_poses())
             self.recorder.flush()
         for hook in self.after_sample:          # the periodic checkpoint, the last good state
             hook(self)
@@ -529,12 +572,14 @@ class Simulation:
 
     def particles(self) -> dict[str, np.ndarray]:
         """Alive particles in id order: id, position (m), velocity (m/s), angular_velocity
-        (rad/s), radius (m), mass (kg), fixed (bool)."""
+        (rad/s), radius (m), mass (kg), fixed (bool), material (index into the scene's sorted
+        material names, ``sim.tables.names``); temperature (K) and moisture (kg/kg) when the
+        scene has them."""
         self._check_alive()
         s = self.engine.state
         n = self.engine.count
         names = ["alive", "serial" if s.process else "particle_id", "position", "velocity",
-                 "angular_velocity", "radius", "mass", "inverse_mass"]
+                 "angular_velocity", "radius", "mass", "inverse_mass", "material"]
         if self.engine.thermal:
             names += ["temperature"] + (["temperature_residual"] if s.compensated else [])
         if self.engine.moisture:
@@ -551,6 +596,7 @@ class Simulation:
         if "position_residual" in host:
             out["position"] += host["position_residual"][:n][order]
         out["fixed"] = host["inverse_mass"][:n][order] == 0.0
+        out["material"] = host["material"][:n][order].astype(np.int32)
         for name in ("temperature", "moisture"):
             if name in host:
                 out[name] = host[name][:n][order].astype(np.float64)

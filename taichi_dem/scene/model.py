@@ -131,6 +131,18 @@ class ParticleFill:
     radii: Optional[np.ndarray] = None              # (n,)
     velocities: Optional[np.ndarray] = None         # (n,3) or None
     angular_velocities: Optional[np.ndarray] = None # (n,3) or None
+    frame: Optional[int] = None                     # the results file's frame a fill starts from
+    temperatures: Optional[np.ndarray] = None       # (n,) K, from a results file's frame
+    moistures: Optional[np.ndarray] = None          # (n,) kg/kg, from a results file's frame
+
+    @property
+    def hottest_temperature(self) -> Optional[float]:
+        """The fill's temperature, K: the one it gives, else the hottest of the particles a
+        results file gives it (None when neither)."""
+        if self.temperature is not None:
+            return self.temperature
+        return float(np.max(self.temperatures)) if self.temperatures is not None \
+            and len(self.temperatures) else None
 
     @property
     def largest_radius(self) -> float:
@@ -162,6 +174,7 @@ class PlaneWall:
 @dataclass(frozen=True)
 class Output:
     interval: float = 0.05               # s
+    frame_interval: Optional[float] = None   # s between particle frames; None: every sample
     rrd: Optional[str] = None
     h5: Optional[str] = None
     checkpoint_interval: Optional[float] = None

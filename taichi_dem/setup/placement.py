@@ -707,7 +707,10 @@ def place_fills(scene: Scene, rng: np.random.Generator) -> PlacedParticles:
         fixed=per_fill(lambda i, f, n: np.full(n, f.fixed), 0, bool),
         material=per_fill(lambda i, f, n: np.full(n, mat_index[f.material]), 0, np.int32),
         fill=per_fill(lambda i, f, n: np.full(n, i), 0, np.int32),
-        temperature=per_fill(lambda i, f, n: np.full(
-            n, np.nan if f.temperature is None else f.temperature), 0, np.float64),
+        # the fill's temperature, else (a fill from a results file) its particles' own
+        temperature=per_fill(lambda i, f, n: np.asarray(f.temperatures, float)
+                             if f.temperature is None and f.temperatures is not None
+                             else np.full(n, np.nan if f.temperature is None else f.temperature),
+                             0, np.float64),
         materials=materials,
     )

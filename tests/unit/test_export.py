@@ -107,6 +107,17 @@ def test_xdmf_of_a_file_without_frames_is_refused(tmp_path, capsys):
     assert "frames" in capsys.readouterr().err
 
 
+def _block(data, name):
+    """The block ``name`` of a multiblock (a scene with bodies), or the data itself."""
+    if not hasattr(data, "GetNumberOfBlocks"):
+        return data
+    for i in range(data.GetNumberOfBlocks()):
+        # VTK names a block after its grid, with the time step's index: "particles[4]"
+        if data.GetMetaData(i).Get(data.NAME()).split("[")[0] == name:
+            return data.GetBlock(i)
+    raise KeyError(name)
+
+
 def test_a_runs_xdmf_opens_in_vtks_xdmf_reader(tmp_path):
     """The XDMF a run writes beside its results file, read back by VTK's XDMF reader (the
     reader ParaView's "Xdmf Reader" is): every frame a time step, its points the frame's
@@ -131,7 +142,7 @@ def test_a_runs_xdmf_opens_in_vtks_xdmf_reader(tmp_path):
         assert list(steps) == pytest.approx(times)
         last = f["frames"][keys[-1]]
         reader.UpdateTimeStep(steps[-1])
-        grid = reader.GetOutputDataObject(0)
+        grid = _block(reader.GetOutputDataObject(0), "particles")
         points = vtk_to_numpy(grid.GetPoints().GetData())
         np.testing.assert_array_equal(points, last["position"][()])
         data = grid.GetPointData()
@@ -139,3 +150,62 @@ def test_a_runs_xdmf_opens_in_vtks_xdmf_reader(tmp_path):
         assert {"temperature [K]", "velocity [m/s]", "radius [m]"} <= arrays
         np.testing.assert_array_equal(vtk_to_numpy(data.GetArray("temperature [K]")),
                                       last["temperature"][()])
+
+
+def test_bodies_at_their_poses_in_frames_and_in_vtks_xdmf_reader(tmp_path):
+    """A drum that turns: the results file keeps its mesh once (/bodies/drum) and, per frame,
+    its pose (rotation, translation) and its vertices at that pose; the XDMF gives each time a
+    spatial collection that VTK's XDMF reader returns as blocks: the drum's triangles at the
+    frame's pose and the particles. Also the frames' material index and the root attribute
+    naming the materials, and [output] frame_interval (a frame every other sample)."""
+    import taichi_dem as td
+    from taichi_dem.bodies.kinematics import rotation_matrix
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkIOXdmf2 import vtkXdmfReader
+    from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
+    text = open("demos/small_drum.toml").read()
+    text = text.replace("[output]", "[output]\nframe_interval = 0.04", 1)
+    assert "frame_interval = 0.04" in text and "interval = 0.02" in text
+    h5 = tmp_path / "drum.h5"
+    with td.Simulation.from_text(text, h5=str(h5)) as sim:
+        sim.run(0.1)
+        speed = sim.scene.bodies[0].motion.speed.at(0.0)
+        axis = np.asarray(sim.scene.bodies[0].motion.axis_direction, float)
+        point = np.asarray(sim.scene.bodies[0].motion.axis_point, float)
+    with h5py.File(h5, "r") as f:
+        assert len(f["series/time"]) == 6                         # t = 0, then every 0.02 s
+        keys = sorted(f["frames"], key=int)
+        times = [float(f["frames"][k].attrs["time"]) for k in keys]
+        assert times == pytest.approx([0.0, 0.04, 0.08], abs=1e-3)   # every other sample
+        assert list(f.attrs["materials"]) == sim.tables.names
+        last = f["frames"][keys[-1]]
+        assert last["material"].shape == last["radius"].shape
+        assert set(last["material"][()]) <= set(range(len(sim.tables.names)))
+        x0 = f["bodies/drum/vertices"][()]
+        rotation = last["bodies/drum/rotation"][()]
+        translation = last["bodies/drum/translation"][()]
+        # the pose is the turn by speed x t about the drum's axis
+        want = rotation_matrix(axis, speed * times[-1])
+        np.testing.assert_allclose(rotation, want, atol=1e-12)
+        np.testing.assert_allclose(translation, point - want @ point, atol=1e-12)
+        posed = last["bodies/drum/vertices"][()]
+        np.testing.assert_allclose(posed, x0 @ rotation.T + translation, atol=1e-12)
+        assert last["bodies/drum/translation"].attrs["units"] == "m"
+        positions = last["position"][()]
+    reader = vtkXdmfReader()
+    reader.SetFileName(str(h5.with_suffix(".xdmf")))
+    reader.UpdateInformation()
+    steps = reader.GetOutputInformation(0).Get(vtkStreamingDemandDrivenPipeline.TIME_STEPS())
+    assert list(steps) == pytest.approx(times)
+    reader.UpdateTimeStep(steps[-1])
+    blocks = reader.GetOutputDataObject(0)
+    named = {blocks.GetMetaData(i).Get(blocks.NAME()).split("[")[0]: blocks.GetBlock(i)
+             for i in range(blocks.GetNumberOfBlocks())}
+    assert set(named) == {"drum", "particles"}
+    np.testing.assert_allclose(vtk_to_numpy(named["drum"].GetPoints().GetData()), posed)
+    assert named["drum"].GetNumberOfCells() == len(sim.scene.bodies[0].faces)
+    np.testing.assert_array_equal(vtk_to_numpy(named["particles"].GetPoints().GetData()), positions)
+    # the CSV of a frame keeps to the particles (the bodies' group is not a column)
+    buf = io.StringIO()
+    assert export.export_frame(h5, -1, buf) == len(positions)
+    assert "material" in buf.getvalue().splitlines()[1]

@@ -48,8 +48,12 @@ PARTICLE = register(Section("particles[]", "An initial fill, [[particles]]: `cou
     Key("moisture", "quantity", "kg water per kg dry solid (drying; needs [thermal])",
         unit="dimensionless", default=None, minimum=0.0),
     Key("fixed", "boolean", "frozen in place (a rough wall of spheres)", default=False),
-    Key("file", "string", "a CSV of x,y,z,radius[,vx,vy,vz[,wx,wy,wz]] (SI), instead of "
-        "count and region", default=None),
+    Key("file", "string", "a CSV of x,y,z,radius[,vx,vy,vz[,wx,wy,wz]] (SI), or a results file "
+        "(.h5) of an earlier run whose frame gives the particles of this fill's material (their "
+        "positions, radii, velocities and, unless the fill gives them, temperatures and "
+        "moistures): settle once, run many cases; instead of count and region", default=None),
+    Key("frame", "integer", "with a results file: the frame to start from (-1 the last, the "
+        "default; 0 the first)", default=None),
 ), owner=__name__, nested={"region": REGION, "radius": RADIUS}))
 
 
@@ -135,8 +139,18 @@ class ParticleSections:
                                                  "gives positions and radii); use either file "
                                                  "or count + region + radius")
             fname = self.string(t["file"], f"{key}.file")
+            if fname.lower().endswith((".h5", ".hdf5")):
+                frame = self.integer(t["frame"], f"{key}.frame") if "frame" in t else -1
+                arrays = self.read_frame(fname, f"{key}.file", frame, material)
+                return ParticleFill(key=key, material=material, file=fname, frame=frame,
+                                    **arrays, **kw)
+            if "frame" in t:
+                raise self.err(f"{key}.frame", "only with a results file (.h5) as file; a CSV "
+                                               "holds one set of particles")
             arrays = self.read_csv(fname, f"{key}.file")
             return ParticleFill(key=key, material=material, file=fname, **arrays, **kw)
+        if "frame" in t:
+            raise self.err(f"{key}.frame", "only with file = a results file (.h5)")
         for k in ("count", "region", "radius"):
             if k not in t:
                 raise self.err(f"{key}.{k}", "required key is missing (a fill needs count, "
@@ -170,6 +184,65 @@ class ParticleSections:
                                            f"or more are {solid:.4g} m^3 of solid, more than "
                                            f"the region's whole volume ({volume:.4g} m^3); "
                                            "reduce count or enlarge the region")
+
+    def read_frame(self, fname: str, key: str, frame: int, material: str) -> dict:
+        """The particles of ``material`` in frame ``frame`` (negative: from the last) of the
+        results file ``fname`` (relative to the scene): positions, radii, velocities, angular
+        velocities and, when the frame has them, temperatures and moistures."""
+        import h5py
+        path = Path(fname)
+        if not path.is_absolute():
+            path = self.base_dir / path
+        if not path.is_file():
+            raise self.err(key, f"results file '{fname}' not found (looked for {path})")
+        where = str(path)
+        try:
+            f = h5py.File(path, "r")
+        except OSError as e:
+            raise SceneError(where, key, f"cannot open as an HDF5 results file ({e})") from None
+        with f:
+            if "fields" in f and "count" in f.attrs:
+                out = _checkpoint_particles(f, where, key, material, self)
+                return self._inside_domain(out, key)
+            if "frames" not in f or not len(f["frames"]):
+                raise SceneError(where, key, "the file holds no particle frames (is it a "
+                                             "results file of a run that wrote some?)")
+            keys = sorted(f["frames"], key=int)
+            if not -len(keys) <= frame < len(keys):
+                raise self.err(key.rsplit(".", 1)[0] + ".frame",
+                               f"{frame}: no such frame; {where} holds {len(keys)} "
+                               f"(0 - {len(keys) - 1}, or -1 for the last)")
+            g = f["frames"][keys[frame]]
+            for name in ("position", "radius"):
+                if name not in g:
+                    raise SceneError(where, key, f"frame {keys[frame]} has no '{name}' dataset")
+            rows = np.arange(g["radius"].shape[0])
+            names = [str(n) for n in f.attrs.get("materials", ())]
+            if names and "material" in g:
+                if material not in names:
+                    raise self.err(key, f"{where} holds no particles of material '{material}' "
+                                        f"(its materials: {', '.join(names)})")
+                rows = np.nonzero(g["material"][()] == names.index(material))[0]
+                if not len(rows):
+                    raise self.err(key, f"frame {keys[frame]} of {where} holds no particles of "
+                                        f"material '{material}'")
+            out = {"positions": g["position"][()][rows].astype(float),
+                   "radii": g["radius"][()][rows].astype(float)}
+            for name, target in (("velocity", "velocities"),
+                                 ("angular_velocity", "angular_velocities"),
+                                 ("temperature", "temperatures"), ("moisture", "moistures")):
+                out[target] = g[name][()][rows].astype(float) if name in g else None
+        return self._inside_domain(out, key)
+
+    def _inside_domain(self, out: dict, key: str) -> dict:
+        """``out`` (read_frame's arrays) when every centre lies in this scene's domain."""
+        lo, hi = np.array(self.domain.min), np.array(self.domain.max)
+        outside = np.nonzero(np.any((out["positions"] < lo) | (out["positions"] > hi), axis=1))[0]
+        if len(outside):
+            raise self.err(key, f"{len(outside)} of the frame's particles lie outside this scene's "
+                                f"domain ({fmt(lo)} to {fmt(hi)}), e.g. one at "
+                                f"{fmt(out['positions'][outside[0]])}")
+        return out
 
     def read_csv(self, fname: str, key: str) -> dict[str, Optional[np.ndarray]]:
         path = Path(fname)
@@ -271,6 +344,45 @@ def _region_volume(region: Region) -> float:
     if region.kind == "box":
         return float(np.prod(np.array(region.box_max, float) - np.array(region.box_min, float)))
     return math.pi * region.radius ** 2 * region.length
+
+
+def _checkpoint_particles(f, where: str, key: str, material: str, reader) -> dict:
+    """read_frame for a checkpoint file (run/checkpoint.py): the alive particles of
+    ``material`` in the engine's fields as saved, in id order, with the f64 residuals of a
+    split-precision state added back."""
+    import tomllib
+    fields: dict = {}
+
+    def collect(name, obj):              # (visititems stops at the first non-None return)
+        if hasattr(obj, "shape"):
+            fields.setdefault(name.rsplit("/", 1)[-1], obj)
+    f["fields"].visititems(collect)
+    count = int(f.attrs["count"])
+    try:
+        names = sorted(tomllib.loads(str(f.attrs.get("scene", ""))).get("materials", {}))
+    except tomllib.TOMLDecodeError:
+        names = []
+    if material not in names:
+        raise reader.err(key, f"{where} holds no particles of material '{material}' "
+                              f"(its materials: {', '.join(names) or 'none named'})")
+    alive = fields["alive"][:count] != 0
+    rows = np.nonzero(alive & (fields["material"][:count] == names.index(material)))[0]
+    if not len(rows):
+        raise reader.err(key, f"the checkpoint {where} holds no particles of material "
+                              f"'{material}'")
+    ids = fields["serial" if "serial" in fields else "particle_id"][:count][rows]
+    rows = rows[np.argsort(ids, kind="stable")]
+
+    def read(name):
+        if name not in fields:
+            return None
+        value = fields[name][:count][rows].astype(float)
+        if name + "_residual" in fields:
+            value = value + fields[name + "_residual"][:count][rows]
+        return value
+    return {"positions": read("position"), "radii": read("radius"),
+            "velocities": read("velocity"), "angular_velocities": read("angular_velocity"),
+            "temperatures": read("temperature"), "moistures": read("moisture")}
 
 
 def fmt(v) -> str:

@@ -46,6 +46,9 @@ DOMAIN = register(Section("domain", "The box particles live in (they are lost ou
 OUTPUT = register(Section("output", "What is written and how often", (
     Key("interval", "quantity", "time between samples (series, frames)", unit="time",
         default=Output.interval, minimum=0.0, exclusive_minimum=True),
+    Key("frame_interval", "quantity", "time between particle frames (/frames), a whole "
+        "multiple of interval; the series keep every sample (default: a frame at every sample)",
+        unit="time", default=None, minimum=0.0, exclusive_minimum=True),
     Key("rrd", "string", "rerun recording (.rrd) to write, relative to the scene", default=None),
     Key("h5", "string", "HDF5 results file to write, relative to the scene", default=None),
     Key("checkpoint_interval", "quantity", "simulated time between checkpoints (none when "
@@ -111,6 +114,14 @@ class SimulationSections:
         for k in ("rrd", "h5"):
             if k in kw and not kw[k].strip():
                 raise self.err(f"{key}.{k}", "must be a non-empty file path")
+        if kw.get("frame_interval") is not None:
+            # frames are taken at samples: a frame interval between them would drift
+            interval = kw.get("interval", Output.interval)
+            ratio = kw["frame_interval"] / interval
+            if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-6 * ratio:
+                raise self.err(f"{key}.frame_interval",
+                               f"{kw['frame_interval']:g} s is not a whole multiple of "
+                               f"output.interval ({interval:g} s): frames are taken at samples")
         return Output(**kw)
 
     def check_particle_total(self, simulation: SimulationSettings, fills, factories) -> None:
