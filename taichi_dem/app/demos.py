@@ -301,6 +301,7 @@ class PaddleCooler(Process):
             return
         t = np.asarray(s["time"], float)
         late = t >= 0.75 * t[-1]
+        words = f"mean over t = {t[late][0]:.4g} - {t[-1]:.4g} s"
         material = sim.scene.materials[feed.material]
         length = float(np.ptp(np.asarray(shell.vertices, float)[:, 0]))
         est = analysis.longer_cooler_outlet(
@@ -309,9 +310,9 @@ class PaddleCooler(Process):
             feed.temperature, feed.mass_rate.at(sim.time), material.heat_capacity,
             self.FULL_LENGTH)
         print(f"summary: the seed's {self.FULL_LENGTH:g} m cooler, estimated from this "
-              f"{length:.3g} m one (plug flow at this run's shell conductance "
-              f"{est['conductance_per_metre']:.3g} +- {est['conductance_per_metre_error']:.2g} "
-              f"W/(m K) per metre, NTU {est['ntu']:.3g}): the ash would leave at "
+              f"{length:.3g} m one (plug flow at this run's shell conductance per metre of "
+              f"cooler {est['conductance_per_metre']:.3g} +- {est['conductance_per_metre_error']:.2g} "
+              f"W/(m K), {words}; NTU {est['ntu']:.3g}): the ash would leave at "
               f"{est['outlet_temperature'] - 273.15:.1f} +- {est['outlet_temperature_error']:.1f} C "
               f"(fed at {feed.temperature - 273.15:.0f} C)")
 
