@@ -4,6 +4,8 @@ effect list (taichi_dem/effects/__init__.py) brings these in only for a scene wi
 
 contact stage (heat effects add a conductance, W/K, to the contact law's response):
   Conduction       particle-particle, through the Hertz contact spot (conduction.py)
+  CollisionConduction  particle-particle, Sun & Chen's transient heat of short contacts
+                   (``contact_conduction_model = "collision"``; conduction.py)
   WallConduction   particle-wall and particle-triangle, through the contact spot
   GasGapWall       particle-wall and particle-body, through the gas gap (gas_gap.py)
   CoarseGrainedWall particles that stand for a finer bed: its contact resistance and
@@ -34,7 +36,9 @@ from .gas_gap_effects import (MODEL_WORDS, PAIR_SHARE, WALL_AGE_FIELDS, GasGapPa
                               _skips_coarse, first_layer_ratios, gas_gap_free_path)
 from . import moisture as drying
 from . import radiation as radiative
-from .conduction import contact_conductance, micro_coefficient, rough_contact_conductance
+from .conduction import (SLOWEST_IMPACT, collision_conductance, collision_factor,
+                         contact_conductance, hertz_contact_time, micro_coefficient,
+                         rough_contact_conductance)
 
 
 class Conduction(Effect):
@@ -93,6 +97,98 @@ class Conduction(Effect):
             return out
 
         return conduction
+
+
+class CollisionConduction(Conduction):
+    """Sun & Chen's collision conduction (conduction.py, Zhou, Yu & Zulli 2010's per-step
+    flux), for particle pairs while a contact is still the collision it began as (its age below
+    the Hertz duration of its impact): the heat the real collision passes, the larger of Sun &
+    Chen's flux and the spot law with the real radius and duration, instead of the spot law
+    Conduction adds (which keeps running: this effect adds the difference); the spot law alone
+    once the contact has outlasted its collision (an enduring contact: a resting bed keeps it).
+
+    Short contacts conduct more than the steady law, not less: heat that only has to penetrate
+    a layer sqrt(kappa t) << a deep meets less resistance than the developed constriction field
+    of the spot (the steady law is the long-time limit of the transient one). Over an elastic
+    collision the ratio of the two heats is about 0.9 / sqrt(Fo), Fo = kappa t_c / a_max^2.
+
+    It keeps a history per contact (the impact speed, the contact's age), so it runs with the
+    contact law's mechanical effects (``mechanical``: on touching contacts that have a mass,
+    with the contact's history) and adds its heat itself; it moves nothing."""
+
+    name = "collision_conduction"
+    mechanical = True
+    # (impact speed m/s: the normal approach speed at the contact's first step; age s: the
+    # simulated time the contact has lasted; t_c,sim s: the Hertz duration at that speed)
+    contact_fields = {"collision_history": (True, "real")}
+    pair_fields = {}
+
+    def __init__(self, description, rough=False):
+        super().__init__(description, rough)
+        self.tables = self.tables + ("collision_factor", "collision_youngs_sim",
+                                     "collision_spot_scale")
+
+    def table_values(self, scene, tables):
+        from taichi_dem.scene.model import Material
+        from taichi_dem.setup.pair_tables import effective_youngs_modulus
+        out = super().table_values(scene, tables)
+        mats = [scene.materials[n] for n in tables.names]
+        real = [Material(m.name, m.density, m.real_youngs_modulus or m.youngs_modulus,
+                         m.poisson_ratio) for m in mats]
+        out["collision_factor"] = np.array([[collision_factor(
+            a.density, a.heat_capacity, a.thermal_conductivity, b.density, b.heat_capacity,
+            b.thermal_conductivity) for b in mats] for a in mats])
+        youngs_sim = np.array([[effective_youngs_modulus(a, b) for b in mats] for a in mats])
+        youngs_real = np.array([[effective_youngs_modulus(a, b) for b in real] for a in real])
+        out["collision_youngs_sim"] = youngs_sim
+        # (E*_sim / E*_real)^1/5: the real spot radius over the simulated one at the same phase
+        # of a collision at the same speed (and its square: the real duration over the simulated)
+        out["collision_spot_scale"] = (youngs_sim / youngs_real) ** 0.2
+        return out
+
+    def contact_func(self, ctx):
+        steady = super().contact_func(ctx)          # the spot law Conduction adds
+        factor = ctx.table["collision_factor"]
+        spot_factor = ctx.table["conductance_factor"]       # 2 k_s = 4 k_i k_j / (k_i + k_j)
+        youngs_sim = ctx.table["collision_youngs_sim"]
+        spot_scale = ctx.table["collision_spot_scale"]
+        Response = contact_response_type(ctx.real)
+        vec0 = ti.Vector([0.0, 0.0, 0.0])
+
+        @ti.func
+        def collision_conduction(c, out, history, dt):
+            state = history.collision        # (impact speed m/s, age s, t_c,sim s)
+            mi, mj = c.material_i, c.material_j
+            if state[1] == 0.0:
+                # the contact's first step: the Hertz force has not acted yet, so the normal
+                # approach speed is the impact speed (gravity's share of one step aside); the
+                # simulated contact's Hertz duration follows from it once
+                state[0] = ti.max(-c.v_rel.dot(c.normal), SLOWEST_IMPACT)
+                state[2] = hertz_contact_time(c.m_eff, c.r_eff, youngs_sim[mi, mj], state[0])
+            if c.conducts != 0 and factor[mi, mj] > 0.0 and state[1] < state[2]:
+                # still the collision: it passes the real collision's heat instead of the spot
+                # law Conduction has already added (less where a softened modulus makes that
+                # one pass too much)
+                g_collision = collision_conductance(
+                    factor[mi, mj], spot_factor[mi, mj], spot_scale[mi, mj], c.r_eff,
+                    c.normal_overlap, state[2])
+                spot = Response(force=vec0, torque_i=vec0, torque_j=vec0, heat=0.0,
+                                conductance=0.0, normal_force=0.0, normal_stiffness=0.0)
+                spot = steady(c, spot)
+                extra = g_collision - spot.conductance
+                out.conductance += extra
+                out.heat += extra * c.temperature_difference
+            state[1] += dt
+            history.collision = state
+            return out, history
+
+        return collision_conduction
+
+
+def contact_response_type(real):
+    """The contact law's Response struct (contacts/geometry.py) in ``real`` precision."""
+    from taichi_dem.contacts.geometry import contact_types
+    return contact_types(real)[1]
 
 
 class WallConduction(Conduction):
@@ -462,6 +558,11 @@ def thermal_effects(scene) -> list:
     if th.conduction:
         out.append(Conduction(f"particle-particle conduction (contact radius correction: "
                               f"{th.contact_radius_correction}{spot})", rough))
+        if th.contact_conduction_model == "collision":
+            out.append(CollisionConduction(
+                "collision conduction between particles (Sun & Chen 1988; Zhou, Yu & Zulli "
+                "2010): the larger of it and the spot law while a contact lasts no longer than "
+                "the Hertz duration of its impact, the spot law after", rough))
         if th.gas_gap and th.gas_gap_pairs:
             out.append(GasGapPair(
                 f"conduction through the gas gap between particles (fluid lens "
