@@ -23,6 +23,10 @@ as the summaries use). Names and units:
                                               orifice): the slope of the lost count while 15 -
                                               60 % of the initial count has left, as the hopper
                                               demo fits its rate (only once 60 % has left)
+``periodic_<axis>/mass_flow``          kg/s   a periodic slice: the mass flow along its
+                                              periodic axis, sum m v_axis / L over the frames
+                                              in the window (the flow through any section)
+``periodic_<axis>/holdup``             kg/m   a periodic slice: the mass per metre of axis
 =====================================  =====  ===============================================
 """
 from __future__ import annotations
@@ -35,7 +39,7 @@ import numpy as np
 UNITS = {"axial_torque": "N m", "power": "W", "heat_flow": "W", "load": "N", "mass_flow": "kg/s",
          "residence_mean": "s", "residence_median": "s", "temperature": "K",
          "outlet_temperature": "K", "mean_temperature": "K", "kinetic_energy": "J",
-         "discharge_rate": "1/s"}
+         "discharge_rate": "1/s", "holdup": "kg/m"}
 
 
 def unit(name: str) -> str:
@@ -112,6 +116,37 @@ def key_outputs(h5_path: str, window: float = 0.25) -> dict[str, float]:
                 window_ = (lost >= 0.15 * initial) & (lost <= 0.6 * initial)
                 if np.count_nonzero(window_) >= 3:
                     out["particles/discharge_rate"] = float(np.polyfit(t[window_], lost[window_], 1)[0])
+        out.update(_periodic_flows(f, doc, window))
+    return out
+
+
+def _periodic_flows(f, doc: dict, window: float) -> dict[str, float]:
+    """A periodic slice's transport from its frames: per periodic axis, the mean over the last
+    ``window`` of the frames of the mass flow sum(m v_axis) / L (kg/s) and the hold-up
+    sum(m) / L (kg/m), L the domain's length along the axis."""
+    domain = doc.get("domain", {}) if isinstance(doc.get("domain"), dict) else {}
+    axes = [a for a in domain.get("periodic", ()) if a in ("x", "y", "z")]
+    if not axes or "frames" not in f or not len(f["frames"]):
+        return {}
+    keys = sorted(f["frames"], key=int)
+    keys = keys[-max(1, int(len(keys) * window)):]
+    out: dict[str, float] = {}
+    for axis in axes:
+        k = "xyz".index(axis)
+        try:
+            length = float(domain["max"][k]) - float(domain["min"][k])
+        except (KeyError, IndexError, TypeError, ValueError):
+            continue                    # (a quantity string: the loader's job, not read here)
+        flows, holdups = [], []
+        for key in keys:
+            g = f["frames"][key]
+            if "mass" not in g or "velocity" not in g:
+                return out
+            m = g["mass"][()]
+            flows.append(float(np.sum(m * g["velocity"][()][:, k])) / length)
+            holdups.append(float(np.sum(m)) / length)
+        out[f"periodic_{axis}/mass_flow"] = float(np.mean(flows))
+        out[f"periodic_{axis}/holdup"] = float(np.mean(holdups))
     return out
 
 
