@@ -30,7 +30,6 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from ..bodies.kinematics import rotation_matrix
 
 # viridis at eleven evenly spaced points (matplotlib's values, rounded); interpolated linearly
 _VIRIDIS = np.array([
@@ -240,12 +239,10 @@ class RerunRecorder:
         rr = self.rr
         kin = getattr(sim.engine, "kinematics", None)
         for k, body in enumerate(sim.scene.bodies):
-            m = body.motion
-            axis = np.asarray(m.axis_direction, float)
-            point = np.asarray(m.axis_point, float)
+            axis = np.asarray(body.motion.axis_direction, float)
             angle = float(kin.angle(k, t)) if kin is not None else 0.0
-            rot = rotation_matrix(axis, angle)
-            translation = point - rot @ point + np.asarray(m.velocity, float) * t
+            # the pose the results file records too (BodyKinematics.pose): x = R x0 + T
+            translation = kin.pose(k, t)[1] if kin is not None else np.zeros(3)
             self.stream.log(f"bodies/{body.name}", rr.Transform3D(
                 translation=translation,
                 rotation_axis_angle=rr.RotationAxisAngle(axis=axis, radians=angle)))
