@@ -62,6 +62,9 @@ def _parser() -> argparse.ArgumentParser:
     c = sub.add_parser("check", help="validate a scene and print derived figures")
     c.add_argument("scene", nargs="?", help="the scene file (TOML) to validate")
     c.add_argument("--builders", action="store_true", help="list the mesh builders")
+    c.add_argument("--preview", metavar="PNG", help="also draw the scene at t = 0 into this PNG: "
+                   "the placed particles, the bodies, the factories' and outlets' regions, "
+                   "the domain (a perspective view and a section along the first body's axis)")
     rs = sub.add_parser("resume", help="continue from a checkpoint")
     rs.add_argument("checkpoint", help="a checkpoint (<scene stem>.checkpoint.h5) a run wrote beside its results")
     _common_outputs(rs)
@@ -115,7 +118,8 @@ EXAMPLES = {
     "run": ["taichi-dem run demos/pile.toml --out results",
             "taichi-dem run drum.toml --until 2 --precision f64 --rrd drum.rrd",
             "taichi-dem run cooler.toml --arch gpu --quiet"],
-    "check": ["taichi-dem check drum.toml", "taichi-dem check --builders"],
+    "check": ["taichi-dem check drum.toml", "taichi-dem check drum.toml --preview drum.png",
+              "taichi-dem check --builders"],
     "resume": ["taichi-dem resume out/pile.checkpoint.h5 --until 1.0"],
     "demo": ["taichi-dem demo", "taichi-dem demo pile", "taichi-dem demo paddle_cooler --until 10 --no-plots"],
     "bench": ["taichi-dem bench --steps 500", "taichi-dem bench --copies 0.25 --precision f64"],
@@ -330,6 +334,12 @@ def cmd_check(args) -> int:
     _refuse_inconsistent(args.scene, scene)
     _note_ignored(args.scene, scene)
     print(describe_scene(scene))
+    if args.preview:
+        from .preview import write_preview
+        try:
+            print(f"preview: {write_preview(scene, args.preview)}")
+        except OSError as err:
+            return _fail(f"--preview: cannot write {args.preview} ({err.strerror or err})")
     print("scene OK")
     return 0
 
