@@ -357,51 +357,101 @@ class MachineAnswer:
     profile: Profile
 
 
+def _pieces(machine: MachineMap, length: float, inlet_sections, law=None) -> list:
+    """[(map, length m, law)] from the discharge upstream: ``machine`` over what the
+    ``inlet_sections`` ((map, length), in order from the inlet end) leave at the discharge end."""
+    inlet_sections = list(inlet_sections or ())
+    rest = length - sum(l for _, l in inlet_sections)
+    if rest <= 0.0:
+        raise SceneError("taichi-dem machine", "--inlet-section", f"the inlet sections are "
+                         f"{length - rest:g} m long, not shorter than the machine ({length:g} m)")
+    return [(machine, rest, law or TransportLaw(machine))] + [
+        (m, l, TransportLaw(m, source=f"inlet section {k + 1}"))
+        for k, (m, l) in reversed(list(enumerate(inlet_sections)))]
+
+
+def _march_pieces(pieces, feed: float, axial_slope: float, depth0: float,
+                  overflow_holdup: float | None, steps: int) -> list:
+    """March each piece from the discharge upstream, the bed's depth (its free surface)
+    continuous where one section meets the next; [(map, x offset m, profile)], stopping at the
+    first that overflows. Every section must carry the bed the same way."""
+    out = []
+    depth = depth0
+    total = sum(l for _, l, _ in pieces)
+    done = 0.0
+    signs = {law.direction(axial_slope) for _, _, law in pieces}
+    if len(signs) > 1:
+        raise SceneError("taichi-dem machine", "--inlet-section", "the sections' maps carry the "
+                         "bed in opposite directions at this incline")
+    for m, piece_length, law in pieces:
+        limit = float(law.holdups[-1]) if overflow_holdup is None else overflow_holdup
+        prof = march(law, piece_length, feed, axial_slope, depth, limit, steps)
+        done += piece_length
+        out.append((m, total - done, prof))
+        if prof.overflows:
+            break
+        depth = float(prof.depth[0])            # at this piece's upstream end
+    return out
+
+
 def answer(machine: MachineMap, length: float, feed: float, axial_slope: float,
            discharge_depth: float | None = None, overflow_holdup: float | None = None,
            inlet_temperature: float | None = None, law: TransportLaw | None = None,
-           steps: int = 400) -> MachineAnswer:
+           steps: int = 400, inlet_sections=()) -> MachineAnswer:
     """The machine ``length`` m long at ``feed`` kg/s: march and integrate (module docstring).
     ``discharge_depth`` defaults to one particle diameter, ``overflow_holdup`` to the largest
-    mapped hold-up."""
-    law = law or TransportLaw(machine)
+    mapped hold-up (of each section's map). ``inlet_sections``: [(map, length m)] in order
+    from the inlet end, each with its own map (an inlet screw before the paddles); ``machine``
+    covers the rest, at the discharge end. Each section's figures come from its own map; a
+    body's torque and power are summed over the sections that have it (by name)."""
+    pieces = _pieces(machine, length, inlet_sections, law)
     depth0 = machine.particle_diameter if discharge_depth is None else discharge_depth
-    limit = float(law.holdups[-1]) if overflow_holdup is None else overflow_holdup
-    prof = march(law, length, feed, axial_slope, depth0, limit, steps)
-    hold = _integral(prof.x, prof.holdup)
+    marched = _march_pieces(pieces, feed, axial_slope, depth0, overflow_holdup, steps)
+    hold = 0.0
     torques, powers = {}, {}
-    for body in machine.bodies:
-        for name, out in (("torque_per_metre", torques), ("power_per_metre", powers)):
-            hs, vs = _interpolate_figure(machine, f"{body}/{name}", axial_slope)
-            if np.all(np.isfinite(vs)):
-                out[body] = _integral(prof.x, np.interp(prof.holdup, hs, vs))
+    ntu, wall = 0.0, None
+    for m, _, prof in marched:
+        hold += _integral(prof.x, prof.holdup)
+        for body in m.bodies:
+            for name, out in (("torque_per_metre", torques), ("power_per_metre", powers)):
+                hs, vs = _interpolate_figure(m, f"{body}/{name}", axial_slope)
+                if np.all(np.isfinite(vs)):
+                    out[body] = out.get(body, 0.0) + _integral(prof.x, np.interp(prof.holdup, hs, vs))
+        if inlet_temperature is not None and m.heat_capacity:
+            for body in m.bodies:
+                hs, vs = _interpolate_figure(m, f"{body}/conductance_per_metre", axial_slope)
+                if body in m.wall_temperatures and np.all(np.isfinite(vs)):
+                    ntu += _integral(prof.x, np.interp(prof.holdup, hs, vs)) / (feed * m.heat_capacity)
+                    wall = m.wall_temperatures[body] if wall is None else wall
     t_out = None
-    if inlet_temperature is not None and machine.heat_capacity:
-        ntu = 0.0
-        wall = None
-        for body in machine.bodies:
-            hs, vs = _interpolate_figure(machine, f"{body}/conductance_per_metre", axial_slope)
-            if body in machine.wall_temperatures and np.all(np.isfinite(vs)):
-                ntu += _integral(prof.x, np.interp(prof.holdup, hs, vs)) / (feed * machine.heat_capacity)
-                wall = machine.wall_temperatures[body] if wall is None else wall
-        if wall is not None:
-            t_out = wall + (inlet_temperature - wall) * math.exp(-ntu)
+    if wall is not None:
+        t_out = wall + (inlet_temperature - wall) * math.exp(-ntu)
+    # one profile from the inlet end: the pieces upstream first
+    parts = marched[::-1]
+    x = np.concatenate([offset + prof.x for _, offset, prof in parts])
+    depth = np.concatenate([prof.depth for _, _, prof in parts])
+    holdup = np.concatenate([prof.holdup for _, _, prof in parts])
+    overflows = any(prof.overflows for _, _, prof in marched)
+    prof = Profile(feed, x, depth, holdup, overflows, marched[0][2].flow_sign)
     return MachineAnswer(feed, hold, hold / feed, float(prof.holdup[0]), torques, powers, t_out,
                          prof.overflows, prof)
 
 
 def capacity(machine: MachineMap, length: float, axial_slope: float,
              discharge_depth: float | None = None, overflow_holdup: float | None = None,
-             law: TransportLaw | None = None, steps: int = 200) -> float:
-    """The largest feed (kg/s) whose profile stays below the overflow hold-up (bisection)."""
-    law = law or TransportLaw(machine)
+             law: TransportLaw | None = None, steps: int = 200, inlet_sections=()) -> float:
+    """The largest feed (kg/s) whose profile stays below the overflow hold-up of every section
+    (bisection)."""
+    pieces = _pieces(machine, length, inlet_sections, law)
+    law = pieces[0][2]
     limit = float(law.holdups[-1]) if overflow_holdup is None else overflow_holdup
 
     slope_sign = law.direction(axial_slope)
     depth0 = machine.particle_diameter if discharge_depth is None else discharge_depth
 
     def fits(feed):
-        return not march(law, length, feed, axial_slope, depth0, limit, steps).overflows
+        return not any(prof.overflows for _, _, prof in
+                       _march_pieces(pieces, feed, axial_slope, depth0, overflow_holdup, steps))
     # the feed whose uniform bed sits at the overflow brackets the capacity (a short machine
     # with a shallow discharge holds more)
     uniform = max(slope_sign * law.flow(limit, axial_slope), 1e-12)
@@ -423,23 +473,29 @@ def capacity(machine: MachineMap, length: float, axial_slope: float,
 
 def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
                 discharge_depth=None, overflow_holdup=None, inlet_temperature=None,
-                draws: int = 40, seed: int = 0) -> dict:
+                draws: int = 40, seed: int = 0, inlet_sections=()) -> dict:
     """The answers at each feed and the capacity, each with the standard deviation over
-    ``draws`` re-marches of maps drawn from the figures' standard errors."""
+    ``draws`` re-marches of maps (every section's) drawn from the figures' standard errors."""
     rng = np.random.default_rng(seed)
-    base = {"capacity": capacity(machine, length, axial_slope, discharge_depth, overflow_holdup),
+    inlet_sections = list(inlet_sections or ())
+    base = {"capacity": capacity(machine, length, axial_slope, discharge_depth, overflow_holdup,
+                                 inlet_sections=inlet_sections),
             "feeds": [answer(machine, length, f, axial_slope, discharge_depth, overflow_holdup,
-                             inlet_temperature) for f in feeds]}
+                             inlet_temperature, inlet_sections=inlet_sections) for f in feeds]}
     samples = {"capacity": [], "feeds": [[] for _ in feeds]}
+    bodies = list(dict.fromkeys([*machine.bodies, *(b for m, _ in inlet_sections for b in m.bodies)]))
     for _ in range(draws):
         drawn = machine.drawn(rng)
+        drawn_inlet = [(m.drawn(rng), l) for m, l in inlet_sections]
         try:
             law = TransportLaw(drawn)
             samples["capacity"].append(capacity(drawn, length, axial_slope, discharge_depth,
-                                                overflow_holdup, law=law))
+                                                overflow_holdup, law=law,
+                                                inlet_sections=drawn_inlet))
             for k, f in enumerate(feeds):
                 samples["feeds"][k].append(answer(drawn, length, f, axial_slope, discharge_depth,
-                                                  overflow_holdup, inlet_temperature, law=law))
+                                                  overflow_holdup, inlet_temperature, law=law,
+                                                  inlet_sections=drawn_inlet))
         except SceneError:        # a draw whose flow falls with the slope: skipped
             continue
     base["capacity_error"] = float(np.std(samples["capacity"], ddof=1)) if len(samples["capacity"]) > 1 else math.nan
@@ -449,7 +505,7 @@ def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
         if len(answers) > 1:
             e["holdup"] = float(np.std([a.holdup for a in answers], ddof=1))
             e["residence_time"] = float(np.std([a.residence_time for a in answers], ddof=1))
-            for body in machine.bodies:
+            for body in bodies:
                 vals = [a.torques[body] for a in answers if body in a.torques]
                 if len(vals) > 1:
                     e[f"{body}/torque"] = float(np.std(vals, ddof=1))
@@ -521,6 +577,10 @@ def add_arguments(p) -> None:
     p.add_argument("--overflow", default=None,
                    help="the hold-up at which the inlet end overflows ('90 kg/m', or a fill "
                         "fraction '40 %%'; default the largest mapped hold-up)")
+    p.add_argument("--inlet-section", nargs=2, action="append", metavar=("MAP", "LENGTH"),
+                   default=[], help="a section at the inlet end with its own map (an inlet "
+                   "screw before the paddles): the map and its length ('1 m'); repeat for more, "
+                   "in order from the inlet; the main map covers the rest, at the discharge end")
     p.add_argument("--draws", type=int, default=40,
                    help="re-marches with the map drawn from its standard errors (the errors)")
     p.add_argument("--out", default=None, help="folder for machine.md, machine.json and "
@@ -574,8 +634,20 @@ def cmd_machine(args) -> int:
             raise SceneError("taichi-dem machine", "--overflow", str(err)) from None
         full = float(m.section.holdup(2.0 * m.section.shell_radius))
         overflow = value if kind == "kg/m" else value * full
-    out = with_errors(m, length, feeds, slope, depth0, overflow, t_in, draws=args.draws)
-    report = machine_report(m, out, length, incline, t_in)
+    inlet = [(MachineMap.load(path), _quantity(size, "length", "--inlet-section"))
+             for path, size in args.inlet_section]
+    for (path, _), (section_map, size) in zip(args.inlet_section, inlet):
+        if size <= 0.0:
+            raise SceneError("taichi-dem machine", "--inlet-section", f"{path}: the length must "
+                             "be > 0")
+        mapped = sorted({round(-math.degrees(math.atan(r.axial_slope)), 9) for r in section_map.rows})
+        if len(mapped) == 1 and abs(mapped[0] - incline) > 1e-6:
+            raise SceneError(str(path), "rows", f"mapped at {mapped[0]} deg only, not at the "
+                             f"machine's {incline} deg: map it at both, or at this incline")
+    out = with_errors(m, length, feeds, slope, depth0, overflow, t_in, draws=args.draws,
+                      inlet_sections=inlet)
+    report = machine_report(m, out, length, incline, t_in,
+                            sections=[(p, l) for (p, _), (_, l) in zip(args.inlet_section, inlet)])
     print(report["text"])
     folder = Path(args.out) if args.out else (map_path if map_path.is_dir() else map_path.parent)
     folder.mkdir(parents=True, exist_ok=True)
@@ -587,9 +659,21 @@ def cmd_machine(args) -> int:
     return 0
 
 
-def machine_report(m: MachineMap, out: dict, length: float, incline: float, t_in) -> dict:
-    """The answers as a Markdown table and a JSON-ready dict (values with their errors)."""
-    lines = [f"# The machine from its map: {length:g} m at {incline:.3g} deg", "",
+def machine_report(m: MachineMap, out: dict, length: float, incline: float, t_in,
+                   sections=()) -> dict:
+    """The answers as a Markdown table and a JSON-ready dict (values with their errors).
+    ``sections``: the inlet sections' (map path, length m), in order from the inlet."""
+    bodies = list(m.bodies)
+    for ans in out["feeds"]:
+        bodies += [b for b in ans.torques if b not in bodies]
+    m = MachineMap(m.rows, m.section, m.angular_speeds, m.particle_diameter, m.heat_capacity,
+                   m.wall_temperatures, bodies)
+    lines = [f"# The machine from its map: {length:g} m at {incline:.3g} deg", ""]
+    if sections:
+        lines += ["sections from the inlet end: " + ", then ".join(
+            f"{l:g} m mapped in {path}" for path, l in sections)
+            + f", then {length - sum(l for _, l in sections):g} m of the main map", ""]
+    lines += [
              f"capacity (the inlet end at the overflow hold-up): {out['capacity'] * 3.6:.4g} "
              f"+- {out['capacity_error'] * 3.6:.2g} t/h", "",
              "| feed (t/h) | inlet-end hold-up (kg/m) | hold-up (kg) | mean residence (s) | "
@@ -634,6 +718,7 @@ def machine_report(m: MachineMap, out: dict, length: float, incline: float, t_in
                      "below them the law is extrapolated as Saeman's (chord cubed); map lower "
                      "or higher hold-ups to be sure")
     doc = {"length_m": length, "incline_deg": incline, "capacity_kg_per_s": out["capacity"],
+           "inlet_sections": [{"map": str(path), "length_m": l} for path, l in sections],
            "capacity_kg_per_s_error": out["capacity_error"], "feeds": rows,
            "inlet_temperature_K": t_in}
     return {"text": "\n".join(lines), "json": doc}

@@ -193,3 +193,74 @@ def test_machine_command_refuses_bad_input_with_file_key_reason(tmp_path, capsys
     assert main(["machine", str(two), "--length", "six metres", "--feed", "1 t/h",
                  "--incline", "3"]) == 2
     assert "--length" in capsys.readouterr().err
+
+
+def screw_map(a=2.0, b=6.0):
+    """A self-conveying section's map (an inlet screw): q = -c^3 (a - b s) at two inclines,
+    towards -x as the drum_map's bed flows."""
+    rows = []
+    for d in (0.15, 0.3, 0.45, 0.6):
+        h = d * R
+        H = float(SECTION.holdup(h))
+        c3 = float(SECTION.chord(h)) ** 3
+        for s in (0.0, -math.tan(math.radians(5.0))):
+            rows.append(mc.MapRow(H, s, {"axial_mass_flow": (-c3 * (a - b * s), 0.0),
+                                         "dynamic_angle": (BETA, 0.0),
+                                         "screw/torque_per_metre": (-3.0, 0.0)}))
+    return mc.MachineMap(rows, SECTION, {}, 0.004, 1000.0, {}, ["screw"])
+
+
+def test_a_machine_split_into_sections_of_one_map_is_the_same_machine():
+    """Sections with their own maps (issue 31 item 3, the inlet screw): the depth is carried
+    across each boundary, so one map cut into two sections gives the unsplit answers."""
+    m = drum_map(shaft_torque=-2.0, conductance=150.0)
+    slope = -math.tan(math.radians(THETA))
+    whole = mc.answer(m, 12.0, 1.2, slope, 0.02, inlet_temperature=700.0, steps=800)
+    split = mc.answer(m, 12.0, 1.2, slope, 0.02, inlet_temperature=700.0, steps=800,
+                      inlet_sections=[(m, 4.0)])
+    for name in ("holdup", "residence_time", "inlet_holdup", "outlet_temperature"):
+        assert getattr(split, name) == pytest.approx(getattr(whole, name), rel=2e-3), name
+    assert split.torques["shell"] == pytest.approx(whole.torques["shell"], rel=2e-3)
+    assert split.profile.x[0] == pytest.approx(0.0) and split.profile.x[-1] == pytest.approx(12.0)
+    assert np.all(np.diff(split.profile.x) >= 0)
+    cap_whole = mc.capacity(m, 12.0, slope, 0.02)
+    assert mc.capacity(m, 12.0, slope, 0.02, inlet_sections=[(m, 4.0)]) == \
+        pytest.approx(cap_whole, rel=1e-2)
+
+
+def test_an_inlet_screw_section_carries_the_feed_at_its_own_hold_up():
+    # a screw that carries 20 c^3 kg/s on its own: ~6x the drum's Saeman flow at this bed
+    drum, screw = drum_map(), screw_map(a=20.0)
+    slope = -math.tan(math.radians(THETA))
+    feed = 0.5
+    plain = mc.answer(drum, 12.0, feed, slope, 0.02)
+    with_screw = mc.answer(drum, 12.0, feed, slope, 0.02, inlet_sections=[(screw, 3.0)])
+    # the screw's own plateau: c^3 (20 - 6 s) = feed
+    c = (feed / (20.0 - 6.0 * slope)) ** (1 / 3)
+    assert with_screw.profile.depth[0] == pytest.approx(R - math.sqrt(R * R - c * c / 4), rel=1e-2)
+    assert with_screw.inlet_holdup < plain.inlet_holdup
+    # the screw's torque over its 3 m only, from its own map (-3 N m per metre at the mapped
+    # hold-ups, anchored at 0 for an empty machine)
+    part = with_screw.profile.x <= 3.0
+    hs, vs = mc._interpolate_figure(screw, "screw/torque_per_metre", slope)
+    expected = np.trapezoid(np.interp(with_screw.profile.holdup[part], hs, vs),
+                            with_screw.profile.x[part])
+    assert with_screw.torques["screw"] == pytest.approx(expected, rel=1e-6)
+    assert "screw" not in plain.torques
+    # the drum part (x > 3 m) is the plain drum's last 9 m
+    drum_part = with_screw.profile.x >= 3.0
+    assert np.interp(6.0, with_screw.profile.x[drum_part], with_screw.profile.holdup[drum_part]) \
+        == pytest.approx(np.interp(6.0, plain.profile.x, plain.profile.holdup), rel=0.05)
+
+
+def test_bad_sections_are_refused():
+    drum = drum_map()
+    slope = -math.tan(math.radians(THETA))
+    with pytest.raises(SceneError, match="not shorter than the machine"):
+        mc.answer(drum, 12.0, 0.5, slope, inlet_sections=[(drum, 12.0)])
+    backwards = screw_map(a=-2.0, b=6.0)            # conveys towards +x, against the drum
+    for r in backwards.rows:
+        q, _ = r.figures["axial_mass_flow"]
+        r.figures["axial_mass_flow"] = (q + 100.0 * float(SECTION.chord(SECTION.depth(r.holdup)[0])) ** 3, 0.0)
+    with pytest.raises(SceneError, match="opposite directions"):
+        mc.answer(drum, 12.0, 0.5, slope, inlet_sections=[(backwards, 2.0)])
