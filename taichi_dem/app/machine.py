@@ -194,19 +194,25 @@ class TransportLaw:
         self.holdups = np.array(holdups)
         self.depths = section.depth(self.holdups)
         chord3 = section.chord(self.depths) ** 3
-        a, b, beta = [], [], []
+        a, b, beta, b_error, q_mean = [], [], [], [], []
         for H in holdups:
             at = [r for r in rows if round(r.holdup, 9) == H]
             s = np.array([r.axial_slope for r in at])
             q = np.array([r.mean("axial_mass_flow") for r in at])
+            q_mean.append(float(np.mean(q)))
             if len(set(np.round(s, 9))) >= 2:
                 slope, icpt = np.polyfit(s, q, 1)
+                # the slope's standard error from the rows' (least squares, independent rows)
+                se = np.array([r.figures.get("axial_mass_flow", (0.0, 0.0))[1] for r in at])
+                ds = s - s.mean()
+                b_error.append(float(np.sqrt(np.sum((se * ds) ** 2)) / np.sum(ds * ds)))
             else:       # one incline: a plain drum's law, q proportional to the slope
                 if abs(s[0]) < 1e-12:
                     raise SceneError(source, "rows", f"hold-up {H:g} kg/m was mapped only at a "
                                      "level axis: the slope's effect cannot be told (map a "
                                      "second incline)")
                 slope, icpt = q[0] / s[0], 0.0
+                b_error.append(0.0)
             a.append(icpt)
             b.append(slope)
             angles = [r.mean("dynamic_angle") for r in at]
@@ -219,6 +225,15 @@ class TransportLaw:
             raise SceneError(source, "rows", "the map has no dynamic angle at some hold-up")
         self.beta = beta
         self.single_incline = len(slopes) < 2
+        # A self-conveying section whose flow the incline does not measurably change (a screw:
+        # b within two standard errors of 0 at every hold-up, negative at some): the bed's
+        # surface slope cannot drive it, so its hold-up is where its own flow carries the feed
+        # (the limit b -> 0 of the march: the depth jumps to that plateau). Any other b <= 0
+        # is refused by the march.
+        b, b_error = np.array(b), np.array(b_error)
+        self.flow_at_mapped = np.array(q_mean)          # kg/s, mean over the inclines
+        self.plateau_only = bool(not self.single_incline and np.any(b <= 0.0)
+                                 and np.all(np.abs(b) <= 2.0 * b_error))
 
     def coefficients(self, holdup, depth=None):
         """(a, b, beta_deg) at ``holdup`` (kg/m), whose bed ``depth`` (m) may be given."""
@@ -286,6 +301,8 @@ def march(law: TransportLaw, length: float, feed: float, axial_slope: float,
     sign = law.direction(axial_slope)
     s_down = sign * axial_slope
     section = law.section
+    if law.plateau_only:
+        return _plateau(law, length, feed, overflow_holdup, sign, steps)
 
     # the law tabulated on a fine grid of depths (the march evaluates it ~4 x steps times)
     cells = 4000
@@ -336,6 +353,23 @@ def march(law: TransportLaw, length: float, feed: float, axial_slope: float,
     x = length - up[::-1]          # from the inlet end
     depths = depths[::-1]
     return Profile(feed, x, depths, section.holdup(depths), overflows, sign)
+
+
+def _plateau(law: TransportLaw, length: float, feed: float, overflow_holdup: float, sign: int,
+             steps: int) -> Profile:
+    """A section at the hold-up whose own flow carries ``feed`` (TransportLaw.plateau_only):
+    the mapped flows (mean over the inclines, from 0 at an empty section) interpolated; beyond
+    the largest mapped flow, or above ``overflow_holdup``, it overflows."""
+    holdups = np.concatenate([[0.0], law.holdups])
+    flows = np.concatenate([[0.0], sign * law.flow_at_mapped])
+    if np.any(np.diff(flows) <= 0.0):
+        raise SceneError("map", "rows", "the section's flow does not rise with its hold-up: no "
+                         "hold-up carries a given feed")
+    overflows = feed > flows[-1] or float(np.interp(feed, flows, holdups)) > overflow_holdup * (1 + 1e-9)
+    held = min(float(np.interp(feed, flows, holdups)), overflow_holdup)
+    x = np.linspace(0.0, length, steps + 1)
+    depth = np.full_like(x, float(law.section.depth(held)[0]))
+    return Profile(feed, x, depth, law.section.holdup(depth), overflows, sign)
 
 
 def _integral(x, y) -> float:

@@ -264,3 +264,28 @@ def test_bad_sections_are_refused():
         r.figures["axial_mass_flow"] = (q + 100.0 * float(SECTION.chord(SECTION.depth(r.holdup)[0])) ** 3, 0.0)
     with pytest.raises(SceneError, match="opposite directions"):
         mc.answer(drum, 12.0, 0.5, slope, inlet_sections=[(backwards, 2.0)])
+
+
+def test_a_section_the_incline_does_not_move_sits_at_its_own_plateau():
+    """A screw whose mapped flow does not change with the incline beyond its noise (b within
+    two standard errors of 0, negative at a hold-up): its hold-up is where its own flow carries
+    the feed, flat along it; a b < 0 beyond the noise is refused."""
+    rows = []
+    for H, q in ((20.0, 1.0), (40.0, 2.2), (60.0, 3.0)):
+        for s, dq in ((0.0, 0.0), (-math.tan(math.radians(5.0)), -0.01)):   # b = -0.11 kg/s
+            rows.append(mc.MapRow(H, s, {"axial_mass_flow": (-(q + dq), 0.02),
+                                         "dynamic_angle": (BETA, 0.0)}))
+    screw = mc.MachineMap(rows, SECTION, {}, 0.004, None, {}, [])
+    law = mc.TransportLaw(screw)
+    assert law.plateau_only
+    drum = drum_map()
+    slope = -math.tan(math.radians(THETA))
+    ans = mc.answer(drum, 12.0, 1.5, slope, 0.02, inlet_sections=[(screw, 2.0)])
+    part = ans.profile.x < 2.0 - 1e-9         # (the drum's profile starts at 2 m)
+    # 1.5 kg/s: between 0.995 at 20 and 2.195 at 40 kg/m (the inclines' mean)
+    expected = 20.0 + 20.0 * (1.5 - 0.995) / (2.195 - 0.995)
+    assert ans.profile.holdup[part] == pytest.approx(expected, rel=1e-6)
+    for r in rows:                                 # the same b with no noise: refused
+        r.figures["axial_mass_flow"] = (r.figures["axial_mass_flow"][0], 0.0)
+    with pytest.raises(SceneError, match="falls with the slope"):
+        mc.answer(drum, 12.0, 1.5, slope, 0.02, inlet_sections=[(screw, 2.0)])
