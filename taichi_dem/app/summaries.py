@@ -27,6 +27,18 @@ def window_words(t: np.ndarray, frac: float = 0.25) -> str:
     return f"mean over t = {a:.4g} - {b:.4g} s"
 
 
+def error_words(values, scale: float = 1.0, fmt: str = ".2g") -> str:
+    """" +- e": the standard error of the mean of ``values`` (correlated samples, by blocking:
+    steady_state.block_standard_error), times ``scale``; empty with fewer than two finite
+    samples. The summaries print it beside each time-averaged figure a user acts on."""
+    from .steady_state import block_standard_error
+    x = np.asarray(values, float)
+    x = x[np.isfinite(x)]
+    if len(x) < 2:
+        return ""
+    return f" +- {block_standard_error(x).standard_error * scale:{fmt}}"
+
+
 def body_torque_lines(sim, frac: float = 0.25) -> dict:
     """Print one line per body: its mean axial torque (N m) and drive power (W; 0 for a body at
     rest, whose torque is the load its mounting takes) over
@@ -40,11 +52,13 @@ def body_torque_lines(sim, frac: float = 0.25) -> dict:
     for b in sim.scene.bodies:
         if f"bodies/{b.name}/axial_torque" not in s:
             continue
-        tq = float(np.mean(_tail(s[f"bodies/{b.name}/axial_torque"], frac)))
-        pw = float(np.mean(_tail(s[f"bodies/{b.name}/power"], frac)))
+        torque = _tail(s[f"bodies/{b.name}/axial_torque"], frac)
+        power = _tail(s[f"bodies/{b.name}/power"], frac)
+        tq, pw = float(np.mean(torque)), float(np.mean(power))
         out[f"{b.name}/axial_torque"] = tq
         out[f"{b.name}/power"] = pw
-        print(f"body {b.name}: axial torque {tq:.4g} N m, drive power {pw:.4g} W ({words})")
+        print(f"body {b.name}: axial torque {tq:.4g}{error_words(torque)} N m, drive power "
+              f"{pw:.4g}{error_words(power)} W ({words}; +- the standard error of the mean)")
     return out
 
 
@@ -81,9 +95,11 @@ def process_summary(sim, window: float = 0.25) -> dict:
             else:
                 print(f"summary: residence time '{x.name}': no particle has made it yet")
         elif x.kind == "mass_flow":
-            mf = float(np.mean(_tail(s[f"sensors/{x.name}/mass_flow"], window)))
+            flows = _tail(s[f"sensors/{x.name}/mass_flow"], window)
+            mf = float(np.mean(flows))
             out[f"{x.name}/mass_flow"] = mf
-            print(f"summary: mass flow through '{x.name}': {mf * 3.6:.3g} t/h "
+            print(f"summary: mass flow through '{x.name}': {mf * 3.6:.3g}"
+                  f"{error_words(flows, 3.6)} t/h "
                   f"({words})")
         elif x.kind == "contact_count":
             cc = float(np.mean(_tail(s[f"sensors/{x.name}/contact_count"], window)))
@@ -94,7 +110,8 @@ def process_summary(sim, window: float = 0.25) -> dict:
         flow = float(np.mean(_tail(s[p + "mass_flow"], window)))
         out[f"{o.name}/mass_flow"] = flow
         line = (f"summary: outlet '{o.name}': {s[p + 'mass'][-1]:.4g} kg removed by t = {end:.4g} s, "
-                f"{flow * 3.6:.3g} t/h ({words})")
+                f"{flow * 3.6:.3g}{error_words(_tail(s[p + 'mass_flow'], window), 3.6)} t/h "
+                f"({words})")
         if p + "mean_temperature" in s:
             temps = _tail(s[p + "mean_temperature"], window)
             flows = _tail(s[p + "mass_flow"], window)
@@ -157,7 +174,7 @@ def process_summary(sim, window: float = 0.25) -> dict:
                     out[f"{b.name}/heat_transfer_coefficient"] = mean_h
                     q = float(np.mean(_tail(s[f"bodies/{b.name}/heat_flow"], window)))
                     print(f"summary: {b.name}: {q:.4g} W into it, wall-to-bed heat transfer "
-                          f"coefficient {mean_h:.4g} W/(m^2 K) over "
+                          f"coefficient {mean_h:.4g}{error_words(h)} W/(m^2 K) over "
                           f"{float(np.mean(_tail(s[f'bodies/{b.name}/covered_area'], window))):.3g} "
                           f"m^2 covered ({words})")
     for f in sim.scene.factories:

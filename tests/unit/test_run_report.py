@@ -52,3 +52,16 @@ def test_a_frame_interval_between_samples_is_refused(tmp_path):
     assert r.returncode == 2
     assert "output.frame_interval" in r.stderr and "whole multiple" in r.stderr
     assert "Traceback" not in r.stderr
+
+
+def test_summary_figures_carry_the_standard_error_of_their_mean():
+    """error_words: blocking's standard error of the mean; for independent samples of standard
+    deviation 2 it is 2 / sqrt(n) (n = 1024: 0.0625, within the blocking's own scatter of ~10 %
+    at the level it settles on); none for a single sample."""
+    import numpy as np
+    from taichi_dem.app.summaries import error_words
+    x = np.random.default_rng(3).normal(5.0, 2.0, 1024)
+    se = float(error_words(x).split("+-")[1])
+    assert se == pytest.approx(2.0 / 32.0, rel=0.25)
+    assert float(error_words(x, 3.6).split("+-")[1]) == pytest.approx(3.6 * se, rel=0.02)
+    assert error_words([1.0]) == "" and error_words([1.0, float("nan")]) == ""
