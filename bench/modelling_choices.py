@@ -10,6 +10,15 @@ the runs resolve; below: within the noise of runs this long), and the wall time 
 Default slice: bench/direct_check/cooler_slice.toml (20 mm spheres in a 0.3 m cooler with a
 25 mm paddle clearance), hold-ups 6 and 9 kg/m at 5 deg, 15 s each. Choices: f64; spheres of
 16 and 24 mm (24 mm just passes the clearance); the thermal time scale 10.
+
+``--preset seed``: the seed's one-row slice (demos/cooler_slice.toml: 15 mm spheres, 20 mm
+paddle clearance) at its mapped hold-ups 30, 60 and 90 kg/m at 5 deg, 6 s each, the reference
+being the rows at 5 deg of the design's published map (docs/machine/seed_cooler/original, the
+same command and length) rather than a new run. Choices: f64; spheres of 20 mm (as wide as the
+clearance) and 30 mm (wider: the seed's question of what the clearance allows); the thermal
+time scale 10.
+
+    python bench/modelling_choices.py --preset seed --out docs/machine/seed_cooler/modelling_choices
 """
 import argparse
 import json
@@ -26,6 +35,13 @@ CHOICES = {"reference": [],
            "16 mm spheres": ["particles.0.radius=0.008"],
            "24 mm spheres": ["particles.0.radius=0.012"],
            "thermal time scale 10": ["thermal.time_scale=10"]}
+SEED_SCENE = ROOT / "demos" / "cooler_slice.toml"
+SEED_REFERENCE = ROOT / "docs" / "machine" / "seed_cooler" / "original"
+SEED_CHOICES = {"reference": [],
+                "20 mm spheres": ["particles.0.radius=0.01"],
+                "30 mm spheres": ["particles.0.radius=0.015"],
+                "thermal time scale 10": ["thermal.time_scale=10"],
+                "f64": ["simulation.precision=f64"]}
 FIGURES = ("axial_mass_flow", "shaft/torque_per_metre", "shell/torque_per_metre",
            "shell/conductance_per_metre", "dynamic_angle")
 
@@ -37,16 +53,29 @@ def folder(out: Path, name: str) -> Path:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "modelling_choices")
-    p.add_argument("--scene", type=Path, default=SCENE)
-    p.add_argument("--holdups", nargs="+", default=["6", "9"])
+    p.add_argument("--preset", choices=["direct_check", "seed"], default="direct_check",
+                   help="which slice and choices (module docstring)")
+    p.add_argument("--scene", type=Path, default=None)
+    p.add_argument("--holdups", nargs="+", default=None)
     p.add_argument("--incline", default="5")
-    p.add_argument("--time", type=float, default=15.0)
+    p.add_argument("--time", type=float, default=None)
+    p.add_argument("--reference", type=Path, default=None,
+                   help="a map folder whose rows at --incline are the reference (not re-run)")
     p.add_argument("--only", nargs="+", default=None, help="choices to run (default all)")
     p.add_argument("--reuse", action="store_true", help="keep maps already in OUT")
     a = p.parse_args(argv)
+    seed = a.preset == "seed"
+    choices = SEED_CHOICES if seed else CHOICES
+    a.scene = a.scene or (SEED_SCENE if seed else SCENE)
+    a.holdups = a.holdups or (["30", "60", "90"] if seed else ["6", "9"])
+    a.time = a.time or (6.0 if seed else 15.0)
+    if a.reference is None and seed:
+        a.reference = SEED_REFERENCE
     walls_file = a.out / "walls.json"
     walls = json.loads(walls_file.read_text()) if walls_file.exists() else {}
-    for name, sets in CHOICES.items():
+    for name, sets in choices.items():
+        if name == "reference" and a.reference is not None:
+            continue
         if a.only and name not in a.only and name != "reference":
             continue
         out = folder(a.out, name)
@@ -62,10 +91,13 @@ def main(argv=None) -> int:
         a.out.mkdir(parents=True, exist_ok=True)
         walls_file.write_text(json.dumps(walls, indent=1))
     maps = {}
-    for name in CHOICES:
+    for name in choices:
         f = folder(a.out, name) / "map.json"
+        if name == "reference" and a.reference is not None:
+            f = a.reference / "map.json"
         if f.exists():
-            maps[name] = json.loads(f.read_text())["rows"]
+            rows = json.loads(f.read_text())["rows"]
+            maps[name] = [r for r in rows if abs(r["incline_deg"] - float(a.incline)) < 1e-6]
     ref = maps["reference"]
     lines = [f"Slice {a.scene.name}, {a.time:g} s per hold-up at {a.incline} deg; each figure: "
              "the choice's value, its difference from the reference in %, and z = difference / "
@@ -80,7 +112,10 @@ def main(argv=None) -> int:
                 if name == "reference":
                     cells.append(f"{v:.4g} +- {e:.2g}")
                     continue
-                r, re_ = ref[k].get(fig, math.nan), ref[k].get(fig + "_standard_error", math.nan)
+                match = [x for x in ref if abs(x["holdup_kg_per_m"] - row["holdup_kg_per_m"])
+                         < 1e-6 * max(1.0, row["holdup_kg_per_m"])]
+                rr = match[0] if match else {}
+                r, re_ = rr.get(fig, math.nan), rr.get(fig + "_standard_error", math.nan)
                 diff = v - r
                 z = diff / math.hypot(e, re_) if math.hypot(e, re_) > 0 else math.nan
                 pct = 100.0 * diff / abs(r) if r else math.nan

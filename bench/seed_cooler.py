@@ -16,6 +16,8 @@ printed with our column beside it (and written to OUT/seed_table.md).
 import argparse
 import json
 import math
+
+import numpy as np
 import subprocess
 import sys
 import time
@@ -27,6 +29,15 @@ sys.path.insert(0, str(ROOT))
 from taichi_dem.app import machine as mc       # noqa: E402
 
 DESIGNS = {"original": ("cooler_slice", 5.0), "optimised": ("cooler_slice_optimised", 2.0)}
+# the optimised design's inlet screw (demos/cooler_slice_screw.toml, our geometry: the seed
+# gives none): its map in OUT/screw, its first SCREW_LENGTH m replacing the paddles'
+SCREW = ("cooler_slice_screw", "screw")
+SCREW_LENGTH = 1.0
+# the original design's modelling choices (bench/modelling_choices.py --preset seed), in
+# OUT/modelling_choices/<name>: each answer's change under each, beside the maps' noise
+CHOICES = {"f64": "precision f64 (f32 mapped)", "20_mm_spheres": "spheres 20 mm (15 mapped)",
+           "30_mm_spheres": "spheres 30 mm (15 mapped)",
+           "thermal_time_scale_10": "thermal time scale 10 (1 mapped)"}
 LENGTH = 6.0
 FEEDS_T_H = (4.6, 6.5)
 INLET_C, WALL_C = 450.0, 30.0
@@ -35,7 +46,7 @@ INLET_C, WALL_C = 450.0, 30.0
 def run_maps(out: Path, holdups, seconds: float, inclines=(5.0, 2.0)) -> dict:
     """``taichi-dem map`` for each design; returns the wall time of each (s)."""
     walls = {}
-    for design, (scene, _) in DESIGNS.items():
+    for design, (scene, _) in [*DESIGNS.items(), (SCREW[1], (SCREW[0], None))]:
         t0 = time.perf_counter()
         cmd = [sys.executable, "-m", "taichi_dem", "map", str(ROOT / "demos" / f"{scene}.toml"),
                "--holdup", *[f"{h} kg/m" for h in holdups], "--incline", *map(str, inclines),
@@ -45,13 +56,76 @@ def run_maps(out: Path, holdups, seconds: float, inclines=(5.0, 2.0)) -> dict:
     return walls
 
 
-def answers(map_dir: Path, incline: float) -> dict:
-    """The machine's answers at the seed's feeds and its capacity (module docstring)."""
-    m = mc.MachineMap.load(map_dir)
-    feeds = [f / 3.6 for f in FEEDS_T_H]
+def answers(map_dir: Path, incline: float, inlet_sections=(), machine=None,
+            feeds_t_h=FEEDS_T_H) -> dict:
+    """The machine's answers at the seed's feeds and its capacity (module docstring);
+    ``machine``: a map to march instead of the one in ``map_dir`` (a modelling choice's)."""
+    m = machine or mc.MachineMap.load(map_dir)
+    feeds = [f / 3.6 for f in feeds_t_h]
     out = mc.with_errors(m, LENGTH, feeds, -math.tan(math.radians(incline)),
-                         inlet_temperature=INLET_C + 273.15, draws=40)
+                         inlet_temperature=INLET_C + 273.15, draws=40,
+                         inlet_sections=inlet_sections)
     return {"map": m, "out": out}
+
+
+def section_speed(answer, start: float, end: float) -> float:
+    """Mean axial speed (m/s) of the bed between ``start`` and ``end`` m from the inlet end:
+    the section's length over its residence (its hold-up over the feed)."""
+    x, h = answer.profile.x, answer.profile.holdup
+    keep = (x >= start - 1e-9) & (x <= end + 1e-9)
+    return (end - start) * answer.feed / float(np.trapezoid(h[keep], x[keep]))
+
+
+def choices_table(out: Path, base: dict) -> str:
+    """Each answer of the original design at 6.5 t/h with its error from noise, and what each
+    modelling choice mapped in OUT/modelling_choices moves it by (z: over the noise)."""
+    folder = out / "modelling_choices"
+    found = {k: v for k, v in CHOICES.items() if (folder / k / "map.json").exists()}
+    if not found:
+        return ""
+    incline = DESIGNS["original"][1]
+    diffs = {}
+    for key, label in found.items():
+        choice = mc.MachineMap.load(folder / key)
+        # both marches from the hold-ups the choice mapped (the design's map may have more)
+        theirs = {round(r.holdup, 6) for r in choice.rows}
+        m = base["map"]
+        common = mc.MachineMap([r for r in m.rows if round(r.holdup, 6) in theirs], m.section,
+                               m.angular_speeds, m.particle_diameter, m.heat_capacity,
+                               m.wall_temperatures, m.bodies)
+        reference = answers(None, incline, machine=common)["out"]
+        other = mc.substituted(common, choice, source=str(folder / key))
+        diffs[label] = mc.choice_differences(reference, answers(None, incline, machine=other)["out"])
+    k = FEEDS_T_H.index(6.5)
+    a, e = base["out"]["feeds"][k], base["out"]["errors"][k]
+    names = [("capacity (t/h)", base["out"]["capacity"] * 3.6, base["out"]["capacity_error"] * 3.6,
+              lambda d: d["capacity"], 3.6, True),
+             ("mean residence (s)", a.residence_time, e.get("residence_time"),
+              lambda d: d["feeds"][k]["residence_time"], 1.0, True),
+             ("shaft drive torque (N m)", -a.torques["shaft"], e.get("shaft/torque"),
+              lambda d: d["feeds"][k]["shaft/torque"], -1.0, True),
+             ("outlet temperature (C)", a.outlet_temperature - 273.15, e.get("outlet_temperature"),
+              lambda d: d["feeds"][k]["outlet_temperature"], 1.0, False)]
+    lines = ["Original paddles, 5 deg, at 6.5 t/h: each answer with its error from the maps' noise "
+             "(one standard deviation over the re-marches) and the change each modelling choice "
+             "makes (the choice's map at 5 deg, `bench/modelling_choices.py --preset seed`; z = "
+             "the change over the two noises combined: |z| < 2 is a change these maps do not "
+             "resolve, so the choice's error is below about 2 noise)", "",
+             "| answer | value | noise | " + " | ".join(diffs) + " |",
+             "|---|---|---|" + "---|" * len(diffs)]
+    for name, value, noise, pick, scale, pct in names:
+        cells = []
+        for d in diffs.values():
+            c = pick(d)
+            if c is None:
+                cells.append("n/a")
+            elif pct:
+                cells.append(f"{c['change'] * scale:+.3g} ({100 * c['relative']:+.0f} %, "
+                             f"z {c['z']:+.1f})")
+            else:
+                cells.append(f"{c['change'] * scale:+.3g} K (z {c['z']:+.1f})")
+        lines.append(f"| {name} | {value:.4g} | {noise:.2g} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 def fmt(value, error, scale=1.0, digits=3):
@@ -59,6 +133,10 @@ def fmt(value, error, scale=1.0, digits=3):
         return "n/a"
     e = error if error is not None and math.isfinite(error) else math.nan
     return f"{value * scale:.{digits}g} +- {e * scale:.2g}"
+
+
+def cap_text(out: dict) -> str:
+    return fmt(out["capacity"], out["capacity_error"], 3.6) + " t/h"
 
 
 def table(results: dict, walls: dict | None) -> str:
@@ -101,13 +179,39 @@ def table(results: dict, walls: dict | None) -> str:
         rows.append((f"{label}: at 4.6 t/h: residence (s), shaft drive torque (N m)", "",
                      f"{fmt(a46.residence_time, e46.get('residence_time'))}; "
                      f"{fmt(-a46.torques.get('shaft', math.nan), e46.get('shaft/torque'))}"))
+    if "optimised_with_screw" in results:
+        r = results["optimised_with_screw"]
+        out = r["out"]
+        label = f"optimised paddles, 2 deg, with {SCREW_LENGTH:g} m of inlet screw (our geometry)"
+        by_feed = {round(a.feed * 3.6, 2): (a, e) for a, e in zip(out["feeds"], out["errors"])}
+        seed = {6.5: "60 / 36 mm/s, about 150 s", 13.0: "45 / 39 mm/s, about 150 s"}
+        for feed in (6.5, 13.0):
+            a, e = by_feed[feed]
+            speeds = (f"{section_speed(a, 0.0, SCREW_LENGTH) * 1e3:.3g} / "
+                      f"{section_speed(a, SCREW_LENGTH, LENGTH) * 1e3:.3g} mm/s, "
+                      f"{fmt(a.residence_time, e.get('residence_time'))} s"
+                      + (" (overflows: beyond capacity)" if a.overflows else ""))
+            rows.append((f"{label}: at {feed:g} t/h, axial speed along screw / paddles, "
+                         "residence", seed[feed], speeds))
+        a, e = by_feed[6.5]
+        drive = -(a.torques.get("shaft", 0.0) + a.torques.get("screw", 0.0))
+        drive_e = math.hypot(e.get("shaft/torque", 0.0), e.get("screw/torque", 0.0))
+        rows += [(f"{label}: capacity", "", cap_text(out)),
+                 (f"{label}: inlet-end hold-up at 6.5 t/h", "no accumulation under the inlet",
+                  f"{a.inlet_holdup:.3g} kg/m"),
+                 (f"{label}: shaft drive torque at 6.5 t/h (paddles + screw)", "",
+                  fmt(drive, drive_e) + " N m"),
+                 (f"{label}: outlet temperature at 6.5 t/h (C)", "(not simulated)",
+                  fmt(a.outlet_temperature - 273.15, e.get("outlet_temperature")))]
     lines = ["| " + " | ".join(rows[0]) + " |", "|---|---|---|"]
     lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]
     if walls:
         lines += ["", "map wall times on this machine: " + ", ".join(
             f"{d} {w / 60:.1f} min" for d, w in walls.items())]
-    lines += ["", "Errors: one standard deviation from the maps' noise (re-marches); not from "
-              "the particle size, precision or the one-row slice (stagger 0)."]
+    lines += ["", "Errors: one standard deviation from the maps' noise (re-marches). What the "
+              "particle size, the precision and the thermal time scale move the answers by is "
+              "the table below (the original design); the one-row slice (stagger 0) is not "
+              "counted in either."]
     return "\n".join(lines)
 
 
@@ -126,7 +230,15 @@ def main(argv=None) -> int:
             results[design] = answers(folder, incline)
         else:
             print(f"no map for {design} in {folder}", file=sys.stderr)
+    if "optimised" in results and (a.out / SCREW[1] / "map.json").exists():
+        screw = mc.MachineMap.load(a.out / SCREW[1])
+        results["optimised_with_screw"] = answers(a.out / "optimised", DESIGNS["optimised"][1],
+                                                  [(screw, SCREW_LENGTH)], feeds_t_h=(6.5, 13.0))
     text = table(results, walls)
+    if "original" in results:
+        extra = choices_table(a.out, results["original"])
+        if extra:
+            text += "\n\n" + extra
     print(text)
     a.out.mkdir(parents=True, exist_ok=True)
     (a.out / "seed_table.md").write_text(text + "\n")

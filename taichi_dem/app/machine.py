@@ -558,6 +558,100 @@ def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
 _HOLDUP = re.compile(r"^\s*([0-9.eE+-]+)\s*(kg/m|%)?\s*$")
 
 
+def substituted(base: MachineMap, other: MachineMap, source: str = "--choice") -> MachineMap:
+    """``base`` with the rows of ``other`` (the same slice with one modelling choice changed:
+    precision, particle size, time scale) put in: a base row that ``other`` mapped at the same
+    hold-up and incline takes ``other``'s figures; one that ``other`` mapped at the same
+    hold-up but another incline only is shifted by the choice's difference there (each figure
+    + other - base at that incline: the choice moves a(H) and the per-metre figures, and its
+    effect on the slope's b(H) is taken as nil). The particle diameter is ``other``'s. A
+    hold-up ``other`` did not map is refused: the march would mix the two."""
+    def key(r):
+        return round(r.holdup, 6), round(r.axial_slope, 9)
+    theirs = {key(r): r for r in other.rows}
+    mine = {key(r): r for r in base.rows}
+    rows = []
+    for r in base.rows:
+        if key(r) in theirs:
+            rows.append(MapRow(r.holdup, r.axial_slope, dict(theirs[key(r)].figures)))
+            continue
+        pairs = [(k, o) for k, o in theirs.items() if k[0] == key(r)[0] and k in mine]
+        if not pairs:
+            raise SceneError(source, "rows", f"the map lacks the hold-up {r.holdup:g} kg/m that "
+                             "the main map has: map the choice at the same hold-ups")
+        k, o = pairs[0]
+        ref = mine[k]
+        figures = {}
+        for name, (value, se) in r.figures.items():
+            if name in o.figures and name in ref.figures:
+                figures[name] = (value + o.figures[name][0] - ref.figures[name][0],
+                                 float(math.hypot(se, o.figures[name][1])))
+            else:
+                figures[name] = (value, se)
+        rows.append(MapRow(r.holdup, r.axial_slope, figures))
+    return MachineMap(rows, base.section, base.angular_speeds, other.particle_diameter,
+                      other.heat_capacity, base.wall_temperatures, base.bodies)
+
+
+def choice_differences(base_out: dict, choice_out: dict) -> dict:
+    """Each answer's change under a modelling choice (choice - base) with z = change over the
+    two re-march deviations combined; ``base_out``/``choice_out`` are ``with_errors``'."""
+    def diff(a, ea, b, eb):
+        if a is None or b is None or not (math.isfinite(a) and math.isfinite(b)):
+            return None
+        e = math.hypot(ea if ea is not None and math.isfinite(ea) else 0.0,
+                       eb if eb is not None and math.isfinite(eb) else 0.0)
+        # relative to the answer itself: +10 % is 10 % more of it (a torque that is negative,
+        # the particles' on the body, grows in size by 10 %)
+        return {"change": b - a, "relative": (b - a) / a if a else math.nan,
+                "z": (b - a) / e if e > 0 else math.nan}
+    out = {"capacity": diff(base_out["capacity"], base_out["capacity_error"],
+                            choice_out["capacity"], choice_out["capacity_error"]), "feeds": []}
+    for a, ea, b, eb in zip(base_out["feeds"], base_out["errors"], choice_out["feeds"],
+                            choice_out["errors"]):
+        row = {"feed_kg_per_s": a.feed,
+               "residence_time": diff(a.residence_time, ea.get("residence_time"),
+                                      b.residence_time, eb.get("residence_time")),
+               "holdup": diff(a.holdup, ea.get("holdup"), b.holdup, eb.get("holdup")),
+               "outlet_temperature": diff(a.outlet_temperature, ea.get("outlet_temperature"),
+                                          b.outlet_temperature, eb.get("outlet_temperature"))}
+        for body in a.torques:
+            if body in b.torques:
+                row[f"{body}/torque"] = diff(a.torques[body], ea.get(f"{body}/torque"),
+                                             b.torques[body], eb.get(f"{body}/torque"))
+        out["feeds"].append(row)
+    return out
+
+
+def choices_report(differences: dict) -> str:
+    """Markdown: what each modelling choice moves each answer by (``choice_differences``)."""
+    def cell(d, scale=1.0, percent=True):
+        if d is None:
+            return "n/a"
+        if not percent:       # a temperature: its change in K says it, a % of K does not
+            return f"{d['change'] * scale:+.3g} (z {d['z']:+.1f})"
+        return f"{d['change'] * scale:+.3g} ({100 * d['relative']:+.0f} %, z {d['z']:+.1f})"
+    bodies = []
+    for d in differences.values():
+        for row in d["feeds"]:
+            bodies += [n for n in row if n.endswith("/torque") and n not in bodies]
+    lines = ["## What each modelling choice moves the answers by", "",
+             "each cell: the answer with the choice minus without, in % of the answer, and z = "
+             "the change over the two re-march deviations combined (|z| > 2: beyond the maps' "
+             "noise); torques are the particles' on each body (N m)", "",
+             "| choice | feed (t/h) | capacity (t/h) | mean residence (s) | "
+             + "".join(f"{b} (N m) | " for b in bodies) + "outlet temperature (K) |",
+             "|---" * (5 + len(bodies)) + "|"]
+    for label, d in differences.items():
+        for k, row in enumerate(d["feeds"]):
+            lines.append(f"| {label} | {row['feed_kg_per_s'] * 3.6:.3g} | "
+                         + (cell(d["capacity"], 3.6) if k == 0 else "") + " | "
+                         + cell(row["residence_time"]) + " | "
+                         + "".join(cell(row.get(b)) + " | " for b in bodies)
+                         + cell(row["outlet_temperature"], percent=False) + " |")
+    return "\n".join(lines)
+
+
 def parse_holdup(text: str) -> tuple[str, float]:
     """``"60 kg/m"`` -> ("kg/m", 60.0); ``"25 %"`` -> ("fill", 0.25); a bare number is kg/m."""
     m = _HOLDUP.match(str(text))
@@ -615,6 +709,11 @@ def add_arguments(p) -> None:
                    default=[], help="a section at the inlet end with its own map (an inlet "
                    "screw before the paddles): the map and its length ('1 m'); repeat for more, "
                    "in order from the inlet; the main map covers the rest, at the discharge end")
+    p.add_argument("--choice", nargs=2, action="append", metavar=("LABEL", "MAP"), default=[],
+                   help="a map of the same slice with one modelling choice changed ('f64', "
+                   "'20 mm spheres'), at the main map's hold-ups and at one or all of its "
+                   "inclines: the machine is marched again with it and each answer's change "
+                   "reported beside the noise; repeat for more")
     p.add_argument("--draws", type=int, default=40,
                    help="re-marches with the map drawn from its standard errors (the errors)")
     p.add_argument("--out", default=None, help="folder for machine.md, machine.json and "
@@ -682,6 +781,16 @@ def cmd_machine(args) -> int:
                       inlet_sections=inlet)
     report = machine_report(m, out, length, incline, t_in,
                             sections=[(p, l) for (p, _), (_, l) in zip(args.inlet_section, inlet)])
+    if args.choice:
+        differences = {}
+        for label, path in args.choice:
+            other = substituted(m, MachineMap.load(path), source=str(path))
+            other_out = with_errors(other, length, feeds, slope, depth0, overflow, t_in,
+                                    draws=args.draws, inlet_sections=inlet)
+            differences[label] = choice_differences(out, other_out)
+        report["text"] += "\n\n" + choices_report(differences)
+        report["json"]["choices"] = {label: {"map": str(path), **differences[label]}
+                                     for label, path in args.choice}
     print(report["text"])
     folder = Path(args.out) if args.out else (map_path if map_path.is_dir() else map_path.parent)
     folder.mkdir(parents=True, exist_ok=True)

@@ -406,7 +406,10 @@ def write_map(results: list[SliceResult], out_dir: Path, scene_name: str,
     """map.csv, map.md, map.json and map.png (torque per metre and axial mass flow against
     hold-up) in ``out_dir``; returns their paths."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    rows = [r.row() for r in results]
+    # SliceResults, or rows already written (a map being added to: --add)
+    rows = [r.row() if isinstance(r, SliceResult) else dict(r) for r in results]
+    order = list(dict.fromkeys(round(r["incline_deg"], 6) for r in rows))
+    rows.sort(key=lambda r: (order.index(round(r["incline_deg"], 6)), r["holdup_kg_per_m"]))
     if machine:
         for row in rows:
             flow, ratio = saeman_check(row, machine)
@@ -514,6 +517,10 @@ def add_arguments(p) -> None:
     p.add_argument("--fill", type=int, default=0, help="the [[particles]] fill whose count is set")
     p.add_argument("--out", default=None, help="folder for map.csv, map.md, map.json, map.png "
                                                "(default: <scene>_map beside the scene)")
+    p.add_argument("--add", action="store_true",
+                   help="add these slices to the map already in --out (the same scene and "
+                        "--set): a hold-up and incline mapped again replaces its row; the "
+                        "table, JSON and plot are written again from all rows")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="a scene key changed for every slice (one value; repeatable), e.g. "
                         "simulation.precision=f64 or particles.0.radius=0.012: the map of a "
@@ -537,6 +544,31 @@ def _print_result(result: SliceResult) -> None:
           f"{result.figures['axial_mass_flow']} kg/s, "
           + ", ".join(f"{k.split('/')[0]} torque {v} N m/m" for k, v in torque.items()),
           flush=True)
+
+
+def _rows_to_add_to(out: Path, scene_name: str, info: dict) -> list[dict]:
+    """The rows of the map in ``out`` that ``--add`` adds to, refused (file: key: reason)
+    unless it is this scene's with the same changes and machine."""
+    js = out / "map.json"
+    try:
+        doc = json.loads(js.read_text())
+    except OSError as err:
+        raise SceneError(str(js), "", f"--add: cannot read the map to add to: "
+                         f"{err.strerror}") from None
+    except json.JSONDecodeError as err:
+        raise SceneError(str(js), "", f"--add: not a map (JSON): {err}") from None
+    if doc.get("scene") != scene_name:
+        raise SceneError(str(js), "scene", f"--add: the map is of {doc.get('scene')!r}, not "
+                         f"{scene_name!r}")
+    theirs = doc.get("machine", {})
+    for key in ("scene_changes", "particle_diameter", "shell_radius", "period", "axis"):
+        a, b = theirs.get(key), info.get(key)
+        same = (a == b if not isinstance(a, float) or not isinstance(b, float)
+                else math.isclose(a, b, rel_tol=1e-9))
+        if not same:
+            raise SceneError(str(js), f"machine.{key}", f"--add: the map has {a!r}, these "
+                             f"slices {b!r}: not the same slice")
+    return list(doc.get("rows", []))
 
 
 def cmd_map(args) -> int:
@@ -578,6 +610,11 @@ def cmd_map(args) -> int:
               "the heat at 1 for the march's outlet temperature", file=sys.stderr)
     for h in holdups:       # refuse every impossible hold-up before running any
         holdup_count(scene, geometry, h, args.fill)
+    out = Path(args.out) if args.out else path.with_name(path.stem + "_map")
+    info = machine_info(scene, geometry, args.fill)
+    if changes:
+        info["scene_changes"] = changes          # what --set changed: the modelling choice
+    old_rows = _rows_to_add_to(out, path.name, info) if args.add else []
     jobs = [(i, h) for i in (args.incline or [None]) for h in holdups]
     if args.dask or args.scheduler:
         # one task per slice (sweep.make_client: a LocalCluster of processes, or a scheduler)
@@ -599,10 +636,9 @@ def cmd_map(args) -> int:
                                arch=args.arch, incline=incline)
             results.append(result)
             _print_result(result)
-    out = Path(args.out) if args.out else path.with_name(path.stem + "_map")
-    info = machine_info(scene, geometry, args.fill)
-    if changes:
-        info["scene_changes"] = changes          # what --set changed: the modelling choice
-    paths = write_map(results, out, path.name, info)
+    new_keys = {(round(r.holdup, 6), round(r.incline, 6)) for r in results}
+    kept = [r for r in old_rows
+            if (round(r["holdup_kg_per_m"], 6), round(r["incline_deg"], 6)) not in new_keys]
+    paths = write_map(kept + results, out, path.name, info)
     print("wrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
     return 0

@@ -289,3 +289,100 @@ def test_a_section_the_incline_does_not_move_sits_at_its_own_plateau():
         r.figures["axial_mass_flow"] = (r.figures["axial_mass_flow"][0], 0.0)
     with pytest.raises(SceneError, match="falls with the slope"):
         mc.answer(drum, 12.0, 1.5, slope, 0.02, inlet_sections=[(screw, 2.0)])
+
+
+# --- a modelling choice's map marched beside the main one (issue 31 item 5) -----------------
+
+def _scaled(m, name, factor):
+    """A copy of map ``m`` with figure ``name`` times ``factor`` in every row."""
+    rows = [mc.MapRow(r.holdup, r.axial_slope,
+                      {n: ((v * factor, se) if n == name else (v, se))
+                       for n, (v, se) in r.figures.items()}) for r in m.rows]
+    return mc.MachineMap(rows, m.section, m.angular_speeds, m.particle_diameter,
+                         m.heat_capacity, m.wall_temperatures, m.bodies)
+
+
+def test_a_choice_that_changes_nothing_moves_no_answer():
+    m = drum_map(shaft_torque=-2.0, conductance=150.0)
+    base = mc.with_errors(m, 12.0, [1.2], -math.tan(math.radians(THETA)), 0.02,
+                          inlet_temperature=700.0, draws=3)
+    same = mc.with_errors(mc.substituted(m, m), 12.0, [1.2], -math.tan(math.radians(THETA)),
+                          0.02, inlet_temperature=700.0, draws=3)
+    d = mc.choice_differences(base, same)
+    assert d["capacity"]["change"] == 0.0
+    for name in ("residence_time", "holdup", "outlet_temperature", "shell/torque"):
+        assert d["feeds"][0][name]["change"] == 0.0
+
+
+def test_a_choice_that_doubles_the_conductance_gives_the_closed_form_outlet():
+    feed, length = 1.2, 12.0
+    m = drum_map(shaft_torque=-2.0, conductance=150.0)
+    choice = mc.substituted(m, _scaled(m, "shell/conductance_per_metre", 2.0))
+    base = mc.with_errors(m, length, [feed], -math.tan(math.radians(THETA)), 0.02,
+                          inlet_temperature=700.0, draws=3)
+    other = mc.with_errors(choice, length, [feed], -math.tan(math.radians(THETA)), 0.02,
+                           inlet_temperature=700.0, draws=3)
+    d = mc.choice_differences(base, other)["feeds"][0]
+    t1 = 300.0 + 400.0 * math.exp(-150.0 * length / (feed * 1000.0))
+    t2 = 300.0 + 400.0 * math.exp(-300.0 * length / (feed * 1000.0))
+    # 5e-3: the march's 400 steps and the conductance's anchor at an empty bed (at the
+    # discharge) leave each outlet ~0.2 % off its closed form, the difference twice that
+    assert d["outlet_temperature"]["change"] == pytest.approx(t2 - t1, rel=5e-3)
+    assert d["residence_time"]["change"] == pytest.approx(0.0, abs=1e-9)
+    text = mc.choices_report({"doubled": mc.choice_differences(base, other)})
+    assert "| doubled | 4.32 |" in text
+
+
+def test_a_choice_mapped_at_one_incline_shifts_the_other_and_keeps_the_slope_effect():
+    m = screw_map()
+    one = [r for r in m.rows if r.axial_slope != 0.0]          # the choice at 5 deg only
+    faster = mc.MachineMap([mc.MapRow(r.holdup, r.axial_slope,
+                                      {n: ((v * 1.5, se) if n == "axial_mass_flow" else (v, se))
+                                       for n, (v, se) in r.figures.items()}) for r in one],
+                           m.section, {}, 0.006, 1000.0, {}, ["screw"])
+    sub = mc.substituted(m, faster)
+    base_law, law = mc.TransportLaw(m), mc.TransportLaw(sub)
+    np.testing.assert_allclose(law.b_per_chord3, base_law.b_per_chord3, rtol=1e-9)
+    for r in sub.rows:         # at 5 deg the choice's flows, at 0 deg shifted by as much
+        ref = next(x for x in m.rows if x.holdup == r.holdup and x.axial_slope == r.axial_slope)
+        at5 = next(x for x in one if x.holdup == r.holdup)
+        assert r.mean("axial_mass_flow") == pytest.approx(
+            ref.mean("axial_mass_flow") + 0.5 * at5.mean("axial_mass_flow"), rel=1e-12)
+    assert sub.particle_diameter == 0.006
+
+
+def test_a_choice_without_the_main_maps_holdups_is_refused(tmp_path, capsys):
+    m = drum_map()
+    short = mc.MachineMap(m.rows[:2], m.section, m.angular_speeds, m.particle_diameter,
+                          m.heat_capacity, m.wall_temperatures, m.bodies)
+    with pytest.raises(SceneError, match="lacks the hold-up"):
+        mc.substituted(m, short)
+
+
+def test_machine_command_reports_each_choice(tmp_path, capsys):
+    import json
+    from taichi_dem.app.cli import main
+
+    def write(m, path):
+        rows = []
+        for r in m.rows:
+            row = {"holdup_kg_per_m": r.holdup, "axial_slope": r.axial_slope}
+            for n, (v, se) in r.figures.items():
+                row[n], row[n + "_standard_error"] = v, se
+            rows.append(row)
+        info = {"shell_radius": R, "shaft_radius": 0.0, "bulk_density": RHO_B,
+                "particle_diameter": m.particle_diameter, "angular_speeds": m.angular_speeds,
+                "wall_temperatures": m.wall_temperatures, "heat_capacity": m.heat_capacity,
+                "bodies": m.bodies}
+        path.write_text(json.dumps({"machine": info, "rows": rows}))
+    m = drum_map(shaft_torque=-2.0, conductance=150.0)
+    write(m, tmp_path / "map.json")
+    write(_scaled(m, "shell/torque_per_metre", 1.1), tmp_path / "f64.json")
+    assert main(["machine", str(tmp_path / "map.json"), "--length", "12 m", "--feed", "1.2 kg/s",
+                 "--inlet-temperature", "700 K", "--draws", "3", "--choice", "f64",
+                 str(tmp_path / "f64.json"), "--out", str(tmp_path / "out")]) == 0
+    doc = json.loads((tmp_path / "out" / "machine.json").read_text())
+    torque = doc["choices"]["f64"]["feeds"][0]["shell/torque"]
+    assert torque["relative"] == pytest.approx(0.1, rel=1e-6)
+    assert "What each modelling choice moves the answers by" in (
+        tmp_path / "out" / "machine.md").read_text()

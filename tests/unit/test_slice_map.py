@@ -177,3 +177,29 @@ def test_a_bad_set_is_refused_before_any_slice_runs(arg, words, capsys):
     code = main(["map", str(SCENE), "--holdup", "10 %", "--time", "1", "--set", arg])
     assert code == 2
     assert words in capsys.readouterr().err
+
+
+def test_slices_added_to_a_map(tmp_path, capsys):
+    """``map --add``: new hold-ups join the map already in --out (its rows kept, in hold-up
+    order), and a map of another slice or another modelling choice is refused (file: key:
+    reason) before any slice runs."""
+    from taichi_dem.app.cli import main
+    import json
+    out = tmp_path / "map"
+    assert main(["map", str(SCENE), "--holdup", "20 %", "--time", "0.2", "--out", str(out)]) == 0
+    first = json.loads((out / "map.json").read_text())["rows"][0]
+    assert main(["map", str(SCENE), "--holdup", "10 %", "--time", "0.2", "--out", str(out),
+                 "--add"]) == 0
+    rows = json.loads((out / "map.json").read_text())["rows"]
+    assert [r["fill_fraction"] for r in rows] == pytest.approx([0.10, 0.20])
+    assert rows[1] == first                                   # kept as it was
+    assert "| 5 | " in (out / "map.md").read_text()           # the table has both rows
+    assert len((out / "map.md").read_text().splitlines()) == 6     # title, blank, head, rule, 2
+    capsys.readouterr()
+    assert main(["map", str(SCENE), "--holdup", "30 %", "--time", "0.2", "--out", str(out),
+                 "--add", "--set", "interactions.0.friction=0.4"]) == 2
+    err = capsys.readouterr().err
+    assert "map.json" in err and "scene_changes" in err and "not the same slice" in err
+    assert main(["map", str(SCENE), "--holdup", "30 %", "--time", "0.2",
+                 "--out", str(tmp_path / "none"), "--add"]) == 2
+    assert "cannot read the map to add to" in capsys.readouterr().err
