@@ -7,6 +7,8 @@ contact stage (heat effects add a conductance, W/K, to the contact law's respons
   CollisionConduction  particle-particle, Sun & Chen's transient heat of short contacts
                    (``contact_conduction_model = "collision"``; conduction.py)
   WallConduction   particle-wall and particle-triangle, through the contact spot
+  WallCollisionConduction  the same walls: Sun & Chen's heat while a wall contact is still
+                   the impact it began as (``contact_conduction_model = "collision"``)
   GasGapWall       particle-wall and particle-body, through the gas gap (gas_gap.py)
   CoarseGrainedWall particles that stand for a finer bed: its contact resistance and
                    penetration to walls and bodies instead of the two above (coarse_grained.py)
@@ -152,6 +154,7 @@ class CollisionConduction(Conduction):
         spot_factor = ctx.table["conductance_factor"]       # 2 k_s = 4 k_i k_j / (k_i + k_j)
         youngs_sim = ctx.table["collision_youngs_sim"]
         spot_scale = ctx.table["collision_spot_scale"]
+        skip_coarse = _skips_coarse(self, ctx)         # (the wall variant's coarse-grained)
         Response = contact_response_type(ctx.real)
         vec0 = ti.Vector([0.0, 0.0, 0.0])
 
@@ -165,7 +168,8 @@ class CollisionConduction(Conduction):
                 # simulated contact's Hertz duration follows from it once
                 state[0] = ti.max(-c.v_rel.dot(c.normal), SLOWEST_IMPACT)
                 state[2] = hertz_contact_time(c.m_eff, c.r_eff, youngs_sim[mi, mj], state[0])
-            if c.conducts != 0 and factor[mi, mj] > 0.0 and state[1] < state[2]:
+            if c.conducts != 0 and factor[mi, mj] > 0.0 and state[1] < state[2] \
+                    and skip_coarse(c) == 0:
                 # still the collision: it passes the real collision's heat instead of the spot
                 # law Conduction has already added (less where a softened modulus makes that
                 # one pass too much)
@@ -196,6 +200,32 @@ class WallConduction(Conduction):
     grained particles (CoarseGrainedWall stands in)."""
 
     name = "wall_conduction"
+    kinds = ("plane", "triangle")
+    pair_fields = {}
+
+    def __init__(self, description, coarse_materials=False, rough=False):
+        super().__init__(description, rough)
+        self.skip_coarse = bool(coarse_materials)
+        if self.skip_coarse:
+            self.tables = self.tables + ("coarse_alpha_ws",)
+
+    def table_values(self, scene, tables):
+        out = super().table_values(scene, tables)
+        if self.skip_coarse:
+            out["coarse_alpha_ws"] = CoarseGrainedWall.tables_for(scene, tables)["coarse_alpha_ws"]
+        return out
+
+
+class WallCollisionConduction(CollisionConduction):
+    """Sun & Chen's collision conduction on particle-wall and particle-triangle contacts
+    (CollisionConduction's law with the wall as the second body: R* = r, m* = m, E* of the
+    particle's and the wall's materials, the wall's rho c k in the collision factor; an
+    isothermal wall is a semi-infinite body at its temperature, which is Sun & Chen's case).
+    A particle that bounces off a shell or a flight passes the real impact's heat, then the
+    spot law once it rests (WallConduction's). Not for coarse-grained particles, whose wall
+    heat CoarseGrainedWall stands in for."""
+
+    name = "wall_collision_conduction"
     kinds = ("plane", "triangle")
     pair_fields = {}
 
@@ -580,6 +610,12 @@ def thermal_effects(scene) -> list:
         but = (f" (not for {', '.join(coarse_names)}: coarse-grained)") if coarse_names else ""
         out.append(WallConduction("conduction to isothermal " + ", ".join(hot) + but + spot,
                                   coarse_materials=bool(coarse_names), rough=rough))
+        if th.contact_conduction_model == "collision":
+            out.append(WallCollisionConduction(
+                "collision conduction to " + ", ".join(hot) + but + " (Sun & Chen 1988, the "
+                "wall a semi-infinite body at its temperature): while a wall contact lasts no "
+                "longer than the Hertz duration of its impact, the spot law after",
+                coarse_materials=bool(coarse_names), rough=rough))
         if coarse_names:
             words = "; ".join(
                 f"{n} for {scene.materials[n].coarse_grained.represented_diameter * 1e6:g} um "

@@ -105,8 +105,8 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
     Key("contact_radius_correction", "choice", "the contact radius corrected for a softened "
         "modulus: \"static\" a ~ E*^-1/3, \"collision\" a ~ E*^-1/5, or \"none\"",
         default="static", choices=RADIUS_CORRECTIONS, effect="conduction"),
-    Key("contact_conduction_model", "choice", "particle-particle contacts: \"steady\" the "
-        "spot law 2 k a alone; \"collision\" Sun & Chen's transient heat of a collision too "
+    Key("contact_conduction_model", "choice", "contacts between particles, and with walls "
+        "and bodies where wall_conduction is on: \"steady\" the spot law 2 k a alone; \"collision\" Sun & Chen's transient heat of a collision too "
         "(0.87 pi a_max^2 t_c^1/2 dT / sum (rho c k)^-1/2, as Zhou, Yu & Zulli 2010's per-step "
         "flux): while a contact lasts no longer than the Hertz duration t_c of its impact (the "
         "normal speed at its first step) it passes the real collision's heat, the larger of "

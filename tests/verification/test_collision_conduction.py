@@ -239,3 +239,83 @@ def test_an_enduring_contact_keeps_the_spot_law(tmp_path):
     # law, to round-off
     assert abs(heats["collision"][0] / heats["steady"][0] - 1.0) > 0.01
     assert heats["collision"][1] == pytest.approx(heats["steady"][1], rel=1e-8)
+
+
+# --- a sphere bouncing off an isothermal wall (the wall variant) -------------------------------
+#
+# The same steel sphere hits a steel plate (a mesh body: its triangles) held at T_HOT head-on at
+# 1 m/s, elastically. Hertz
+# with R* = R, m* = m, E* = E / (2 (1 - nu^2)); the wall is a semi-infinite body at its
+# temperature, Sun & Chen's own case, so the heat is the same formula with the wall's rho c k.
+# Tolerance 2 % as for the pair (the same rectangle rule over ~600 steps of the collision).
+
+def _wall_scene(tmp_path, model):
+    x = R + GAP
+    (tmp_path / "ball.csv").write_text("x,y,z,radius,vx,vy,vz\n" + ",".join(
+        repr(float(c)) for c in (0.0, 0.0, x, R, 0.0, 0.0, -SPEED)) + "\n")
+    key = f'contact_conduction_model = "{model}"\n'
+    return f"""
+[simulation]
+end_time = {END * 2!r}
+dt = {DT!r}
+gravity = [0.0, 0.0, 0.0]
+precision = "f64"
+[domain]
+min = [-0.01, -0.01, -0.01]
+max = [0.01, 0.01, 0.01]
+[materials.steel]
+density = {DENSITY}
+youngs_modulus = {YOUNGS!r}
+poisson_ratio = {POISSON}
+thermal_conductivity = {K}
+heat_capacity = {C}
+[[interactions]]
+pair = ["steel", "steel"]
+restitution = 1.0
+friction = 0.0
+[[bodies]]
+name = "plate"
+material = "steel"
+temperature = {T_HOT}
+mesh = {{ builder = "box", min = [-0.005, -0.005, -0.002], max = [0.005, 0.005, 0.0], normals = "outward" }}
+[[particles]]
+material = "steel"
+temperature = {T_COLD}
+file = "ball.csv"
+[thermal]
+conduction = true
+wall_conduction = true
+{key}
+[output]
+interval = {END / 2!r}
+"""
+
+
+def test_a_bounce_off_a_hot_wall_passes_sun_and_chens_heat(tmp_path):
+    mass = DENSITY * 4.0 / 3.0 * math.pi * R ** 3
+    e_eff = YOUNGS / (2.0 * (1.0 - POISSON ** 2))
+    d_max = (15.0 * mass * SPEED ** 2 / (16.0 * e_eff * math.sqrt(R))) ** 0.4
+    a_max, t_c = math.sqrt(R * d_max), 0.8 * beta(0.4, 0.5) * d_max / SPEED
+    expected = sun_chen_heat(T_HOT - T_COLD, a_max, t_c, DENSITY, C, K, DENSITY, C, K)
+    steady = 2.0 * K * (T_HOT - T_COLD) * beta(0.6, 0.5) / beta(0.4, 0.5) * a_max * t_c
+    heats = {}
+    for model in ("steady", "collision"):
+        with taichi_dem.Simulation.from_text(_wall_scene(tmp_path, model), base_dir=str(tmp_path),
+                                             precision="f64") as sim:
+            names = [e.name for e in sim.effects]
+            sim.run()
+            p = sim.particles()
+            into_wall = float(np.asarray(sim.series["thermal/wall_heat"])[-1])
+        assert ("wall_collision_conduction" in names) == (model == "collision")
+        assert np.asarray(p["velocity"])[0][2] == pytest.approx(SPEED, rel=1e-3)  # bounced
+        heats[model] = (float(np.asarray(p["temperature"])[0]) - T_COLD) * mass * C
+        # energy: the plate's tally (the time integral of its heat flow, which a body records
+        # over every step) is what the sphere gained, to round-off (the heat is ~1e-7 of the
+        # sphere's m c T)
+        assert -into_wall == pytest.approx(heats[model], rel=1e-6)
+    print(f"\n  wall: a_max {a_max:.4e} m, t_c {t_c:.4e} s: collision {heats['collision']:.6e} J, "
+          f"Sun & Chen {expected:.6e} J ({heats['collision'] / expected:.4f}); steady "
+          f"{heats['steady']:.6e} J, 2 k dT int a dt {steady:.6e} J "
+          f"({heats['steady'] / steady:.4f})")
+    assert heats["collision"] == pytest.approx(expected, rel=TOLERANCE)
+    assert heats["steady"] == pytest.approx(steady, rel=TOLERANCE)
