@@ -120,8 +120,9 @@ def choices_table(out: Path, base: dict) -> str:
             if c is None:
                 cells.append("n/a")
             elif pct:
+                # (the drive torque is minus the particles' torque: its change and z flip)
                 cells.append(f"{c['change'] * scale:+.3g} ({100 * c['relative']:+.0f} %, "
-                             f"z {c['z']:+.1f})")
+                             f"z {math.copysign(1.0, scale) * c['z']:+.1f})")
             else:
                 cells.append(f"{c['change'] * scale:+.3g} K (z {c['z']:+.1f})")
         lines.append(f"| {name} | {value:.4g} | {noise:.2g} | " + " | ".join(cells) + " |")
