@@ -195,11 +195,11 @@ def contact_response_type(real):
     return contact_types(real)[1]
 
 
-class WallConduction(Conduction):
-    """The contact-spot conduction to an isothermal wall or body (R* = r); not for coarse-
-    grained particles (CoarseGrainedWall stands in)."""
+class _OnWalls:
+    """What a contact-spot law needs to run on particle-wall and particle-triangle contacts
+    (mixed in before the pair law's class): no partner's share, and coarse-grained particles
+    left alone where the scene has them (CoarseGrainedWall stands in for their wall heat)."""
 
-    name = "wall_conduction"
     kinds = ("plane", "triangle")
     pair_fields = {}
 
@@ -216,7 +216,14 @@ class WallConduction(Conduction):
         return out
 
 
-class WallCollisionConduction(CollisionConduction):
+class WallConduction(_OnWalls, Conduction):
+    """The contact-spot conduction to an isothermal wall or body (R* = r); not for coarse-
+    grained particles (CoarseGrainedWall stands in)."""
+
+    name = "wall_conduction"
+
+
+class WallCollisionConduction(_OnWalls, CollisionConduction):
     """Sun & Chen's collision conduction on particle-wall and particle-triangle contacts
     (CollisionConduction's law with the wall as the second body: R* = r, m* = m, E* of the
     particle's and the wall's materials, the wall's rho c k in the collision factor; an
@@ -226,20 +233,6 @@ class WallCollisionConduction(CollisionConduction):
     heat CoarseGrainedWall stands in for."""
 
     name = "wall_collision_conduction"
-    kinds = ("plane", "triangle")
-    pair_fields = {}
-
-    def __init__(self, description, coarse_materials=False, rough=False):
-        super().__init__(description, rough)
-        self.skip_coarse = bool(coarse_materials)
-        if self.skip_coarse:
-            self.tables = self.tables + ("coarse_alpha_ws",)
-
-    def table_values(self, scene, tables):
-        out = super().table_values(scene, tables)
-        if self.skip_coarse:
-            out["coarse_alpha_ws"] = CoarseGrainedWall.tables_for(scene, tables)["coarse_alpha_ws"]
-        return out
 
 
 class CoarseGrainedWall(Effect):
