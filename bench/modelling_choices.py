@@ -16,7 +16,8 @@ paddle clearance) at its mapped hold-ups 30, 60 and 90 kg/m at 5 deg, 6 s each, 
 being the rows at 5 deg of the design's published map (docs/machine/seed_cooler/original, the
 same command and length) rather than a new run. Choices: f64; spheres of 20 mm (as wide as the
 clearance) and 30 mm (wider: the seed's question of what the clearance allows); the thermal
-time scale 10.
+time scale 10; two paddle rows staggered 45 degrees (bench/seed_cooler/cooler_slice_two_rows.toml)
+against the one-row slice's stagger 0.
 
     python bench/modelling_choices.py --preset seed --out docs/machine/seed_cooler/modelling_choices
 """
@@ -41,7 +42,11 @@ SEED_CHOICES = {"reference": [],
                 "20 mm spheres": ["particles.0.radius=0.01"],
                 "30 mm spheres": ["particles.0.radius=0.015"],
                 "thermal time scale 10": ["thermal.time_scale=10"],
-                "f64": ["simulation.precision=f64"]}
+                "f64": ["simulation.precision=f64"],
+                # another scene, not a key: two rows staggered 45 degrees (the one-row slice
+                # has stagger 0; the seed gives none, our full machine staggers 45)
+                "two rows stagger 45": {"scene": ROOT / "bench" / "seed_cooler" /
+                                        "cooler_slice_two_rows.toml"}}
 FIGURES = ("axial_mass_flow", "shaft/torque_per_metre", "shell/torque_per_metre",
            "shell/conductance_per_metre", "dynamic_angle")
 
@@ -81,7 +86,10 @@ def main(argv=None) -> int:
         out = folder(a.out, name)
         if a.reuse and (out / "map.json").exists():
             continue
-        cmd = [sys.executable, "-m", "taichi_dem", "map", str(a.scene), "--holdup", *a.holdups,
+        scene = a.scene
+        if isinstance(sets, dict):          # a choice that is another scene
+            scene, sets = sets["scene"], sets.get("sets", [])
+        cmd = [sys.executable, "-m", "taichi_dem", "map", str(scene), "--holdup", *a.holdups,
                "--incline", a.incline, "--time", str(a.time), "--out", str(out)]
         for s in sets:
             cmd += ["--set", s]

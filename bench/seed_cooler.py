@@ -37,7 +37,8 @@ SCREW_LENGTH = 1.0
 # OUT/modelling_choices/<name>: each answer's change under each, beside the maps' noise
 CHOICES = {"f64": "precision f64 (f32 mapped)", "20_mm_spheres": "spheres 20 mm (15 mapped)",
            "30_mm_spheres": "spheres 30 mm (15 mapped)",
-           "thermal_time_scale_10": "thermal time scale 10 (1 mapped)"}
+           "thermal_time_scale_10": "thermal time scale 10 (1 mapped)",
+           "two_rows_stagger_45": "two rows staggered 45 deg (one row mapped)"}
 LENGTH = 6.0
 FEEDS_T_H = (4.6, 6.5)
 INLET_C, WALL_C = 450.0, 30.0
