@@ -20,6 +20,14 @@ time scale 10; two paddle rows staggered 45 degrees (bench/seed_cooler/cooler_sl
 against the one-row slice's stagger 0.
 
     python bench/modelling_choices.py --preset seed --out docs/machine/seed_cooler/modelling_choices
+
+f32 against f64 over a longer window at the operating hold-up (20 s at 60 kg/m, 5 deg):
+
+    taichi-dem map demos/cooler_slice.toml --holdup 60 --incline 5 --time 20 \
+        --set simulation.precision=f32 --out docs/machine/seed_cooler/modelling_choices/long_f32
+    (the same with f64 into long_f64)
+    python bench/modelling_choices.py --compare docs/machine/seed_cooler/modelling_choices/long_f32 \
+        docs/machine/seed_cooler/modelling_choices/long_f64 --out docs/machine/seed_cooler/modelling_choices/precision_long.md
 """
 import argparse
 import json
@@ -55,6 +63,31 @@ def folder(out: Path, name: str) -> Path:
     return out / name.replace(" ", "_")
 
 
+def compare(first: Path, second: Path) -> str:
+    """Markdown: two maps of the same slice (f32 and f64 over a long window), row by row, each
+    figure's difference with z (the difference over the two standard errors combined)."""
+    a = json.loads((first / "map.json").read_text())
+    b = json.loads((second / "map.json").read_text())
+    lines = [f"{first.name} against {second.name} ({a['scene']}): each figure's value in both, "
+             "the difference (second - first) in % of the first, and z (|z| > 2: a bias these "
+             "runs resolve; below it, the bias is under about two standard errors)", "",
+             "| hold-up (kg/m) | incline (deg) | figure | " + first.name + " | " + second.name
+             + " | difference | z |", "|---|---|---|---|---|---|---|"]
+    for ra in a["rows"]:
+        rb = next((r for r in b["rows"] if abs(r["holdup_kg_per_m"] - ra["holdup_kg_per_m"]) < 1e-6
+                   and abs(r["incline_deg"] - ra["incline_deg"]) < 1e-6), None)
+        if rb is None:
+            continue
+        for fig in FIGURES + ("axial_speed", "shell/heat_transfer_coefficient"):
+            va, ea = ra.get(fig, math.nan), ra.get(fig + "_standard_error", math.nan)
+            vb, eb = rb.get(fig, math.nan), rb.get(fig + "_standard_error", math.nan)
+            e = math.hypot(ea, eb)
+            lines.append(f"| {ra['holdup_kg_per_m']:.3g} | {ra['incline_deg']:.3g} | {fig} | "
+                         f"{va:.4g} +- {ea:.2g} | {vb:.4g} +- {eb:.2g} | "
+                         f"{100 * (vb - va) / abs(va):+.1f} % | {(vb - va) / e:+.1f} |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "modelling_choices")
@@ -68,7 +101,15 @@ def main(argv=None) -> int:
                    help="a map folder whose rows at --incline are the reference (not re-run)")
     p.add_argument("--only", nargs="+", default=None, help="choices to run (default all)")
     p.add_argument("--reuse", action="store_true", help="keep maps already in OUT")
+    p.add_argument("--compare", nargs=2, type=Path, metavar=("FIRST", "SECOND"), default=None,
+                   help="only compare two maps already written (e.g. f32 and f64 over a long "
+                        "window) and write OUT (a .md file)")
     a = p.parse_args(argv)
+    if a.compare:
+        text = compare(*a.compare)
+        print(text)
+        a.out.write_text(text + "\n")
+        return 0
     seed = a.preset == "seed"
     choices = SEED_CHOICES if seed else CHOICES
     a.scene = a.scene or (SEED_SCENE if seed else SCENE)
