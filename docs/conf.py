@@ -38,7 +38,11 @@ root_doc = "index"
 # build output
 exclude_patterns = ["_build", "reference/_generated", "machine/seed_cooler/seed_table.md",
                     "machine/direct_check/comparison_6rows.md",
-                    "machine/modelling_choices/choices.md"]
+                    "machine/modelling_choices/choices.md",
+                    # the seed's modelling-choice maps: summed up by their choices.md and
+                    # precision_long.md, which machine/tables.md includes
+                    "machine/seed_cooler/modelling_choices/*/map.md",
+                    "machine/seed_cooler/modelling_choices/*.md"]
 
 myst_enable_extensions = ["colon_fence", "deflist"]
 # `## Heading` gets an anchor, so [text](page.md#heading) links resolve

@@ -253,26 +253,10 @@ def _wall_scene(tmp_path, model):
     x = R + GAP
     (tmp_path / "ball.csv").write_text("x,y,z,radius,vx,vy,vz\n" + ",".join(
         repr(float(c)) for c in (0.0, 0.0, x, R, 0.0, 0.0, -SPEED)) + "\n")
-    key = f'contact_conduction_model = "{model}"\n'
-    return f"""
-[simulation]
-end_time = {END * 2!r}
-dt = {DT!r}
-gravity = [0.0, 0.0, 0.0]
-precision = "f64"
-[domain]
-min = [-0.01, -0.01, -0.01]
-max = [0.01, 0.01, 0.01]
-[materials.steel]
-density = {DENSITY}
-youngs_modulus = {YOUNGS!r}
-poisson_ratio = {POISSON}
-thermal_conductivity = {K}
-heat_capacity = {C}
-[[interactions]]
-pair = ["steel", "steel"]
-restitution = 1.0
-friction = 0.0
+    # the pair's settings, materials and interaction; twice as long (the ball flies back)
+    head = _scene(tmp_path, model).split("[[particles]]")[0]
+    head = head.replace(f"end_time = {END!r}", f"end_time = {END * 2!r}")
+    return head + f"""
 [[bodies]]
 name = "plate"
 material = "steel"
@@ -285,7 +269,7 @@ file = "ball.csv"
 [thermal]
 conduction = true
 wall_conduction = true
-{key}
+contact_conduction_model = "{model}"
 [output]
 interval = {END / 2!r}
 """
