@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """What Sun & Chen's collision conduction costs per step (issue 32): the small drum demo
 (demos/small_drum.toml: 400 softened glass beads of 8 mm, 4 flights, 20 rpm, f32) with
-[thermal] conduction between particles, stepped with ``contact_conduction_model`` "steady"
-(the default) and "collision" in alternated rounds, one thread; medians of the seconds per step.
+[thermal] conduction between particles and to the shell (held at 350 K), stepped with
+``contact_conduction_model`` "steady" (the default) and "collision" (pairs and the shell) in
+alternated rounds, one thread; medians of the seconds per step.
 
     TI_OFFLINE_CACHE_FILE_PATH=/tmp/ticache_collision .venv/bin/python bench/collision_conduction_cost.py
 """
@@ -21,7 +22,11 @@ def scene(model):
     text = text.replace("youngs_modulus = 2.0e11\n", "youngs_modulus = 2.0e11\n"
                         "thermal_conductivity = 45.0\nheat_capacity = 460.0\n")
     text = text.replace("count = 400\n", "count = 400\ntemperature = 300.0\n")
-    text += f'\n[thermal]\nconduction = true\ncontact_conduction_model = "{model}"\n'
+    # the shell held at 350 K: wall conduction, and with "collision" the wall variant too
+    text = text.replace('name = "drum"\nmaterial = "steel"\n',
+                        'name = "drum"\nmaterial = "steel"\ntemperature = 350.0\n')
+    text += (f'\n[thermal]\nconduction = true\nwall_conduction = true\n'
+             f'contact_conduction_model = "{model}"\n')
     return text
 
 
