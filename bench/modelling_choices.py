@@ -21,6 +21,11 @@ against the one-row slice's stagger 0.
 
     python bench/modelling_choices.py --preset seed --out docs/machine/seed_cooler/modelling_choices
 
+``--preset seed_optimised``: the optimised design's slice at 2 deg (its incline) against its
+published map, with two rows staggered 45 degrees:
+
+    python bench/modelling_choices.py --preset seed_optimised --out docs/machine/seed_cooler/modelling_choices_optimised
+
 f32 against f64 over a longer window at the operating hold-up (20 s at 60 kg/m, 5 deg):
 
     taichi-dem map demos/cooler_slice.toml --holdup 60 --incline 5 --time 20 \
@@ -55,6 +60,11 @@ SEED_CHOICES = {"reference": [],
                 # has stagger 0; the seed gives none, our full machine staggers 45)
                 "two rows stagger 45": {"scene": ROOT / "bench" / "seed_cooler" /
                                         "cooler_slice_two_rows.toml"}}
+SEED_OPTIMISED_SCENE = ROOT / "demos" / "cooler_slice_optimised.toml"
+SEED_OPTIMISED_REFERENCE = ROOT / "docs" / "machine" / "seed_cooler" / "optimised"
+SEED_OPTIMISED_CHOICES = {"reference": [],
+                          "two rows stagger 45": {"scene": ROOT / "bench" / "seed_cooler" /
+                                                  "cooler_slice_optimised_two_rows.toml"}}
 FIGURES = ("axial_mass_flow", "shaft/torque_per_metre", "shell/torque_per_metre",
            "shell/conductance_per_metre", "dynamic_angle")
 
@@ -91,11 +101,12 @@ def compare(first: Path, second: Path) -> str:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "modelling_choices")
-    p.add_argument("--preset", choices=["direct_check", "seed"], default="direct_check",
+    p.add_argument("--preset", choices=["direct_check", "seed", "seed_optimised"],
+                   default="direct_check",
                    help="which slice and choices (module docstring)")
     p.add_argument("--scene", type=Path, default=None)
     p.add_argument("--holdups", nargs="+", default=None)
-    p.add_argument("--incline", default="5")
+    p.add_argument("--incline", default=None, help="deg (default 5; seed_optimised 2)")
     p.add_argument("--time", type=float, default=None)
     p.add_argument("--reference", type=Path, default=None,
                    help="a map folder whose rows at --incline are the reference (not re-run)")
@@ -110,13 +121,15 @@ def main(argv=None) -> int:
         print(text)
         a.out.write_text(text + "\n")
         return 0
-    seed = a.preset == "seed"
-    choices = SEED_CHOICES if seed else CHOICES
-    a.scene = a.scene or (SEED_SCENE if seed else SCENE)
+    seed = a.preset in ("seed", "seed_optimised")
+    optimised = a.preset == "seed_optimised"
+    choices = (SEED_OPTIMISED_CHOICES if optimised else SEED_CHOICES) if seed else CHOICES
+    a.scene = a.scene or ((SEED_OPTIMISED_SCENE if optimised else SEED_SCENE) if seed else SCENE)
     a.holdups = a.holdups or (["30", "60", "90"] if seed else ["6", "9"])
     a.time = a.time or (6.0 if seed else 15.0)
+    a.incline = a.incline or ("2" if optimised else "5")
     if a.reference is None and seed:
-        a.reference = SEED_REFERENCE
+        a.reference = SEED_OPTIMISED_REFERENCE if optimised else SEED_REFERENCE
     walls_file = a.out / "walls.json"
     walls = json.loads(walls_file.read_text()) if walls_file.exists() else {}
     for name, sets in choices.items():

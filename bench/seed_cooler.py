@@ -77,14 +77,17 @@ def section_speed(answer, start: float, end: float) -> float:
     return (end - start) * answer.feed / float(np.trapezoid(h[keep], x[keep]))
 
 
-def choices_table(out: Path, base: dict) -> str:
-    """Each answer of the original design at 6.5 t/h with its error from noise, and what each
-    modelling choice mapped in OUT/modelling_choices moves it by (z: over the noise)."""
-    folder = out / "modelling_choices"
+CHOICE_FOLDERS = {"original": "modelling_choices", "optimised": "modelling_choices_optimised"}
+
+
+def choices_table(out: Path, base: dict, design: str = "original") -> str:
+    """Each answer of ``design`` at 6.5 t/h with its error from noise, and what each modelling
+    choice mapped in OUT/<CHOICE_FOLDERS[design]> moves it by (z: over the noise)."""
+    folder = out / CHOICE_FOLDERS[design]
     found = {k: v for k, v in CHOICES.items() if (folder / k / "map.json").exists()}
     if not found:
         return ""
-    incline = DESIGNS["original"][1]
+    incline = DESIGNS[design][1]
     diffs = {}
     for key, label in found.items():
         choice = mc.MachineMap.load(folder / key)
@@ -107,9 +110,13 @@ def choices_table(out: Path, base: dict) -> str:
               lambda d: d["feeds"][k]["shaft/torque"], -1.0, True),
              ("outlet temperature (C)", a.outlet_temperature - 273.15, e.get("outlet_temperature"),
               lambda d: d["feeds"][k]["outlet_temperature"], 1.0, False)]
-    lines = ["Original paddles, 5 deg, at 6.5 t/h: each answer with its error from the maps' noise "
+    title = ("Original paddles, 5 deg" if design == "original" else
+             "Optimised paddles (45 deg), 2 deg, no inlet screw")
+    preset = "seed" if design == "original" else "seed_optimised"
+    lines = [f"{title}, at 6.5 t/h: each answer with its error from the maps' noise "
              "(one standard deviation over the re-marches) and the change each modelling choice "
-             "makes (the choice's map at 5 deg, `bench/modelling_choices.py --preset seed`; z = "
+             f"makes (the choice's map at {incline:g} deg, `bench/modelling_choices.py --preset "
+             f"{preset}`; z = "
              "the change over the two noises combined: |z| < 2 is a change these maps do not "
              "resolve, so the choice's error is below about 2 noise)", "",
              "| answer | value | noise | " + " | ".join(diffs) + " |",
@@ -211,9 +218,9 @@ def table(results: dict, walls: dict | None) -> str:
         lines += ["", "map wall times on this machine: " + ", ".join(
             f"{d} {w / 60:.1f} min" for d, w in walls.items())]
     lines += ["", "Errors: one standard deviation from the maps' noise (re-marches). What the "
-              "particle size, the precision and the thermal time scale move the answers by is "
-              "the table below (the original design); the one-row slice (stagger 0) is not "
-              "counted in either."]
+              "precision, the particle size, the thermal time scale and the one-row slice's "
+              "stagger of 0 (against two rows staggered 45 deg) move the answers by is in the "
+              "tables below."]
     return "\n".join(lines)
 
 
@@ -237,10 +244,11 @@ def main(argv=None) -> int:
         results["optimised_with_screw"] = answers(a.out / "optimised", DESIGNS["optimised"][1],
                                                   [(screw, SCREW_LENGTH)], feeds_t_h=(6.5, 13.0))
     text = table(results, walls)
-    if "original" in results:
-        extra = choices_table(a.out, results["original"])
-        if extra:
-            text += "\n\n" + extra
+    for design in CHOICE_FOLDERS:
+        if design in results:
+            extra = choices_table(a.out, results[design], design)
+            if extra:
+                text += "\n\n" + extra
     print(text)
     a.out.mkdir(parents=True, exist_ok=True)
     (a.out / "seed_table.md").write_text(text + "\n")
