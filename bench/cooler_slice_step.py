@@ -4,6 +4,7 @@
 
     python bench/cooler_slice_step.py [--holdup 60 [90 ...]] [--settle 0.2] [--seconds 0.3]
                                       [--arch cuda] [--scene demos/cooler_slice.toml]
+                                      [--precision f64]
 
 Prints ``run K: X M particle-steps/s`` per hold-up (bench/before_after.py reads it).
 """
@@ -23,6 +24,8 @@ def main() -> int:
     p.add_argument("--scene", type=Path, default=ROOT / "demos" / "cooler_slice.toml")
     p.add_argument("--settle", type=float, default=0.2)
     p.add_argument("--seconds", type=float, default=0.3)
+    p.add_argument("--precision", choices=["f32", "f64"], default=None,
+                   help="default: the scene's (f32)")
     a = p.parse_args()
     import taichi_dem as td
     from taichi_dem.app import slice_map as sm
@@ -35,7 +38,7 @@ def main() -> int:
         count, _, _ = sm.holdup_count(scene, sm.slice_geometry(scene), ("kg/m", holdup))
         text = to_text(apply(tomllib.loads(base), {"particles.0.count": count}, str(path)))
         t0 = time.perf_counter()
-        with td.Simulation.from_text(text, h5="", arch=a.arch) as sim:
+        with td.Simulation.from_text(text, h5="", arch=a.arch, precision=a.precision) as sim:
             sim.run(a.settle)
             start = time.perf_counter() - t0
             t0 = time.perf_counter()
@@ -43,7 +46,7 @@ def main() -> int:
             sim.run(sim.time + a.seconds)
             rate = sim.particle_count * steps / (time.perf_counter() - t0) / 1e6
         print(f"run {k}: {rate:.3f} M particle-steps/s ({count} particles, {holdup:g} kg/m, "
-              f"{a.arch}; build, compile and settle {start:.1f} s)", flush=True)
+              f"{a.arch}, {a.precision or 'scene precision'}; build, compile and settle {start:.1f} s)", flush=True)
     return 0
 
 
