@@ -42,7 +42,9 @@ exclude_patterns = ["_build", "reference/_generated", "machine/seed_cooler/seed_
                     # the seed's modelling-choice maps: summed up by their choices.md and
                     # precision_long.md, which machine/tables.md includes
                     "machine/seed_cooler/modelling_choices/*/map.md",
-                    "machine/seed_cooler/modelling_choices/*.md"]
+                    "machine/seed_cooler/modelling_choices/*.md",
+                    "machine/seed_cooler/modelling_choices_optimised/*/map.md",
+                    "machine/seed_cooler/modelling_choices_optimised/*.md"]
 
 myst_enable_extensions = ["colon_fence", "deflist"]
 # `## Heading` gets an anchor, so [text](page.md#heading) links resolve
