@@ -22,7 +22,7 @@ against the one-row slice's stagger 0.
     python bench/modelling_choices.py --preset seed --out docs/machine/seed_cooler/modelling_choices
 
 ``--preset seed_optimised``: the optimised design's slice at 2 deg (its incline) against its
-published map, with two rows staggered 45 degrees:
+published map, with 20 mm spheres, f64, and two rows staggered 45 degrees:
 
     python bench/modelling_choices.py --preset seed_optimised --out docs/machine/seed_cooler/modelling_choices_optimised
 
@@ -63,6 +63,8 @@ SEED_CHOICES = {"reference": [],
 SEED_OPTIMISED_SCENE = ROOT / "demos" / "cooler_slice_optimised.toml"
 SEED_OPTIMISED_REFERENCE = ROOT / "docs" / "machine" / "seed_cooler" / "optimised"
 SEED_OPTIMISED_CHOICES = {"reference": [],
+                          "20 mm spheres": ["particles.0.radius=0.01"],
+                          "f64": ["simulation.precision=f64"],
                           "two rows stagger 45": {"scene": ROOT / "bench" / "seed_cooler" /
                                                   "cooler_slice_optimised_two_rows.toml"}}
 FIGURES = ("axial_mass_flow", "shaft/torque_per_metre", "shell/torque_per_metre",
