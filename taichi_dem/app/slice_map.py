@@ -404,7 +404,8 @@ def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float
 def write_map(results: list[SliceResult], out_dir: Path, scene_name: str,
               machine: dict | None = None) -> list[Path]:
     """map.csv, map.md, map.json and map.png (torque per metre and axial mass flow against
-    hold-up) in ``out_dir``; returns their paths."""
+    hold-up) in ``out_dir``, the rows in hold-up order within each incline (inclines in the
+    order they first appear); returns their paths."""
     out_dir.mkdir(parents=True, exist_ok=True)
     # SliceResults, or rows already written (a map being added to: --add)
     rows = [r.row() if isinstance(r, SliceResult) else dict(r) for r in results]

@@ -147,8 +147,8 @@ def test_the_map_of_a_drum_slice(tmp_path):
 
 
 def test_the_map_on_dask_workers(tmp_path):
-    """--dask: one task per slice on a LocalCluster of two processes; the rows come back in
-    the order asked for, each from its own simulation."""
+    """--dask: one task per slice on a LocalCluster of two processes; the rows are written in
+    hold-up order within each incline (as every map), each from its own simulation."""
     from taichi_dem.app.cli import main
     import json
     out = tmp_path / "map"
