@@ -35,6 +35,10 @@ import taichi_dem
 
 # glass beads (real modulus for the contact-spot correction), steel shell
 GLASS = dict(density=2500.0, youngs=63e9, poisson=0.22, k=1.0, c=800.0)
+# glass on glass, measured: Foerster, Louge, Chang & Allia, Phys. Fluids 6 (1994) 1108 (mu
+# 0.092 for glass spheres). It sets how densely the first layer covers the shell (0.68-0.71 of
+# it at 0.092 against 0.63 at 0.5, per covered area), and so the contact part of h.
+GLASS_FRICTION = 0.092
 STEEL = dict(density=7800.0, youngs=200e9, poisson=0.3, k=45.0, c=480.0)
 
 
@@ -50,7 +54,8 @@ def scene_text(*, drum_radius=0.05, length=0.008, radius=1e-3, count=1000, rpm_m
                lens=None, min_gap=1e-6, k_gas=0.0262, model="solid_resistance",
                friction=0.5, wall_friction=0.5, rolling_friction=0.02, restitution=0.5,
                output_interval=0.05, rayleigh_fraction=0.3, dt=None, seed=1,
-               represented_diameter=None, flights=0, flight_height=None) -> str:
+               represented_diameter=None, flights=0, flight_height=None,
+               adiabatic_lifters=False) -> str:
     g, s = GLASS, STEEL
     step = "" if dt is None else f"dt = {dt!r}\n"
     # coarse graining: the beads stand for finer ones (thermal/coarse_grained.py), the bed's
@@ -66,6 +71,15 @@ def scene_text(*, drum_radius=0.05, length=0.008, radius=1e-3, count=1000, rpm_m
     # low lifters (a fraction of a bead high) keep the bed from slipping on the smooth shell
     lifters = (f", flights = {int(flights)}, flight_height = {flight_height!r}, flight_thickness = "
                f"{0.5 * flight_height!r}") if flights else ""
+    lifter_body = ""
+    if flights and adiabatic_lifters:
+        lifter_body = f"""[[bodies]]
+name = "lifters"
+material = "steel"
+mesh = {{ builder = "drum", radius = {drum_radius!r}, length = {length!r}, end_walls = false, include_shell = false, segments = {segments}{lifters} }}
+motion = {{ rotate = {{ axis_point = [0, 0, 0], axis_direction = [1, 0, 0], speed = "{rpm_mech!r} rpm" }} }}
+"""
+        lifters = ""
     return f"""
 [simulation]
 end_time = 1.0
@@ -107,7 +121,7 @@ material = "steel"
 mesh = {{ builder = "drum", radius = {drum_radius!r}, length = {length!r}, end_walls = false, segments = {segments}{lifters} }}
 motion = {{ rotate = {{ axis_point = [0, 0, 0], axis_direction = [1, 0, 0], speed = "{rpm_mech!r} rpm" }} }}
 temperature = {t_wall!r}
-[[particles]]
+{lifter_body}[[particles]]
 material = "glass"
 radius = {radius!r}
 count = {count}
@@ -145,6 +159,41 @@ def first_layer_mask(position, radius, drum_radius, segments=72):
     return np.hypot(position[:, 1], position[:, 2]) > inscribed - 1.1 * radius
 
 
+def passive_bed_solid_fraction(position, radius, drum_radius, length, depth=(3.0, 9.0),
+                               half_angle=0.25, points=20000, seed=0):
+    """The solid fraction of the bed where it rides with the shell: the share of ``points``
+    random points (a fixed seed) that fall inside a bead, in the annular sector 1.5-4.5 bead
+    diameters in from the shell (``depth`` in radii: past the wall's layering, short of the
+    flowing layer) within ``half_angle`` (rad) of the middle of the wetted arc, periodic along
+    the axis (length). NaN without beads touching the shell."""
+    from scipy.spatial import cKDTree
+    y, z = position[:, 1], position[:, 2]
+    r = np.hypot(y, z)
+    angle = np.arctan2(y, -z)
+    touching = r > drum_radius - 1.02 * radius
+    if np.count_nonzero(touching) < 5:
+        return math.nan
+    lo, hi = np.percentile(angle[touching], [1.0, 99.0])
+    middle = 0.5 * (lo + hi)
+    r_out, r_in = drum_radius - depth[0] * radius, drum_radius - depth[1] * radius
+    rng = np.random.default_rng(seed)
+    # uniform in the sector's area: r^2 uniform between r_in^2 and r_out^2
+    pr = np.sqrt(rng.uniform(r_in ** 2, r_out ** 2, points))
+    pa = middle + rng.uniform(-half_angle, half_angle, points)
+    px = rng.uniform(0.0, length, points)
+    sample = np.column_stack([px, pr * np.sin(pa), -pr * np.cos(pa)])
+    centres = np.asarray(position, dtype=float).copy()
+    centres[:, 0] %= length
+    # periodic along x by images: beads within a radius of either end, shifted by +-length
+    images = [centres]
+    for shift in (-length, length):
+        near = (centres[:, 0] + shift > -radius) & (centres[:, 0] + shift < length + radius)
+        images.append(centres[near] + np.array([shift, 0.0, 0.0]))
+    tree = cKDTree(np.vstack(images))
+    distance, _ = tree.query(sample)
+    return float(np.mean(distance < radius))
+
+
 def angle_mean(angles):
     return float(np.nanmean(angles))
 
@@ -154,11 +203,15 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
                    t_bed=293.15, model="solid_resistance", softened_modulus=5e6,
                    rolling_friction=0.02, segments=72, output_interval=0.05, threads=1,
                    dt=None, seed=1, verbose=False, represented_diameter=None, flights=0,
-                   flight_height=None) -> dict:
+                   flight_height=None, adiabatic_lifters=False, friction=0.5,
+                   wall_friction=0.5) -> dict:
     """Run the experiment at thermal speed ``rpm`` (the mechanics turn at time_scale x rpm).
 
     settle: s of simulated time rolling before the bed is made cold; startup: s after that
-    before averaging (default one contact time estimated from the fill, in simulated time);
+    before averaging (default 1.1 contact times estimated from the fill, in simulated time:
+    every bead then on the shell came to it after the switch, so the wall's elements under the
+    bed have the ages 0 to t_c of the steady state the model averages over, not the younger
+    ones of the transient, which read high: 4-9 % at 2 rpm);
     measure: s of averaging (default one contact time). Returns a dict: the mean coefficient
     h (W/(m^2 K)) and its spread over 4 sub-windows, the wetted angle and contact time
     (thermal), the bed's mean temperatures, the covered-area check, the count, wall time."""
@@ -169,14 +222,18 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
     from taichi_dem.thermal.correlations import wetted_angle_from_fill
     guess = wetted_angle_from_fill(fill)
     t_c_mech = guess / omega_mech
-    startup = t_c_mech if startup is None else startup
+    # 1.1: the first layer rides at 0.92-0.96 of the shell's speed, so it stays a little
+    # longer than a wall element
+    startup = 1.1 * t_c_mech if startup is None else startup
     measure = t_c_mech if measure is None else measure
     text = scene_text(drum_radius=drum_radius, length=length, radius=radius, count=count,
                       rpm_mech=rpm_mech, t_wall=t_wall, softened_modulus=softened_modulus,
                       segments=segments, time_scale=time_scale, model=model,
                       rolling_friction=rolling_friction, output_interval=output_interval,
                       dt=dt, seed=seed, represented_diameter=represented_diameter,
-                      flights=flights, flight_height=flight_height)
+                      flights=flights, flight_height=flight_height,
+                      adiabatic_lifters=adiabatic_lifters, friction=friction,
+                      wall_friction=wall_friction)
     t0 = _time.perf_counter()
     with taichi_dem.Simulation.from_text(text, precision="f64", threads=threads) as sim:
         sim.run(settle)
@@ -188,11 +245,12 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
         first = len(sim.series["time"])
         sim.run(settle + startup)
         start = len(sim.series["time"])
-        angles, first_layer, first_count, ride = [], [], [], []
+        angles, first_layer, first_count, ride, solid = [], [], [], [], []
         while sim.time < settle + startup + measure - 1e-9:
             sim.step(sim.output_every)
             p = sim.particles()
             angles.append(wetted_angle(p["position"], radius, drum_radius))
+            solid.append(passive_bed_solid_fraction(p["position"], radius, drum_radius, length))
             near = first_layer_mask(p["position"], radius, drum_radius, segments)
             first_layer.append(float(np.mean(p["temperature"][near])))
             first_count.append(int(np.count_nonzero(near)))
@@ -238,6 +296,8 @@ def drum_wall_heat(*, rpm=6.0, fill=0.15, drum_radius=0.05, length=0.008, radius
         "h_contact": float(np.mean(-q / (area * (t_wall - np.asarray(first_layer))))),
         "h_bed": float(np.mean(-q / (area * (np.asarray(first_layer) - tb_window)))),
         "wetted_angle": angle,
+        # the riding bed's porosity (the penetration model's bulk density and conductivity)
+        "bed_porosity": 1.0 - float(np.nanmean(solid)),
         "ride": float(np.mean(ride)),
         "wetted_angle_from_area": float(np.mean(area)) / (drum_radius * length),
         "wetted_angle_guess": guess,
@@ -287,15 +347,21 @@ def models(result, radius=1e-3, k_gas=0.0262, coverage=0.8):
     model = result["kwargs"].get("model", "solid_resistance") if "kwargs" in result else \
         result.get("model", "solid_resistance")
     d = 2.0 * radius
-    solid_fraction = 1.0 - PACKED_BED_POROSITY
+    # the bed's bulk density and conductivity at the porosity of the DEM's riding bed where it
+    # was measured (the penetration model's bed is the one simulated), else the packed bed's
+    porosity = result.get("bed_porosity", PACKED_BED_POROSITY)
+    if not math.isfinite(porosity):
+        porosity = PACKED_BED_POROSITY
+    solid_fraction = 1.0 - porosity
     rho_b = GLASS["density"] * solid_fraction
     t_mean = 0.5 * (result["t_wall"] + 0.5 * (result["t_bed_start"] + result["t_bed_end"]))
-    k_zbs = zehner_schlunder(GLASS["k"], k_gas, PACKED_BED_POROSITY)
+    k_zbs = zehner_schlunder(GLASS["k"], k_gas, porosity)
     common = dict(rpm=result["rpm"], wetted_angle=result["wetted_angle"], diameter=d,
                   k_gas=k_gas, bed_density=rho_b, heat_capacity=GLASS["c"], temperature=t_mean,
                   coverage=coverage)
     physical = c.schlunder_mollekopf(bed_conductivity=k_zbs, **common)
     physical["bed_conductivity"] = k_zbs
+    physical["bed_porosity"] = porosity
     # DEM-consistent: alpha_WS from the DEM's own sphere-wall conductance
     g = wall_particle_conductance(model, radius, k_gas)
     min_gap = 1e-6
