@@ -411,11 +411,18 @@ if __name__ == "__main__":
     ap.add_argument("--radius", type=float, default=1e-3, help="bead radius (m)")
     ap.add_argument("--represented-diameter", type=float, default=None,
                     help="coarse graining: the beads stand for beads of this diameter (m)")
+    ap.add_argument("--friction", type=float, default=0.5,
+                    help="glass on glass (0.5 reproduces the history's figures; the test uses "
+                         "GLASS_FRICTION, 0.092)")
+    ap.add_argument("--flights", type=int, default=0, help="low lifters on the shell")
+    ap.add_argument("--flight-height", type=float, default=None, help="their height (m)")
+    ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--json", default="")
     a = ap.parse_args()
     kw = dict(rpm=a.rpm, time_scale=a.time_scale, fill=a.fill, length=a.length, model=a.model,
               settle=a.settle, startup=a.startup, measure=a.measure, dt=a.dt, radius=a.radius,
-              represented_diameter=a.represented_diameter)
+              represented_diameter=a.represented_diameter, friction=a.friction,
+              flights=a.flights, flight_height=a.flight_height, seed=a.seed)
     r = drum_wall_heat(**kw)
     r["kwargs"] = kw
     if a.json:
