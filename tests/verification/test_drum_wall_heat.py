@@ -130,3 +130,25 @@ def test_coefficient_rises_with_speed_slower_than_penetration_alone():
           f"(penetration alone: {math.sqrt(3):.3f})")
     assert 1.03 < ratio < math.sqrt(3.0)
     assert np.all(windows > 1.0)
+
+
+def test_passive_bed_solid_fraction_of_a_simple_cubic_lattice():
+    """The porosity sampler against a packing whose solid fraction is known: beads on a simple
+    cubic lattice of spacing 2 r fill pi / 6 = 0.5236 of space. The sector (6 radii deep, 0.5
+    rad wide, 5 mm long: ~70 lattice cells) cuts cells at its edges, which moves the fraction
+    by up to ~2 % of it; 20 000 points add a standard error of 0.0035. Tolerance 0.02."""
+    from drum_wall_heat import passive_bed_solid_fraction
+    r, big, length = 1e-3, 0.05, 0.006
+    step = 2.0 * r
+    g = np.arange(-big, big, step) + r
+    x = np.arange(0.0, length, step) + r
+    X, Y, Z = np.meshgrid(x, g, g, indexing="ij")
+    lattice = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
+    lattice = lattice[np.hypot(lattice[:, 1], lattice[:, 2]) < big - 1.5 * r]
+    # a ring of beads touching the shell over +-1 rad about the bottom marks the wetted arc
+    a = np.linspace(-1.0, 1.0, 40)
+    ring = np.column_stack([np.full_like(a, r), (big - r) * np.sin(a), -(big - r) * np.cos(a)])
+    fraction = passive_bed_solid_fraction(np.vstack([lattice, ring]), r, big, length)
+    assert fraction == pytest.approx(math.pi / 6.0, abs=0.02)
+    # no beads on the shell: no wetted arc to sample
+    assert math.isnan(passive_bed_solid_fraction(lattice, r, big, length))
