@@ -57,7 +57,7 @@ KEEP_LAST_GOOD = False
 # host attributes saved and restored by name, (owner, attribute); a missing one is skipped
 HOST_ATTRIBUTES = (
     ("sim", "time"), ("sim", "step_count"), ("sim", "_warned_thermal"), ("sim", "_warned_speed"),
-    ("sim", "_last_sample_time"), ("sim", "_next_frame_time"),
+    ("sim", "_last_sample_time"), ("sim", "_next_frame_time"), ("sim", "_interval_tail"),
     ("engine", "time"), ("engine", "count"),
     ("broadphase", "rebuilds"), ("broadphase", "entries"),
     ("mesh", "binned_time"), ("mesh", "interval_steps"),

@@ -28,6 +28,7 @@ from ..scene.loader import load_scene, parse_scene
 from ..scene.model import Scene
 from ..sensors import Now, build_sensors
 from ..sensors.particles import mass_inside
+from ..sensors.pooling import amounts, pool, should_pool
 from ..setup.pair_tables import build_pair_tables
 from ..setup.placement import place_fills
 from ..setup.timestep import choose_step_and_skin
@@ -208,6 +209,8 @@ class Simulation:
         self.step_count = 0
         self.time = 0.0
         self._last_sample_time = 0.0
+        # the last sample's interval and its interval series' amounts (sensors/pooling.py)
+        self._interval_tail = None
         self.output_every = max(1, int(round(scene.output.interval / self.dt)))
         # the simulated time from which the next sample writes a particle frame ([output]
         # frame_interval; every sample without it)
@@ -447,13 +450,26 @@ class Simulation:
         m = self.engine.measure()
         for check in self.checks:       # NaN, overlap, speed (divergence.py); _check_state
             check(m)
-        now = Now(time=self.time, interval=self.time - self._last_sample_time, measured=m)
-        values = {"time": self.time}
+        interval = self.time - self._last_sample_time
+        nominal = self.output_every * self.dt
+        # a short interval (the run stops between two regular samples) is pooled with the one
+        # before it: no sample's rates stand for less than a full interval (sensors/pooling.py)
+        pooling = should_pool(interval, nominal, self.dt, self._interval_tail)
+        covered = interval + (self._interval_tail["interval"] if pooling else 0.0)
+        now = Now(time=self.time, interval=interval, measured=m,
+                  pooled_interval=covered - interval)
+        values = {"time": self.time, "sample_interval": covered}
         if self.scene.thermal is not None and self.scene.thermal.time_scale != 1.0:
             # the time the heat has had: S x simulated time ([thermal] time_scale)
             values["thermal_time"] = self.scene.thermal.time_scale * self.time
         for sensor in self.sensors.values():
             sensor.sample(values, now)
+        if pooling:
+            tail = pool(values, interval, self._interval_tail["amounts"], nominal)
+        else:
+            tail = amounts(values, interval)
+        # what a next short sample pools with (kept in checkpoints: run/checkpoint.py)
+        self._interval_tail = {"interval": covered, "amounts": tail} if covered > 0.0 else None
         self._last_sample_time = self.time
         for name, v in values.items():
             self._series.setdefault(name, []).append(np.asarray(v, dtype=np.float64))

@@ -25,6 +25,9 @@ class Now:
     time: float          # s
     interval: float      # s since the previous sample (0 at the first)
     measured: dict       # Engine.measure() at this sample: energies, largest speed, means
+    # s: a short sample (sensors/pooling.py) is pooled with the interval before it, this long;
+    # a sensor whose series are "records" statistics pools its records over it too
+    pooled_interval: float = 0.0
 
 
 def build_sensors(sim) -> dict:

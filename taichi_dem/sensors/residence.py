@@ -42,9 +42,16 @@ class ResidenceTimes:
             new = self.interval[x.name]
             recs = np.concatenate(new) if new else np.empty((0, 3))
             self.interval[x.name] = []
+            count = float(len(recs))     # a "total" series: sensors/pooling.py pools it
+            if now.pooled_interval > 0.0:
+                # a short sample: its statistics over the records of this interval and the one
+                # before it (sensors/pooling.py), as its count is
+                every = self.records(x.name)
+                start = now.time - now.interval - now.pooled_interval
+                recs = every[every[:, 2] > start + 1e-12 * max(1.0, abs(start))]
             t = recs[:, 2] - recs[:, 1]
             p = f"sensors/{x.name}/"
-            values[p + "count"] = float(len(t))
+            values[p + "count"] = count
             if len(t):
                 values[p + "mean"] = float(np.mean(t))
                 values[p + "median"], values[p + "p10"], values[p + "p90"] = (

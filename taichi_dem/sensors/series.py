@@ -7,6 +7,14 @@ scene keys. The results file gives every series dataset a ``units`` attribute fr
 tests/unit/test_series_units.py fails on it). Plain Python (no Taichi).
 
 A name is a pattern: ``*`` stands for one name segment (a body's, a wall's, a sensor's).
+
+``interval`` says how a sample's value relates to its output interval, so that a sample whose
+interval is short (a run that stops between two regular samples) can be pooled with the one
+before it (sensors/pooling.py): "" an instantaneous or cumulative value; "mean" a time mean
+over the interval (a rate); "total" an amount in the interval (a count); "weighted" a mean
+over what the interval saw, weighted by the amount of the sibling series ``weight``
+(an outlet's temperature by its mass flow); "records" a statistic of the records closed in the
+interval, pooled by the sensor that writes it.
 """
 from __future__ import annotations
 
@@ -22,10 +30,15 @@ class Series:
     unit: str
     description: str
     shape: str = ""
+    interval: str = ""
+    weight: str = ""
 
 
 SERIES = (
     Series("time", "s", "simulated time of the sample"),
+    Series("sample_interval", "s", "the time the sample's interval means and counts cover: the "
+           "output interval (0 at the start); a sample after a short interval (a run that ends "
+           "between two regular samples) covers it and the interval before it"),
     Series("thermal_time", "s", "thermal time, thermal.time_scale x the simulated time"),
     Series("particles/count", "1", "particles alive"),
     Series("particles/kinetic_energy", "J", "translational and rotational, of the moving ones"),
@@ -36,32 +49,39 @@ SERIES = (
            "while no particle is inside"),
     Series("particles/mean_moisture", "1", "kg water per kg dry solid, mean; NaN while no "
            "particle is inside"),
-    Series("bodies/*/force", "N", "on the body from the particles", "(3,)"),
-    Series("bodies/*/torque", "N m", "about the body's rotation axis point", "(3,)"),
-    Series("bodies/*/axial_torque", "N m", "the component along its rotation axis"),
+    Series("bodies/*/force", "N", "on the body from the particles", "(3,)", interval="mean"),
+    Series("bodies/*/torque", "N m", "about the body's rotation axis point", "(3,)",
+           interval="mean"),
+    Series("bodies/*/axial_torque", "N m", "the component along its rotation axis",
+           interval="mean"),
     Series("bodies/*/angular_speed", "rad/s", "its prescribed angular speed"),
-    Series("bodies/*/power", "W", "drive power, -axial_torque x angular_speed"),
-    Series("bodies/*/heat_flow", "W", "into the body (an isothermal body)"),
+    Series("bodies/*/power", "W", "drive power, -axial_torque x angular_speed", interval="mean"),
+    Series("bodies/*/heat_flow", "W", "into the body (an isothermal body)", interval="mean"),
     Series("bodies/*/covered_area", "m^2", "the area of its triangles the particles touch"),
-    Series("bodies/*/heat_transfer_coefficient", "W/(m^2 K)", "wall to bed"),
+    Series("bodies/*/heat_transfer_coefficient", "W/(m^2 K)", "wall to bed", interval="mean"),
     Series("walls/*/force", "N", "on the wall from the particles", "(3,)"),
     Series("walls/*/heat_flow", "W", "into the wall (an isothermal wall)"),
-    Series("sensors/*/mass_flow", "kg/s", "through the sensor's plane over the interval"),
-    Series("sensors/*/crossings", "1", "particles that crossed the plane in the interval"),
+    Series("sensors/*/mass_flow", "kg/s", "through the sensor's plane over the interval",
+           interval="mean"),
+    Series("sensors/*/crossings", "1", "particles that crossed the plane in the interval",
+           interval="total"),
     Series("sensors/*/contact_count", "1", "particles touching the body"),
-    Series("sensors/*/count", "1", "residence records closed in the interval"),
-    Series("sensors/*/mean", "s", "residence time, mean over the interval's records"),
-    Series("sensors/*/median", "s", "residence time, median"),
-    Series("sensors/*/p10", "s", "residence time, 10th percentile"),
-    Series("sensors/*/p90", "s", "residence time, 90th percentile"),
+    Series("sensors/*/count", "1", "residence records closed in the interval", interval="total"),
+    Series("sensors/*/mean", "s", "residence time, mean over the interval's records",
+           interval="records"),
+    Series("sensors/*/median", "s", "residence time, median", interval="records"),
+    Series("sensors/*/p10", "s", "residence time, 10th percentile", interval="records"),
+    Series("sensors/*/p90", "s", "residence time, 90th percentile", interval="records"),
     Series("factories/*/mass", "kg", "inserted so far"),
     Series("factories/*/count", "1", "particles inserted so far"),
     Series("factories/*/behind", "kg", "mass the factory is behind its schedule"),
     Series("outlets/*/mass", "kg", "removed so far"),
     Series("outlets/*/count", "1", "particles removed so far"),
-    Series("outlets/*/mass_flow", "kg/s", "removed over the interval"),
-    Series("outlets/*/mean_temperature", "K", "of the particles removed in the interval"),
-    Series("outlets/*/mean_moisture", "1", "of the particles removed in the interval"),
+    Series("outlets/*/mass_flow", "kg/s", "removed over the interval", interval="mean"),
+    Series("outlets/*/mean_temperature", "K", "of the particles removed in the interval",
+           interval="weighted", weight="mass_flow"),
+    Series("outlets/*/mean_moisture", "1", "of the particles removed in the interval",
+           interval="weighted", weight="mass_flow"),
     Series("thermal/energy_inside", "J", "sum m c T of the particles inside"),
     Series("thermal/energy_fed", "J", "brought in by the factories so far"),
     Series("thermal/energy_removed", "J", "taken out by the outlets so far"),
