@@ -39,8 +39,8 @@ def discharged_mass(sim, sensor: Optional[str] = None) -> tuple[np.ndarray, np.n
     t = s["time"]
     key = f"sensors/{sensor}/mass_flow"
     if sensor is not None and key in s:
-        dt = np.diff(t, prepend=t[0])
-        return t, np.cumsum(s[key] * dt)
+        from ..sensors.pooling import cumulative_of_rate
+        return t, cumulative_of_rate(t, s[key], s.get("sample_interval"))
     return t, s["particles/lost"] * float(np.mean(initial_masses(sim)))
 
 

@@ -82,12 +82,13 @@ def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "x"
 
 
-def _rate(t: np.ndarray, cumulative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The flow of a cumulative series per output interval (kg/s), at the interval's end."""
-    if len(t) < 2:
-        return t[:0], cumulative[:0]
-    dt = np.diff(t)
-    return t[1:], np.divide(np.diff(cumulative), dt, out=np.zeros_like(dt), where=dt > 0)
+def _rate(t: np.ndarray, cumulative: np.ndarray,
+          covered: Optional[np.ndarray] = None) -> tuple[np.ndarray, np.ndarray]:
+    """The flow of a cumulative series per output interval (kg/s), at the interval's end; over
+    what each sample covers (``sample_interval``: a short closing sample pooled with the
+    interval before it, as the rate series are)."""
+    from ..sensors.pooling import rate_of_cumulative
+    return rate_of_cumulative(t, cumulative, covered)
 
 
 class Results:
@@ -250,7 +251,7 @@ def mass_flow_figure(r: Results) -> Optional[Figure]:
     for name in r.names("factories"):
         m = r.get(f"factories/{name}/mass")
         if m is not None:
-            rates.append(Line(f"factory '{name}' (fed)", *_rate(r.t, m)))
+            rates.append(Line(f"factory '{name}' (fed)", *_rate(r.t, m, r.series.get("sample_interval"))))
             masses.append(Line(f"fed by '{name}'", r.t, m))
     for name in r.names("outlets"):
         f = r.get(f"outlets/{name}/mass_flow")

@@ -89,3 +89,40 @@ def should_pool(interval: float, nominal: float, dt: float, previous: Optional[d
     """Whether a sample over ``interval`` s is short (more than half a step under the nominal
     output interval) and has a sample before it to pool with."""
     return previous is not None and 0.0 < interval < nominal - 0.5 * dt
+
+
+def rate_of_cumulative(t: np.ndarray, cumulative: np.ndarray,
+                       covered: Optional[np.ndarray] = None) -> tuple[np.ndarray, np.ndarray]:
+    """(sample times s, rate per s) of a cumulative series (kg -> kg/s) over what each sample
+    covers: its ``sample_interval`` when given (a pooled closing sample: its own interval and
+    the one before), else the time since the previous sample. The first sample has no rate."""
+    t = np.asarray(t, dtype=np.float64)
+    cumulative = np.asarray(cumulative, dtype=np.float64)
+    if len(t) < 2:
+        return t[:0], cumulative[:0]
+    if covered is None or len(covered) != len(t):
+        span = np.diff(t)
+        return t[1:], np.divide(np.diff(cumulative), span, out=np.zeros_like(span),
+                                where=span > 0)
+    start = t[1:] - np.asarray(covered, dtype=np.float64)[1:]
+    begin = np.interp(start, t, cumulative)
+    span = t[1:] - start
+    return t[1:], np.divide(cumulative[1:] - begin, span, out=np.zeros_like(span),
+                            where=span > 0)
+
+
+def cumulative_of_rate(t: np.ndarray, rate: np.ndarray,
+                       covered: Optional[np.ndarray] = None) -> np.ndarray:
+    """The running integral of a rate series (kg/s -> kg) at each sample, exact for interval
+    means: each sample adds rate x what it covers (``sample_interval``) to the integral at the
+    start of what it covers (a sample time: a pooled sample starts where the one before the
+    previous ended). Without ``covered``: rate x the time since the previous sample."""
+    t = np.asarray(t, dtype=np.float64)
+    rate = np.asarray(rate, dtype=np.float64)
+    if covered is None or len(covered) != len(t):
+        return np.cumsum(rate * np.diff(t, prepend=t[:1]))
+    out = np.zeros_like(rate)
+    for i in range(1, len(t)):      # samples, not particles: a short host loop
+        start = t[i] - float(covered[i])
+        out[i] = float(np.interp(start, t[:i], out[:i])) + rate[i] * float(covered[i])
+    return out
