@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import functools
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -225,8 +226,13 @@ def describe_scene(scene) -> str:
     from ..effects import enabled_effects
     from ..setup.pair_tables import build_pair_tables
     from ..setup.placement import place_fills
+    from ..setup.memory import estimated_device_bytes, memory_problem, particle_slots
     from ..setup.timestep import choose_step_and_skin
 
+    # before anything the size of the scene is allocated (placement, the tables)
+    problem = memory_problem(scene)
+    if problem:
+        raise SceneError(scene.source, *problem)
     placed = place_fills(scene, np.random.default_rng(scene.simulation.seed))
     tables = build_pair_tables(scene)
     from ..run.simulation import _factory_capacity, _fit_skin_to_periodic_axes, _sizes_to_expect
@@ -243,14 +249,9 @@ def describe_scene(scene) -> str:
     skin = _fit_skin_to_periodic_axes(scene, float(np.max(radii)), skin, ts.notes, say=False)
     n_initial = n
     n = n + _factory_capacity(scene)
-    real_bytes = 8 if scene.simulation.precision == "f64" else 4
-    # per particle: 6 vec3 + 4 reals + 3 ints of state, shadows and rows (~12 ints)
-    per_particle = (6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes
-    # per neighbour entry (about 8 per particle, with the lists' growth headroom): ids,
-    # mirror, 5 vec3
-    from ..engine.tuning import LIST_GROWTH
-    per_entry = 3 * 4 + 5 * 3 * real_bytes
-    memory = n * per_particle + int(LIST_GROWTH * 8 * n) * per_entry
+    # setup/memory.py: state, neighbour lists, cells (memory_problem refused more than the
+    # machine has above, from the same estimate)
+    memory = estimated_device_bytes(particle_slots(scene), scene.simulation.precision)
     steps = scene.simulation.end_time / ts.dt
     lines = [f"scene: {scene.source}", "effects (compiled and run, in step order):"]
     for e in enabled_effects(scene):
@@ -332,9 +333,7 @@ def cmd_check(args) -> int:
         return _fail("check: give a scene file (or --builders)")
     from ..scene.loader import load_scene
     scene = load_scene(args.scene)
-    _refuse_unwritable(args.scene, (("output.h5", scene.output.h5),
-                                    ("output.rrd", scene.output.rrd)))
-    _refuse_inconsistent(args.scene, scene)
+    _refuse_bad_outputs(args.scene, scene, *_resolve_outputs(args.scene, scene))
     _note_ignored(args.scene, scene)
     print(describe_scene(scene))
     if args.preview:
@@ -348,13 +347,42 @@ def cmd_check(args) -> int:
 
 
 # ---------------------------------------------------------------------------------- run
-def _output_path(explicit, configured, out_dir, scene_path, suffix):
-    if explicit:
-        return explicit
-    if out_dir:
-        name = Path(configured).name if configured else Path(scene_path).stem + suffix
-        return str(Path(out_dir) / name)
-    return configured
+def _resolve_outputs(scene_path, scene, args=None):
+    """(results file, recording file, checkpoint file) a run of ``scene`` writes: absolute
+    paths or None (consistency.resolve_output_path: the scene's [output] paths inside its
+    folder, or their names in --out DIR; --h5 and --rrd as the user gave them; the checkpoint
+    beside the results, in --out DIR, or beside the scene)."""
+    from ..run.checkpoint import default_path
+    from ..scene.sections.consistency import resolve_output_path
+    explicit_h5 = getattr(args, "h5", None)
+    explicit_rrd = getattr(args, "rrd", None)
+    out_dir = getattr(args, "out", None)
+    h5_name = scene.output.h5
+    if out_dir and not h5_name:
+        h5_name = Path(scene_path).stem + ".h5"      # --out DIR alone: <scene stem>.h5 there
+    h5 = resolve_output_path(scene_path, "output.h5", h5_name, explicit_h5, out_dir, "--h5")
+    rrd = resolve_output_path(scene_path, "output.rrd", scene.output.rrd, explicit_rrd,
+                              out_dir, "--rrd")
+    checkpoint = default_path(scene, h5, os.path.expanduser(out_dir) if out_dir else None)
+    return h5, rrd, checkpoint
+
+
+def _refuse_bad_outputs(scene_path, scene, h5, rrd, checkpoint, args=None) -> None:
+    """SceneError (file: key: reason) for an output that cannot be written, or an existing
+    file in its place that is not ours (consistency.foreign_file_problem): never overwritten."""
+    from ..scene.sections.consistency import foreign_file_problem
+    h5_key = "--h5" if getattr(args, "h5", None) else "output.h5"
+    rrd_key = "--rrd" if getattr(args, "rrd", None) else "output.rrd"
+    _refuse_unwritable(scene_path, ((h5_key, h5), (rrd_key, rrd)))
+    # the checkpoint (periodic, or the last good state of a diverged run) goes beside the
+    # results: blamed on the key that puts it there
+    checkpoint_key = ("output.checkpoint_interval" if scene.output.checkpoint_interval
+                      else "--out" if getattr(args, "out", None) else h5_key)
+    for key, path, kind in ((h5_key, h5, "results"), (rrd_key, rrd, "recording"),
+                            (checkpoint_key, checkpoint, "checkpoint")):
+        problem = foreign_file_problem(path, kind)
+        if problem:
+            raise SceneError(str(scene_path), key, problem)
 
 
 def _window_problem(args):
@@ -363,14 +391,6 @@ def _window_problem(args):
         return None
     from .window import display_problem
     return display_problem()
-
-
-def _refuse_inconsistent(source, scene) -> None:
-    """SceneError for what a command-line run of the scene cannot do (consistency.py)."""
-    from ..scene.sections.consistency import interval_problem
-    problem = interval_problem(scene)
-    if problem:
-        raise SceneError(str(source), *problem)
 
 
 def _note_ignored(source, scene) -> None:
@@ -390,7 +410,6 @@ def _refuse_unwritable(source, paths) -> None:
 
 
 def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
-    from ..run.checkpoint import default_path
     from ..run.simulation import Simulation
     from ..scene.loader import load_scene
 
@@ -398,14 +417,13 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
     if problem:
         return _fail(problem, 2)
     scene = load_scene(scene_path)
-    h5 = _output_path(args.h5, scene.output.h5, args.out, scene_path, ".h5")
-    rrd = args.rrd or (_output_path(None, scene.output.rrd, args.out, scene_path, ".rrd")
-                       if scene.output.rrd else None)
-    _refuse_unwritable(scene_path, (("--h5" if args.h5 else "output.h5", h5),
-                                    ("--rrd" if args.rrd else "output.rrd", rrd)))
-    if getattr(args, "until", None) is None:
-        _refuse_inconsistent(scene_path, scene)
+    h5, rrd, checkpoint_path = _resolve_outputs(scene_path, scene, args)
+    _refuse_bad_outputs(scene_path, scene, h5, rrd, checkpoint_path, args)
     _note_ignored(scene_path, scene)
+    from ..setup.memory import memory_problem
+    problem = memory_problem(scene, args.arch, args.precision)   # before anything is allocated
+    if problem:
+        raise SceneError(scene_path, *problem)
     every_nth = getattr(args, "every_nth", 1) or 1
     if every_nth < 1:
         return _fail(f"--every-nth: {every_nth} is not a positive whole number")
@@ -417,7 +435,7 @@ def cmd_run(args, scene_path: str, summary=None, setup=None) -> int:
         return _fail(f"{err} (at the start: no checkpoint written)", 3)
     # beside the results, or in --out DIR (CONTRACT.md); also where a divergence leaves the
     # last good state
-    sim.checkpointer.path = default_path(scene, h5, args.out)
+    sim.checkpointer.path = checkpoint_path
     if summary is None and (scene.factories or scene.outlets or scene.sensors):
         # a process scene of the user's own gets the engineer's numbers the process demos print
         from .summaries import process_summary
@@ -446,6 +464,7 @@ def cmd_resume(args) -> int:
     if args.h5:
         h5 = args.h5
     elif args.out:
+        args.out = os.path.expanduser(args.out)
         h5 = str(Path(args.out) / (Path(stored_results).name if stored_results
                                    else Path(path).name.replace(".checkpoint.h5", ".h5")))
     else:

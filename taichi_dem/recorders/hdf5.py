@@ -68,6 +68,11 @@ class HDF5Recorder:
     """Writes /series/<name> (extendable along time) and /frames/<k>/... groups."""
 
     def __init__(self, path: str, *, scene_text: str, dt: float, arch: str, precision: str):
+        from ..errors import SceneError
+        from ..scene.sections.consistency import foreign_file_problem
+        problem = foreign_file_problem(path, "results")     # never overwrite a file not ours
+        if problem:
+            raise SceneError(path, "h5", problem)
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
         self.path = path
         self.file = h5py.File(path, "w")
@@ -91,6 +96,11 @@ class HDF5Recorder:
         if not os.path.exists(path):
             rec = cls(path, scene_text=scene_text, dt=dt, arch=arch, precision=precision)
         else:
+            from ..errors import SceneError
+            from ..scene.sections.consistency import foreign_file_problem
+            problem = foreign_file_problem(path, "results")   # never rewrite a file not ours
+            if problem:
+                raise SceneError(path, "h5", problem)
             rec = cls.__new__(cls)
             rec.path = path
             rec.file = h5py.File(path, "a")

@@ -394,7 +394,7 @@ def default_path(scene, h5: Optional[str] = None, out_dir: Optional[str] = None)
     is_file = not scene.source.startswith("<")
     stem = Path(scene.source).stem if is_file else "scene"
     if out_dir:
-        directory = Path(out_dir)
+        directory = Path(os.path.expanduser(out_dir))
     elif h5:
         directory = Path(h5).resolve().parent
     elif is_file:

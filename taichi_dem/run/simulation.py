@@ -236,7 +236,9 @@ class Simulation:
             ("energy", self.sensors.get("energy"))) if v is not None}
         self._series: dict[str, list] = {}
         self.recorder = None
-        h5 = h5 if h5 is not None else scene.output.h5
+        if h5 is None:      # the scene's [output] h5: inside its folder (consistency.py)
+            from ..scene.sections.consistency import resolve_output_path
+            h5 = resolve_output_path(scene.source, "output.h5", scene.output.h5)
         if h5:
             from ..recorders.hdf5 import HDF5Recorder
             self.recorder = HDF5Recorder(h5, scene_text=scene.text, dt=self.dt, arch=arch,

@@ -85,9 +85,35 @@ def conduction_tables(scene: Scene, names: list[str]):
     return factor, correction
 
 
+# The tables hold every pair of declared materials (M x M: 6 float64 tables and an int32 one,
+# built on the host, copied to the device and indexed by material in the kernels). 140,000
+# unused materials asked for 146 GiB and raised MemoryError. A cap on their size, not on what
+# is used: the numbering of materials (sorted names) is shared with placement and the results'
+# ``materials`` attribute. 256 MiB is about 2,200 materials, a hundred times what a scene needs.
+PAIR_TABLE_BYTES_PER_PAIR = 6 * 8 + 4
+MAX_PAIR_TABLE_BYTES = 2 ** 28
+
+
+def pair_table_problem(scene: Scene):
+    """Why the scene's pair tables are too large to build (a reason), or None."""
+    m = len(scene.materials)
+    need = m * m * PAIR_TABLE_BYTES_PER_PAIR
+    if need > MAX_PAIR_TABLE_BYTES:
+        most = int(math.isqrt(MAX_PAIR_TABLE_BYTES // PAIR_TABLE_BYTES_PER_PAIR))
+        return (f"{m:,} materials need pair tables of {need / 2 ** 30:,.1f} GiB (every pair of "
+                f"declared materials, {PAIR_TABLE_BYTES_PER_PAIR} bytes each); at most {most:,} "
+                "materials: remove the unused ones")
+    return None
+
+
 def build_pair_tables(scene: Scene) -> PairTables:
     """Pair tables for every material pair that has an interaction (others stay zero and are
-    never used: the loader guarantees every pair that can meet has one)."""
+    never used: the loader guarantees every pair that can meet has one). SceneError (key
+    ``materials``) when they would exceed MAX_PAIR_TABLE_BYTES."""
+    problem = pair_table_problem(scene)
+    if problem:
+        from ..errors import SceneError
+        raise SceneError(scene.source, "materials", problem)
     names = sorted(scene.materials)
     m = len(names)
     t = PairTables(names, *(np.zeros((m, m)) for _ in range(5)),

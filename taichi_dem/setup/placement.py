@@ -566,11 +566,33 @@ def _drop_periodic_conflicts(scene: Scene, sites: np.ndarray, spacing: float) ->
     return sites[keep_mask]
 
 
+# Peak host memory of placing a region fill, per particle: the lattice sites (about 4 per
+# particle, local and world coordinates, parity, masks) and the jitter arrays. Measured with
+# tracemalloc on a 100,000-sphere box fill: 968 bytes per particle.
+PLACEMENT_BYTES_PER_PARTICLE = 1000
+
+
+def placement_memory_problem(count: int):
+    """Why placing ``count`` spheres would not fit in the machine's memory (a reason), or
+    None; from the count alone, before anything is allocated."""
+    from .memory import host_memory_bytes
+    need = count * PLACEMENT_BYTES_PER_PARTICLE
+    have = host_memory_bytes()
+    if have and need > have:
+        return (f"placing {count:,} spheres needs about {need / 2 ** 30:,.1f} GiB of memory "
+                f"({PLACEMENT_BYTES_PER_PARTICLE} bytes each), more than the machine's "
+                f"{have / 2 ** 30:,.1f} GiB; reduce count")
+    return None
+
+
 def _place_region_fill(scene: Scene, fill: ParticleFill, rng: np.random.Generator,
                        prev_pos: np.ndarray, prev_r: np.ndarray, tris=None):
     count = fill.count
     if count == 0:
         return np.empty((0, 3)), np.empty(0)
+    problem = placement_memory_problem(count)
+    if problem:
+        raise SceneError(scene.source, f"{fill.key}.count", problem)
     region = fill.region
     r_max = fill.radius.largest
     radii = sample_radii(fill.radius, count, rng)

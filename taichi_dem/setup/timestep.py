@@ -25,6 +25,22 @@ MAX_RAYLEIGH_FRACTION = 0.5     # explicit dt beyond half the Rayleigh time is r
 BODY_STEP_FRACTION = 0.1        # auto dt: a body surface moves at most 0.1 r_min per step
 BODY_STEP_ERROR = 0.3           # explicit dt moving a body surface more than 0.3 r_min per
                                 # step is refused: a thin paddle could pass through a particle
+# Physical sanity (issue 43): a step below MIN_DT, or a run of more than MAX_STEPS steps, is
+# a scene that would run for years (1e10 steps are ~3 h at 1e6 steps/s for ONE particle; a
+# real scene runs at 1e5 - 1e8 particle-steps/s), always a unit or property mistake
+# (density 1e-25 gives dt 1.5e-19 s). Refused, naming the key that made it absurd.
+MIN_DT = 1e-9                   # s
+MAX_STEPS = 1e10
+# A contact so soft that one particle's own weight presses it into its partner by more
+# than its radius (Hertz: m g = 4/3 E* sqrt(R*) d^1.5, R* = r against a wall, the stiffest
+# reading) is not a contact: particles pass through each other and the automatic step (set
+# by the Hertz contact time) grows past the output interval or the whole run (E = 1e-3 Pa
+# gives dt 0.22 s; density 1e25 gives 5,118 s; both ran "0 steps" and exited 0).
+MAX_WEIGHT_OVERLAP = 1.0        # radii
+# which material key to blame for an absurd step: the one furthest (in decades) from the
+# range real granular solids (and their softened DEM stand-ins) occupy
+PLAUSIBLE_DENSITY = (10.0, 3e4)            # kg/m^3: aerogel granules to tungsten
+PLAUSIBLE_YOUNGS_MODULUS = (1e4, 1.2e12)   # Pa: soft gels (softened DEM) to diamond
 
 
 @dataclass
@@ -78,13 +94,15 @@ def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
     t_rayleigh = math.inf
     t_contact = math.inf
     v = expected_max_speed(scene, initial_speeds)
+    rayleigh_material = contact_material = None
     for k, name in enumerate(material_names):
         sel = materials == k
         if not np.any(sel):
             continue
         mat = scene.materials[name]
         r = float(np.min(radii[sel]))
-        t_rayleigh = min(t_rayleigh, rayleigh_time(r, mat))
+        if rayleigh_time(r, mat) < t_rayleigh:
+            t_rayleigh, rayleigh_material = rayleigh_time(r, mat), name
         # the stiffest partner this material can meet (particles or walls)
         partners = (set(material_names[j] for j in np.unique(materials))
                     | {w.material for w in scene.walls} | {b.material for b in scene.bodies})
@@ -94,7 +112,8 @@ def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
             e_eff = effective_youngs_modulus(mat, scene.materials[pname])
             m = 4.0 / 3.0 * math.pi * r ** 3 * mat.density
             # a small sphere against a wall: m* = m, R* = r (the shortest contact of this pair)
-            t_contact = min(t_contact, hertz_contact_time(m, r, e_eff, v))
+            if hertz_contact_time(m, r, e_eff, v) < t_contact:
+                t_contact, contact_material = hertz_contact_time(m, r, e_eff, v), name
     if not math.isfinite(t_rayleigh):
         t_rayleigh = 1e-3
     courant = skin / (2.0 * v) if v > 0 else math.inf
@@ -135,7 +154,153 @@ def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
                              f"{BODY_STEP_FRACTION * r_min / v_body:.3g} s or dt = \"auto\"")
         if dt > t_contact / MIN_STEPS_PER_CONTACT:
             notes.append(f"fewer than {MIN_STEPS_PER_CONTACT} steps per contact at {v:.3g} m/s")
-    return TimeStepReport(dt, t_rayleigh, t_contact, v, courant, limited_by, notes)
+    report = TimeStepReport(dt, t_rayleigh, t_contact, v, courant, limited_by, notes)
+    setter = {"rayleigh_fraction": rayleigh_material,
+              "contact_duration": contact_material}.get(limited_by)
+    refuse_absurd_step(scene, report, setter, radii, materials, material_names, fixed)
+    return report
+
+
+def _blamed_key(scene: Scene, material: str | None, too_small: bool) -> str:
+    """The dotted key that made an automatic step absurd: the material property furthest
+    (in decades) outside PLAUSIBLE_DENSITY / PLAUSIBLE_YOUNGS_MODULUS, in the direction that
+    gives the fault (a tiny step: density too low or modulus too high; a huge one: the
+    reverse); the material as a whole when neither stands out."""
+    if material is None:
+        return "simulation.dt"
+    mat = scene.materials[material]
+    lo_rho, hi_rho = PLAUSIBLE_DENSITY
+    lo_e, hi_e = PLAUSIBLE_YOUNGS_MODULUS
+    if too_small:      # dt ~ sqrt(rho / E): low density, high modulus
+        off = {"density": math.log10(lo_rho / mat.density) if mat.density < lo_rho else 0.0,
+               "youngs_modulus": (math.log10(mat.youngs_modulus / hi_e)
+                                  if mat.youngs_modulus > hi_e else 0.0)}
+    else:
+        off = {"density": math.log10(mat.density / hi_rho) if mat.density > hi_rho else 0.0,
+               "youngs_modulus": (math.log10(lo_e / mat.youngs_modulus)
+                                  if mat.youngs_modulus < lo_e else 0.0)}
+    worst = max(off, key=off.get)
+    return f"materials.{material}.{worst}" if off[worst] > 0.0 else f"materials.{material}"
+
+
+def _property_words(scene: Scene, material: str | None, radius: float,
+                    which: str = "smallest radius") -> str:
+    """' (material ...: density, modulus; radius)' for a message, '' without a material."""
+    if material is None:
+        return ""
+    mat = scene.materials[material]
+    return (f" (material {material!r}: density {mat.density:.3g} kg/m^3, Young's modulus "
+            f"{mat.youngs_modulus:.3g} Pa; {which} {radius:.3g} m)")
+
+
+def weight_overlap(scene: Scene, radii: np.ndarray, materials: np.ndarray,
+                   material_names: list[str]) -> tuple[float, str | None, float]:
+    """The largest overlap, in radii, that one particle's own weight presses into its
+    softest partner (Hertz, m g = 4/3 E* sqrt(r) d^1.5, the particle's own radius as R*),
+    over the materials present, with that material and radius (m); (0, None, nan) without
+    gravity. Dimensionless."""
+    g = float(np.linalg.norm(scene.simulation.gravity))
+    if g <= 0.0 or not len(radii):
+        return 0.0, None, math.nan
+    present = set(material_names[j] for j in np.unique(materials))
+    partners = present | {w.material for w in scene.walls} | {b.material for b in scene.bodies}
+    worst, worst_name, worst_radius = 0.0, None, math.nan
+    for k, name in enumerate(material_names):
+        sel = materials == k
+        if not np.any(sel):
+            continue
+        mat = scene.materials[name]
+        r = float(np.max(radii[sel]))       # the heaviest sphere of the material
+        mass = 4.0 / 3.0 * math.pi * r ** 3 * mat.density
+        for pname in partners:
+            if frozenset((name, pname)) not in scene.interactions:
+                continue
+            e_eff = effective_youngs_modulus(mat, scene.materials[pname])
+            depth = (3.0 * mass * g / (4.0 * e_eff * math.sqrt(r))) ** (2.0 / 3.0) / r
+            if depth > worst:
+                worst, worst_name, worst_radius = depth, name, r
+    return worst, worst_name, worst_radius
+
+
+def refuse_absurd_step(scene: Scene, report: TimeStepReport, setter: str | None,
+                       radii: np.ndarray, materials: np.ndarray,
+                       material_names: list[str], fixed: np.ndarray | None = None) -> None:
+    """SceneError (file: key: reason) for a step no run can use (issue 43): below MIN_DT,
+    more than MAX_STEPS to end_time, longer than the run or the output interval, a contact
+    too soft to carry a particle's weight, or a [viscous_damping] time constant the step
+    cannot resolve. ``setter``: the material whose bound set an automatic step."""
+    sim = scene.simulation
+    dt = report.dt
+    explicit = sim.dt is not None
+    r_min = float(np.min(radii)) if len(radii) else math.nan
+    if not (dt > 0.0 and math.isfinite(dt)):
+        return           # describe_scene and the engine report a non-finite step themselves
+    steps = sim.end_time / dt
+    if dt < MIN_DT or steps > MAX_STEPS:
+        key = "simulation.dt" if explicit else _blamed_key(scene, setter, too_small=True)
+        if dt >= MIN_DT and key in ("simulation.dt", f"materials.{setter}"):
+            key = "simulation.end_time"      # a sane step, an absurd duration
+        origin = ("given" if explicit
+                  else "automatic, set by the " + report.limited_by.replace("_", " "))
+        raise SceneError(scene.source, key,
+                         f"the time step is {dt:.3g} s ({origin})"
+                         f"{'' if explicit else _property_words(scene, setter, r_min)}, "
+                         f"and reaching end_time {sim.end_time:g} s takes {steps:.3g} steps: "
+                         f"a run needs dt >= {MIN_DT:g} s and at most {MAX_STEPS:.0e} steps "
+                         "(it would never finish; check the units of the density, modulus "
+                         "and radii)")
+    moving = fixed is None or not len(fixed) or not bool(np.all(fixed))
+    depth, soft, heavy_radius = weight_overlap(scene, radii, materials, material_names)
+    if depth > MAX_WEIGHT_OVERLAP and moving:
+        key = _blamed_key(scene, soft, too_small=False)
+        raise SceneError(scene.source, key if key != f"materials.{soft}" else
+                         f"materials.{soft}.youngs_modulus",
+                         f"a particle's own weight presses it {depth:.3g} radii into its "
+                         f"partner{_property_words(scene, soft, heavy_radius, 'radius')}: "
+                         f"more than {MAX_WEIGHT_OVERLAP:g} radius, the particles would pass "
+                         f"through each other (the step would be {dt:.3g} s); the modulus is "
+                         "too low or the density too high for a contact (check their units)")
+    bound, what = min((sim.end_time, "simulation.end_time"),
+                      (scene.output.interval, "output.interval"))
+    if dt > bound:
+        key = "simulation.dt" if explicit else _blamed_key(scene, setter, too_small=False)
+        if key in (f"materials.{setter}", "simulation.dt") and not explicit:
+            key = what        # plausible materials: the interval (or the run) is too short
+        raise SceneError(scene.source, key,
+                         f"the time step is {dt:.3g} s ({'given' if explicit else 'automatic'})"
+                         f"{'' if explicit else _property_words(scene, setter, r_min)}, "
+                         f"longer than {what} ({bound:g} s): the run could not resolve "
+                         "anything (no sample, or steps coarser than the samples)")
+    damping = scene.settings.get("viscous_damping")
+    if damping is not None:
+        from ..effects.viscous_damping.settings import step_problem
+        problem = step_problem(damping, dt)
+        if problem:
+            raise SceneError(scene.source, "viscous_damping.time_constant", problem)
+
+
+# The cell grid (engine/grid.py) starts from cells one pair cutoff (at least 2 r_max) wide and
+# coarsens until it holds at most 8 cells per particle; its first cell count is a 64-bit
+# integer, so a domain more than ~2e6 cutoffs wide on each axis overflows it (OverflowError).
+MAX_GRID_CELLS = 2.0 ** 62
+
+
+def refuse_uncountable_grid(scene: Scene, radii: np.ndarray) -> None:
+    """SceneError (key ``domain``) when the domain spans more pair cutoffs than a 64-bit cell
+    count can number (``radii``: m; the cutoff is taken as 2 r_max, its least value)."""
+    if not len(radii):
+        return
+    cutoff = 2.0 * float(np.max(radii))
+    if not cutoff > 0.0:
+        return
+    span = np.asarray(scene.domain.max, float) - np.asarray(scene.domain.min, float)
+    cells = float(np.prod(np.maximum(np.ceil(span / cutoff), 1.0)))
+    if not cells <= MAX_GRID_CELLS:
+        raise SceneError(scene.source, "domain",
+                         f"the domain ({' x '.join(f'{x:.3g}' for x in span)} m) spans "
+                         f"{cells:.3g} cells of the pair cutoff ({cutoff:.3g} m): more than "
+                         f"the {MAX_GRID_CELLS:.3g} the cell grid can number; a smaller "
+                         "domain (wrong units?)")
 
 
 SKIN_REBUILD_STEPS = 20          # default skin: a particle at the expected speed triggers a
@@ -155,6 +320,7 @@ def choose_step_and_skin(scene: Scene, radii: np.ndarray, materials: np.ndarray,
     provisional = scene.simulation.skin or SKIN_MIN_DIAMETERS * mean_diameter
     report = choose_time_step(scene, radii, materials, material_names, initial_speeds, provisional,
                               fixed)
+    refuse_uncountable_grid(scene, radii)
     if scene.simulation.skin:
         return report, scene.simulation.skin
     wanted = 2.0 * SKIN_REBUILD_STEPS * report.expected_speed * report.dt

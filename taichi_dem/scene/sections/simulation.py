@@ -12,6 +12,11 @@ from ..model import Domain, Output, SimulationSettings
 MAX_PARTICLES = 2 ** 31 - 1
 # a domain narrower than this on any axis is a unit mistake (as for meshes, geometry.mesh)
 MIN_DOMAIN_SIZE = 1e-6     # m
+# ... and a coordinate beyond this is one too (issue 43: a domain of +-1e29 m overflowed the
+# cell count). The largest machines simulated (kilns) are ~200 m long; at 1e6 m a float32
+# coordinate is resolved to 6 cm only, coarser than any particle, so no contact there could
+# be computed.
+MAX_COORDINATE = 1e6       # m
 AXES = ("x", "y", "z")
 _S = SimulationSettings
 
@@ -88,6 +93,12 @@ class SimulationSections:
         t = self.table(value, key)
         DOMAIN.check(t, self.source, key)
         lo, hi = self.corners(t, key)
+        for corner, name in ((lo, "min"), (hi, "max")):
+            if max(abs(x) for x in corner) > MAX_COORDINATE:
+                raise self.err(f"{key}.{name}", f"{list(corner)} lies beyond {MAX_COORDINATE:g} m "
+                                                "from the origin: absurd for a DEM scene (a "
+                                                "float32 coordinate there is resolved to "
+                                                "centimetres; wrong units?)")
         for i, ax in enumerate(AXES):
             if hi[i] - lo[i] < MIN_DOMAIN_SIZE:
                 raise self.err(f"{key}.max", f"the domain is {hi[i] - lo[i]:.3g} m across on "
@@ -135,6 +146,13 @@ class SimulationSections:
                                f"the fills hold {total:,} particles, more than the "
                                f"{MAX_PARTICLES:,} the engine can index (32-bit fields)")
         if simulation.max_particles is not None:
+            if simulation.max_particles < total:
+                # the engine sizes its slots from max_particles: fewer slots than the fills
+                # place was silently ignored before (issue 43)
+                raise self.err("simulation.max_particles",
+                               f"{simulation.max_particles:,} particle slots are fewer than the "
+                               f"{total:,} particles the fills place; raise max_particles to "
+                               f"at least {total:,} (or leave it out)")
             return
         expected = float(total)
         for f in factories:

@@ -1,0 +1,88 @@
+"""What a scene asks of the machine's memory, checked before anything is allocated (issue 43:
+``max_particles = 2147483647`` printed "estimated device memory 2105344 MiB", said OK, and the
+run crashed; 200 million particles in one fill raised MemoryError in placement).
+
+Plain Python and numpy: ``check`` uses it without starting the Taichi runtime.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from typing import Optional
+
+# particle slots are indexed with 32-bit integers, so the estimate below never needs more
+LIST_ENTRIES_PER_PARTICLE = 8      # neighbour entries per particle the lists start with
+CELLS_PER_PARTICLE = 8             # engine/grid.py MAX_CELLS_PER_PARTICLE: a start and a count
+GPU_ARCHS = ("gpu", "cuda")        # archs whose device memory nvidia-smi reports
+
+
+def host_memory_bytes() -> int:
+    """The machine's physical memory, bytes (os.sysconf); 0 when the system does not say."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
+def device_memory_bytes(arch: str) -> tuple[int, str]:
+    """(bytes, what they are) the kernels of ``arch`` can use: host RAM for cpu; for a CUDA GPU
+    the first device's memory as nvidia-smi reports it (cheap, no Taichi runtime), else host
+    RAM (vulkan and metal do not say cheaply; their memory is rarely more than the host's)."""
+    if arch in GPU_ARCHS and shutil.which("nvidia-smi"):
+        try:
+            out = subprocess.run(["nvidia-smi", "--query-gpu=memory.total",
+                                  "--format=csv,noheader,nounits"], capture_output=True,
+                                 text=True, timeout=10, check=True).stdout.split()
+            if out:
+                return int(float(out[0]) * 2 ** 20), "the GPU's memory"
+        except (OSError, ValueError, subprocess.SubprocessError):
+            pass
+    return host_memory_bytes(), "the machine's memory"
+
+
+def estimated_device_bytes(slots: int, precision: str) -> int:
+    """Device memory (bytes) for ``slots`` particle slots: per particle 6 vectors and 4 reals
+    of state, 15 ints of shadows and rows, 4 reals more; about LIST_ENTRIES_PER_PARTICLE
+    neighbour entries (with the lists' growth headroom) of 3 ints and 5 vectors each; and
+    CELLS_PER_PARTICLE grid cells of 2 ints."""
+    from ..engine.tuning import LIST_GROWTH
+    real_bytes = 8 if precision == "f64" else 4
+    per_particle = (6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes
+    per_entry = 3 * 4 + 5 * 3 * real_bytes
+    return (slots * per_particle + int(LIST_GROWTH * LIST_ENTRIES_PER_PARTICLE * slots) * per_entry
+            + CELLS_PER_PARTICLE * slots * 2 * 4)
+
+
+def particle_slots(scene) -> int:
+    """Slots the engine allocates: the fills' particles plus the factories' capacity
+    (run/simulation.py ``_factory_capacity``, which honours max_particles)."""
+    from ..run.simulation import _factory_capacity
+    return scene.expected_particle_count + _factory_capacity(scene)
+
+
+def _blamed_key(scene) -> str:
+    """The key that sets the slot count: max_particles when given, else the largest source."""
+    if scene.simulation.max_particles is not None and scene.factories:
+        return "simulation.max_particles"
+    if scene.factories:
+        return f"{scene.factories[0].key}.mass_rate"
+    if scene.fills:
+        biggest = max(scene.fills, key=lambda f: f.expected_count)
+        return f"{biggest.key}.count" if biggest.file is None else f"{biggest.key}.file"
+    return "particles"
+
+
+def memory_problem(scene, arch: str = "cpu", precision: Optional[str] = None):
+    """(key, reason) when the scene's estimated device memory exceeds what ``arch`` has (the
+    estimate and the machine's figure in the reason), else None. Nothing is allocated."""
+    precision = precision or scene.simulation.precision
+    slots = particle_slots(scene)
+    need = estimated_device_bytes(slots, precision)
+    have, what = device_memory_bytes(arch)
+    if have and need > have:
+        return (_blamed_key(scene),
+                f"{slots:,} particle slots need an estimated {need / 2 ** 20:,.0f} MiB of "
+                f"device memory ({precision}), more than {what} ({have / 2 ** 20:,.0f} MiB); "
+                "use fewer particles (or a smaller max_particles)")
+    return None
