@@ -25,9 +25,12 @@ def _fail(message: str, code: int = 2) -> int:
 
 def _common_outputs(p: argparse.ArgumentParser):
     p.add_argument("--until", type=float, help="simulated time to stop at, s (default end_time)")
-    p.add_argument("--out", help="directory for results (default: as the scene's [output] says)")
-    p.add_argument("--h5", help="HDF5 results file")
-    p.add_argument("--rrd", help="rerun recording file (headless)")
+    p.add_argument("--out", help="directory for results, the checkpoint and the recording "
+                                 "(default: the scene's [output] paths, in the scene file's "
+                                 "folder); ~ is expanded")
+    p.add_argument("--h5", help="HDF5 results file, anywhere (a path in the scene stays in its "
+                                "folder); an existing file not of taichi_dem is never overwritten")
+    p.add_argument("--rrd", help="rerun recording file (headless), anywhere")
     p.add_argument("--spawn", action="store_true", help="stream to a rerun viewer")
     p.add_argument("--every-nth", type=int, default=1, metavar="N",
                    help="rerun: draw every Nth particle only (default 1: all)")

@@ -43,6 +43,7 @@ def read(table: Any, parser) -> DampingSettings:
 SECTION = register(Section("viscous_damping", "Background viscous damping for settling: "
                            "every moving particle's velocity relaxes to rest, a = -v / "
                            "time_constant (off without this section)", (
-    Key("time_constant", "quantity", "the velocity falls by e in this time", unit="time",
+    Key("time_constant", "quantity", "the velocity falls by e in this time; at least 5 time "
+        "steps (the explicit decay is resolved)", unit="time",
         default=REQUIRED, minimum=0.0, exclusive_minimum=True),
 ), owner=__name__, reader=read, builds="taichi_dem.effects.viscous_damping.effect:build"))

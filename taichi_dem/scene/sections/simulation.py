@@ -36,8 +36,10 @@ SIMULATION = register(Section("simulation", "Time, gravity, precision and the st
         minimum=0, why="it seeds numpy's generator"),
     Key("skin", "quantity", "the Verlet skin; default 0.1 x the mean diameter", unit="length",
         default=None, minimum=0.0, exclusive_minimum=True),
-    Key("max_particles", "integer", "particle slots to allocate (default: the fills and the "
-        "factories' schedules until end_time)", default=None, minimum=1, maximum=MAX_PARTICLES),
+    Key("max_particles", "integer", "particle slots to allocate, at least the particles the "
+        "fills place (default: the fills and the factories' schedules until end_time); "
+        "refused when their estimated device memory exceeds the machine's",
+        default=None, minimum=1, maximum=MAX_PARTICLES),
 ), owner=__name__))
 
 DOMAIN = register(Section("domain", "The box particles live in (they are lost outside it) and "
@@ -49,13 +51,22 @@ DOMAIN = register(Section("domain", "The box particles live in (they are lost ou
 ), owner=__name__))
 
 OUTPUT = register(Section("output", "What is written and how often", (
-    Key("interval", "quantity", "time between samples (series, frames)", unit="time",
+    Key("interval", "quantity", "time between samples (series, frames); may exceed "
+        "end_time (the run's end is sampled anyway), not be shorter than the time step",
+        unit="time",
         default=Output.interval, minimum=0.0, exclusive_minimum=True),
     Key("frame_interval", "quantity", "time between particle frames (/frames), a whole "
         "multiple of interval; the series keep every sample (default: a frame at every sample)",
         unit="time", default=None, minimum=0.0, exclusive_minimum=True),
-    Key("rrd", "string", "rerun recording (.rrd) to write, relative to the scene", default=None),
-    Key("h5", "string", "HDF5 results file to write, relative to the scene", default=None),
+    Key("rrd", "string", "rerun recording (.rrd) to write, relative to the scene file's "
+        "folder, which it may not leave (no absolute path, ~ or ..: name a file elsewhere with "
+        "--rrd); with --out DIR its file name in DIR; an existing file that is not a rerun "
+        "recording is never overwritten", default=None),
+    Key("h5", "string", "HDF5 results file to write, relative to the scene file's folder, "
+        "which it may not leave (no absolute path, ~ or ..: name a file elsewhere with --h5); "
+        "with --out DIR its file name in DIR; an existing file that is not a taichi_dem "
+        "results file is never overwritten (nor one at the checkpoint beside it)",
+        default=None),
     Key("checkpoint_interval", "quantity", "simulated time between checkpoints (none when "
         "absent)", unit="time", default=None, minimum=0.0, exclusive_minimum=True),
 ), owner=__name__))
