@@ -30,7 +30,6 @@ import re
 import subprocess
 import sys
 import time
-import tomllib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Optional
@@ -96,11 +95,8 @@ def plan(scene_path: str, combos: list[dict], seeds: int = 1, *, duration: Optio
         text = Path(scene_path).read_text(encoding="utf-8-sig")
     except OSError as e:
         raise SceneError(scene_path, "", f"cannot read the scene file: {e.strerror or e}") from None
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError:
-        ov.check(text, {}, scene_path)      # the loader's message for the syntax error
-        raise
+    from ..scene.loader import read_toml
+    doc = read_toml(text, scene_path)       # a syntax error or deep nesting: SceneError
     if seeds < 1:
         raise SceneError("--seeds", "", f"must be >= 1, got {seeds}")
     base_seed = scene_seed(doc)

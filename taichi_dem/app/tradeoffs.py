@@ -45,7 +45,6 @@ import argparse
 import math
 import re
 import sys
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Optional
@@ -221,8 +220,9 @@ def plan_study(scene_path: str, knobs: list[str], seeds: int, duration: Optional
     """(reference specs, variant specs, skipped {knob or variant: reason}). Every variant is
     validated by the loader; one it refuses is skipped with the loader's message."""
     from .sweep import plan
+    from ..scene.loader import read_toml
     text = Path(scene_path).read_text(encoding="utf-8-sig")
-    doc = tomllib.loads(text)
+    doc = read_toml(text, scene_path)       # a syntax error or deep nesting: SceneError
     ref_specs = plan(scene_path, [dict(REFERENCE_OVERRIDES)], seeds, duration=duration,
                      threads=threads, arch=arch, labels=[{"knob": "reference", "setting": "reference"}])
     info = step_info(ov.check(ref_specs[0].text, {}, scene_path))

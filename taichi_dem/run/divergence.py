@@ -4,7 +4,12 @@ the particle, its position, the likely cause and the fix.
 
 Three criteria (README "Divergence"):
 
-* non-finite position or velocity (NaN or |x| >= 1e30);
+* a non-finite state (NaN or |x| >= 1e30): position, velocity, angular velocity and, where
+  the scene has them, temperature (also one not above 0 K) and moisture. The message names
+  the quantity and the cause that fits it (``non_finite_message``): a non-finite velocity is
+  the explicit integration blowing up (a time step too large); a non-finite position beside
+  a finite velocity cannot come from a step (it moves a particle by dt x its velocity) and was
+  put into the state; a non-finite temperature is an unstable or overflowing heat balance;
 * an overlap larger than ``OVERLAP_LIMIT`` = 0.6 of the smaller radius (particle-particle),
   or of the particle's radius (plane walls), or larger than ``BODY_OVERLAP_LIMIT`` = 1.0 of the
   radius with a mesh body (its centre has reached the surface: it is passing through). Hertz
@@ -23,7 +28,9 @@ Three criteria (README "Divergence"):
 Both limits are attributes of ``sim.divergence`` and may be changed from Python.
 """
 
+import math
 import time as _time
+from typing import Optional
 
 import numpy as np
 import taichi as ti
@@ -35,6 +42,25 @@ OVERLAP_LIMIT = 0.6          # of the smaller radius
 BODY_OVERLAP_LIMIT = 1.0     # of the radius: the centre reaches a body's surface
 SPEED_FACTOR = 10.0          # times the expected largest speed (m/s)
 _NONE = 2 ** 30              # "no particle" in the index reductions
+# the state a particle must hold finite, in the order a message blames them, with units
+_QUANTITIES = {"velocity": "m/s", "angular_velocity": "rad/s", "position": "m",
+               "temperature": "K", "moisture": "kg/kg"}
+
+
+def _value(field, slot: int) -> np.ndarray:
+    """One particle's value of a state field (a vector or a scalar) as a float array."""
+    v = field[slot]
+    return np.atleast_1d(np.asarray(v.to_numpy() if hasattr(v, "to_numpy") else v, dtype=float))
+
+
+def _wrong(quantity: str, values: np.ndarray) -> np.ndarray:
+    """Per row of ``values``: not a physical ``quantity`` (non-finite or |x| >= 1e30; a
+    temperature also at or below 0 K), as the scan kernel tests it."""
+    v = np.asarray(values, dtype=np.float64)
+    bad = ~(np.abs(v) < 1e30)
+    if quantity == "temperature":
+        bad |= ~(v > 0.0)
+    return bad.reshape(len(v), -1).any(axis=1) if v.ndim > 1 else bad
 
 
 class DivergenceGuard:
@@ -65,6 +91,8 @@ class DivergenceGuard:
         n_walls = len(walls)
         has_mesh = mesh is not None
         body_scale = OVERLAP_LIMIT / BODY_OVERLAP_LIMIT
+        has_temperature = "temperature" in s.spec
+        has_moisture = "moisture" in s.spec
 
         @ti.kernel
         def scan(n: ti.i32, serial_loops: ti.template()):
@@ -76,10 +104,17 @@ class DivergenceGuard:
             for i in range(n):
                 worst[i] = 0.0
                 if s.alive[i] != 0:
-                    x, v = s.position[i], s.velocity[i]
+                    x, v, w = s.position[i], s.velocity[i], s.angular_velocity[i]
                     finite = True
                     for k in ti.static(range(3)):
-                        if not (ti.abs(x[k]) < 1e30 and ti.abs(v[k]) < 1e30):
+                        if not (ti.abs(x[k]) < 1e30 and ti.abs(v[k]) < 1e30
+                                and ti.abs(w[k]) < 1e30):
+                            finite = False
+                    if ti.static(has_temperature):
+                        if not (s.temperature[i] > 0.0 and s.temperature[i] < 1e30):
+                            finite = False
+                    if ti.static(has_moisture):
+                        if not ti.abs(s.moisture[i]) < 1e30:
                             finite = False
                     if not finite:
                         ti.atomic_min(index[0], i)
@@ -122,10 +157,11 @@ class DivergenceGuard:
         self._scan = e.serial_switch(scan)
 
     def __call__(self, measured: dict) -> None:
-        self.check(self.sim.time)
+        self.check(self.sim.time, measured)
 
-    def check(self, time: float) -> None:
-        """Raise DivergenceError when the state at ``time`` is no longer physical."""
+    def check(self, time: float, measured: Optional[dict] = None) -> None:
+        """Raise DivergenceError when the state at ``time`` is no longer physical
+        (``measured``: the sample's sums, engine/measure.py, for the thermal step ratio)."""
         t0 = _time.perf_counter()
         e = self.sim.engine
         key = (e.pairs, getattr(e.mesh, "entries_tree", None))
@@ -140,12 +176,7 @@ class DivergenceGuard:
         self.seconds += _time.perf_counter() - t0
         self.checks += 1
         if idx[0] != _NONE:
-            raise DivergenceError(self._describe(
-                time, int(idx[0]), "has a non-finite position or velocity",
-                "a time step too large for the stiffest contact (the explicit integration blew "
-                "up)", "reduce simulation.dt or rayleigh_fraction (dt = \"auto\" uses 0.2 x the "
-                "Rayleigh time); if the scene has very stiff walls or bodies, check their "
-                "materials' youngs_modulus"))
+            raise DivergenceError(self.non_finite_message(time, int(idx[0]), measured))
         if big[0] > self.overlap_limit and idx[1] != _NONE:
             raise DivergenceError(self._describe(
                 time, int(idx[1]),
@@ -166,6 +197,79 @@ class DivergenceGuard:
                 "deeply overlapping (their repulsion launches them)",
                 "reduce simulation.dt or rayleigh_fraction, and check the fills and factory "
                 "regions for overlaps"))
+
+    def non_finite_message(self, time: float, slot: Optional[int] = None,
+                           measured: Optional[dict] = None) -> str:
+        """The divergence message for a non-finite (or, for a temperature, not positive)
+        quantity of the particle in ``slot`` at ``time`` s (None: the first such particle,
+        found on the host - the rare path after Measure flagged the sample): which quantity,
+        its value and the cause that fits that quantity."""
+        s = self.sim.engine.state
+        n = self.sim.engine.count
+        names = [q for q in _QUANTITIES if q in s.spec]
+        if slot is None:
+            arrays = {q: getattr(s, q).to_numpy()[:n] for q in names}
+            bad = np.zeros(n, dtype=bool)
+            for q in names:
+                bad |= _wrong(q, arrays[q])
+            bad &= s.alive.to_numpy()[:n] != 0
+            rows = np.nonzero(bad)[0]
+            if not len(rows):       # the flag was a sum's overflow: the largest speed names it
+                speed = np.linalg.norm(arrays["velocity"], axis=1)
+                rows = [int(np.argmax(np.where(s.alive.to_numpy()[:n] != 0, speed, -1.0)))]
+            slot = int(rows[0])
+        values = {q: _value(getattr(s, q), slot) for q in names}
+        # the first wrong in _QUANTITIES' order: a velocity before the position it moves
+        quantity = next((q for q in names if np.any(_wrong(q, values[q]))), "velocity")
+        shown = ", ".join(f"{v:.4g}" for v in values[quantity])
+        unit = _QUANTITIES[quantity]
+        if quantity == "temperature" and np.all(np.isfinite(values[quantity])):
+            what = f"has a temperature of {shown} K, not above absolute zero"
+        else:
+            what = (f"has a non-finite {quantity.replace('_', ' ')} "
+                    f"({'[' + shown + ']' if len(values[quantity]) > 1 else shown} {unit})")
+        cause, fix = self._cause(quantity, measured)
+        return self._describe(time, slot, what, cause, fix)
+
+    def _cause(self, quantity: str, measured: Optional[dict]) -> tuple[str, str]:
+        """(likely cause, fix) of a non-finite ``quantity``."""
+        if quantity in ("velocity", "angular_velocity"):
+            return ("a time step too large for the stiffest contact (the explicit integration "
+                    "blew up)", "reduce simulation.dt or rayleigh_fraction (dt = \"auto\" uses "
+                    "0.2 x the Rayleigh time); if the scene has very stiff walls or bodies, check "
+                    "their materials' youngs_modulus")
+        if quantity == "position":
+            return ("not the integration: a step moves a particle by dt x its velocity, which is "
+                    "finite, so the position was put into the state non-finite (written from "
+                    "Python between steps, or an initial state that was not checked)",
+                    "check what sets the particles' positions (sim.engine.state, an edited "
+                    "checkpoint); a scene's fills and start files are checked on load")
+        ratio = (measured or {}).get("thermal_step_ratio")
+        if quantity == "temperature":
+            if ratio is not None and not math.isfinite(ratio):
+                return ("the heat balance overflowed (dt sum(h)/(m c) is not finite): "
+                        "temperatures, conductivities or heat capacities so extreme that a heat "
+                        "flow or conductance is beyond the floating-point range (radiation's "
+                        "grows as T^3 - T^4)",
+                        "check the temperatures of the fills, factories, walls, bodies and gas "
+                        "and the materials' thermal_conductivity, heat_capacity and emissivity "
+                        "for wrong units")
+            if ratio is not None and ratio >= 1.0:
+                return (f"the temperature update is unstable: dt sum(h)/(m c) = {ratio:.3g} >= 1 "
+                        "(dt the thermal step, thermal.time_scale x simulation.dt)",
+                        f"reduce simulation.dt or thermal.time_scale (by {ratio:.2g}x at least), "
+                        "or raise heat_capacity/lower thermal_conductivity if they are scaled")
+            return ("heat flows too large for the particle's heat capacity: an unstable "
+                    "temperature update (thermal.time_scale x simulation.dt too long), or "
+                    "temperatures, conductivities or heat capacities so extreme that the heat "
+                    "balance overflows (radiation grows as T^4)",
+                    "check the materials' heat_capacity and thermal_conductivity and the "
+                    "temperatures of the fills, factories, walls, bodies and gas; reduce "
+                    "thermal.time_scale or simulation.dt")
+        return ("an unstable drying update: evaporation faster than the step can follow "
+                "(thermal.time_scale x simulation.dt too long), or absurd moistures or gas "
+                "conditions", "check the fills' and factories' moisture and the [thermal] "
+                "drying and gas keys; reduce thermal.time_scale or simulation.dt")
 
     def _describe(self, time, slot, what, cause, fix) -> str:
         s = self.sim.engine.state

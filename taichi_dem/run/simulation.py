@@ -493,14 +493,12 @@ class Simulation:
             hook(self)
 
     def _check_state(self, measured: dict):
-        """The checks of the sample's measurements (after the divergence guard): non-finite
-        velocities stop the run, a thermal step past its limit too; contacts resolved in too
-        few steps and pinched particles are warned about once."""
+        """The checks of the sample's measurements (after the divergence guard): a state the
+        sums found non-finite (a velocity, a temperature not above 0 K) stops the run with the
+        quantity named (divergence.py), a thermal step past its limit too; contacts resolved
+        in too few steps and pinched particles are warned about once."""
         if measured["non_finite"]:
-            raise DivergenceError(
-                f"the simulation diverged near t = {self.time:.6g} s (non-finite velocity). "
-                f"Likely cause: a time step too large for the stiffest contact; reduce "
-                f"simulation.dt or rayleigh_fraction")
+            raise DivergenceError(self.divergence.non_finite_message(self.time, None, measured))
         self._check_contact_resolution(measured["max_speed"])
         if self.engine.mesh is not None:
             self._check_pinching(self.engine.mesh.survey.deepest_overlaps(self.engine.count))

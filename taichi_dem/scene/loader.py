@@ -26,7 +26,7 @@ from ..effects import catalog as _catalog  # noqa: F401 (registers the effects' 
 from ..errors import SceneError
 from .keys import effect_sections, suggest as _suggest
 from .model import Scene
-from .sections.common import Reader, decode_utf8 as _decode_utf8
+from .sections.common import Reader, decode_utf8 as _decode_utf8, refuse_control_characters
 from .sections.materials import MaterialSections
 from .sections.consistency import ConsistencySections
 from .sections.particles import ParticleSections, region_bounds  # noqa: F401 (re-exported)
@@ -58,11 +58,19 @@ def load_scene(path) -> Scene:
     return parse_scene(text, source=str(p), base_dir=p.parent)
 
 
-def parse_scene(text: str, source: str = "<string>", base_dir=None) -> Scene:
-    """Validate TOML ``text``; relative particle files resolve against ``base_dir`` (default:
-    the directory of ``source`` when it is a path, else the current directory)."""
+def read_toml(text: str, source: str = "<string>") -> dict:
+    """The TOML document ``text`` as a dict; a syntax error or a nesting too deep for the
+    reader is a SceneError naming ``source`` (and the line) - every reader of a scene's text
+    goes through here, so no TOML error reaches the user as a traceback."""
     try:
-        doc = tomllib.loads(text)
+        return tomllib.loads(text)
+    except RecursionError:
+        # tomllib reads nested arrays and inline tables recursively: a few hundred levels
+        # exhaust Python's stack (no scene key nests more than five)
+        raise SceneError(source, "", f"the TOML nests arrays or inline tables too deeply to "
+                                     f"be read (more than a few hundred levels, from line "
+                                     f"{_deepest_line(text)}); no scene key nests more than a "
+                                     f"few levels") from None
     except tomllib.TOMLDecodeError as e:
         msg = str(e)
         m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
@@ -76,9 +84,31 @@ def parse_scene(text: str, source: str = "<string>", base_dir=None) -> Scene:
         else:
             reason = f"TOML syntax error: {msg}"
         raise SceneError(source, "", reason) from None
+
+
+def parse_scene(text: str, source: str = "<string>", base_dir=None) -> Scene:
+    """Validate TOML ``text``; relative particle files resolve against ``base_dir`` (default:
+    the directory of ``source`` when it is a path, else the current directory)."""
+    doc = read_toml(text, source)
+    refuse_control_characters(doc, source)
     if base_dir is None:
         base_dir = Path(source).parent if not source.startswith("<") else Path.cwd()
     return _Parser(source, Path(base_dir)).scene(doc, text)
+
+
+def _deepest_line(text: str, depth: int = 100) -> int:
+    """The line where brackets and braces first open ``depth`` deep (strings and comments
+    not told apart: a pointer for the message, not a parse)."""
+    level, line = 0, 1
+    for m in re.finditer(r"[\[\]{}\n]", text):
+        c = m.group()
+        if c == "\n":
+            line += 1
+        else:
+            level += 1 if c in "[{" else -1
+            if level >= depth:
+                return line
+    return line
 
 
 class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, ParticleSections,

@@ -77,7 +77,8 @@ def test_non_finite_velocity_is_named(small_text, tmp_path):
     sim.checkpointer.path = str(tmp_path / "n.checkpoint.h5")
     assert not sim.checkpointer.keep_last_good      # from Python: off by default
     message, _, err = diverge(sim, lambda s: s.velocity.__setitem__(3, [np.nan, 0.0, 0.0]))
-    assert "non-finite position or velocity" in message
+    # the quantity named (issue 43: not "position or velocity"), with its cause
+    assert "has a non-finite velocity ([nan" in message and "time step too large" in message
     assert "No checkpoint was written" in message and err.checkpoint == ""
     assert not os.listdir(tmp_path)
     sim.close()

@@ -642,7 +642,7 @@ def test_file_missing(tmp_path):
 
 @pytest.mark.parametrize("text, frag", [
     ("x,y,radius\n0.5,0.5,0.01\n", "lacks column 'z'"),
-    ("x,y,z,radius,colour\n0.5,0.5,0.5,0.01,1\n", "unknown column 'colour'"),
+    ("x,y,z,radius,colour\n0.5,0.5,0.5,0.01,1\n", "column 5 of the header"),
     ("x,y,z,radius,vx,vy\n0.5,0.5,0.5,0.01,1,1\n", "give all of vx,vy,vz"),
     ("x,y,z,radius,x\n0.5,0.5,0.5,0.01,1\n", "appears twice"),
     ("", "empty file"),
@@ -650,7 +650,7 @@ def test_file_missing(tmp_path):
     ("x,y,z,radius\n0.5,0.5,0.5,-0.01\n", "line 2: radius must be > 0"),
     ("x,y,z,radius\n0.5,nan,0.5,0.01\n", "line 2, column 'y'"),
     ("x,y,z,radius\n0.5,inf,0.5,0.01\n", "not finite"),
-    ("x,y,z,radius\n0.5,abc,0.5,0.01\n", "cannot read 'abc'"),
+    ("x,y,z,radius\n0.5,abc,0.5,0.01\n", "line 2, column 'y': not a number"),
     ("x,y,z,radius\n0.5,0.5,0.01\n", "line 2: 3 values"),
     ("x,y,z,radius\n0.5,0.5,1.5,0.01\n", "outside the domain"),
 ])

@@ -2,8 +2,9 @@
 or a SceneError naming the file, the dotted key and the reason."""
 from __future__ import annotations
 
+import re
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 
@@ -86,8 +87,14 @@ class Reader:
         return value
 
     def string(self, value: Any, key: str) -> str:
+        """``value`` when it is a string without control characters (a NUL byte, a newline,
+        an escape: nothing in a scene - a name, a path, a choice - can hold them)."""
         if not isinstance(value, str):
             raise self.err(key, f"expected a string, got {_type_name(value)}")
+        char = control_character(value)
+        if char is not None:
+            raise self.err(key, f"contains the control character {char}; names, paths and "
+                                "choices are printable text")
         return value
 
     def material_name(self, value: Any, key: str) -> str:
@@ -120,3 +127,46 @@ def decode_utf8(data: bytes, file: str, key: str) -> str:
                                     f"0x{data[e.start]:02x} at line {line}, column {column}); "
                                     "save it as UTF-8") from None
     return text.replace("\r\n", "\n").replace("\r", "\n")
+
+
+def control_character(text: str) -> Optional[str]:
+    """The first control character of ``text`` (Unicode category Cc: NUL, tab, newline,
+    escape, DEL, ...) as ``U+XXXX (NAME)``, or None when there is none."""
+    m = _CONTROL.search(text)
+    if m is None:
+        return None
+    code = ord(m.group())
+    return f"U+{code:04X}" + (f" ({_CONTROL_NAMES[code]})" if code in _CONTROL_NAMES else "")
+
+
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f]")    # Unicode category Cc, all of it
+
+
+_CONTROL_NAMES = {0x00: "a NUL byte", 0x09: "a tab", 0x0A: "a newline", 0x0D: "a carriage "
+                  "return", 0x1B: "an escape", 0x7F: "a delete"}
+
+
+def refuse_control_characters(doc: dict, source: str) -> None:
+    """A SceneError for the first string value or table key of the parsed TOML ``doc`` that
+    holds a control character (scene.loader calls it before any section is read: a NUL byte
+    in a path or a name would otherwise reach the file system, HDF5 group names or the
+    terminal). Walks the document without recursion."""
+    stack: list[tuple[str, Any]] = [("", doc)]
+    while stack:
+        path, value = stack.pop()
+        if isinstance(value, dict):
+            for k, v in reversed(list(value.items())):
+                char = control_character(k)
+                if char is not None:
+                    shown = k.encode("unicode_escape").decode()
+                    raise SceneError(source, path or shown,
+                                     f"the key or name \"{shown}\" contains the control "
+                                     f"character {char}; names are printable text")
+                stack.append((f"{path}.{k}" if path else k, v))
+        elif isinstance(value, list):
+            stack.extend((f"{path}[{i}]", v) for i, v in reversed(list(enumerate(value))))
+        elif isinstance(value, str):
+            char = control_character(value)
+            if char is not None:
+                raise SceneError(source, path, f"contains the control character {char}; "
+                                               "names, paths and choices are printable text")

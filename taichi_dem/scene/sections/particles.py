@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from pathlib import Path
 from typing import Any, Optional
 
@@ -15,7 +16,7 @@ from ..keys import REQUIRED, Key, Section, register
 from ..keys import suggest as _suggest
 from ..model import ParticleFill, RadiusDistribution, Region
 from ..units import MAX_MAGNITUDE, MIN_MAGNITUDE
-from .common import decode_utf8
+from .common import control_character, decode_utf8
 from .regions import BOX, BOX_KEYS, CYLINDER, CYLINDER_KEYS, REGION, REGION_KINDS  # noqa: F401
 
 CSV_COLUMNS = ("x", "y", "z", "radius", "vx", "vy", "vz", "wx", "wy", "wz")
@@ -187,52 +188,98 @@ class ParticleSections:
 
     def read_frame(self, fname: str, key: str, frame: int, material: str) -> dict:
         """The particles of ``material`` in frame ``frame`` (negative: from the last) of the
-        results file ``fname`` (relative to the scene): positions, radii, velocities, angular
-        velocities and, when the frame has them, temperatures and moistures."""
+        results file ``fname`` (relative to the scene): positions (m), radii (m), velocities
+        (m/s), angular velocities (rad/s) and, when the frame has them, temperatures (K) and
+        moistures (kg/kg). The file is validated like a scene: every dataset's shape and type,
+        one row per particle everywhere, finite values, positive radii and temperatures; what
+        is wrong is a SceneError naming the scene, ``key``, the HDF5 file and the dataset."""
         import h5py
-        path = Path(fname)
-        if not path.is_absolute():
-            path = self.base_dir / path
+        path = self.resolve_path(fname, key)
         if not path.is_file():
             raise self.err(key, f"results file '{fname}' not found (looked for {path})")
         where = str(path)
+
+        def bad(reason: str) -> SceneError:
+            return self.err(key, f"{where}: {reason}")
+
         try:
             f = h5py.File(path, "r")
         except OSError as e:
-            raise SceneError(where, key, f"cannot open as an HDF5 results file ({e})") from None
-        with f:
-            if "fields" in f and "count" in f.attrs:
-                out = _checkpoint_particles(f, where, key, material, self)
-                return self._inside_domain(out, key)
-            if "frames" not in f or not len(f["frames"]):
-                raise SceneError(where, key, "the file holds no particle frames (is it a "
-                                             "results file of a run that wrote some?)")
-            keys = sorted(f["frames"], key=int)
-            if not -len(keys) <= frame < len(keys):
-                raise self.err(key.rsplit(".", 1)[0] + ".frame",
-                               f"{frame}: no such frame; {where} holds {len(keys)} "
-                               f"(0 - {len(keys) - 1}, or -1 for the last)")
-            g = f["frames"][keys[frame]]
-            for name in ("position", "radius"):
-                if name not in g:
-                    raise SceneError(where, key, f"frame {keys[frame]} has no '{name}' dataset")
-            rows = np.arange(g["radius"].shape[0])
-            names = [str(n) for n in f.attrs.get("materials", ())]
-            if names and "material" in g:
-                if material not in names:
-                    raise self.err(key, f"{where} holds no particles of material '{material}' "
-                                        f"(its materials: {', '.join(names)})")
-                rows = np.nonzero(g["material"][()] == names.index(material))[0]
-                if not len(rows):
-                    raise self.err(key, f"frame {keys[frame]} of {where} holds no particles of "
-                                        f"material '{material}'")
-            out = {"positions": g["position"][()][rows].astype(float),
-                   "radii": g["radius"][()][rows].astype(float)}
-            for name, target in (("velocity", "velocities"),
-                                 ("angular_velocity", "angular_velocities"),
-                                 ("temperature", "temperatures"), ("moisture", "moistures")):
-                out[target] = g[name][()][rows].astype(float) if name in g else None
+            raise bad(f"cannot open as an HDF5 results file ({e})") from None
+        try:
+            with f:
+                if "fields" in f and "count" in f.attrs:
+                    out = _checkpoint_particles(f, where, key, material, self, bad)
+                else:
+                    out = self._frame_particles(f, where, key, frame, material, bad)
+        except OSError as e:           # h5py: a dataset or link that cannot be read
+            raise bad(f"cannot read the HDF5 file ({e})") from None
         return self._inside_domain(out, key)
+
+    def _frame_particles(self, f, where: str, key: str, frame: int, material: str,
+                         bad) -> dict:
+        """read_frame for a results file: the rows of ``material`` in /frames/<k>."""
+        import h5py
+        frames = _member(f, "frames", bad)
+        if frames is None or (isinstance(frames, h5py.Group) and not len(frames)):
+            raise bad("the file holds no particle frames (is it a results file of a run that "
+                      "wrote some?)")
+        if not isinstance(frames, h5py.Group):
+            raise bad("/frames is a dataset; a results file's /frames is a group of frames "
+                      "/frames/0, /frames/1, ...")
+        names = list(frames)
+        odd = [n for n in names if not re.fullmatch(r"[0-9]{1,18}", n)]
+        if odd:
+            raise bad(f"the frame group /frames/{_printable(odd[0])} is not named by a frame "
+                      "number; a results file's frames are /frames/0, /frames/1, ...")
+        keys = sorted(names, key=int)
+        if not -len(keys) <= frame < len(keys):
+            raise self.err(key.rsplit(".", 1)[0] + ".frame",
+                           f"{frame}: no such frame; {where} holds {len(keys)} "
+                           f"(0 - {len(keys) - 1}, or -1 for the last)")
+        gpath = f"/frames/{keys[frame]}"
+        g = frames[keys[frame]]
+        if not isinstance(g, h5py.Group):
+            raise bad(f"{gpath} is a dataset; a frame is a group of datasets (position, "
+                      "radius, velocity, ...)")
+        arrays = {}
+        for name, (target, columns, _) in FRAME_DATASETS.items():
+            ds = _member(g, name, bad, gpath)
+            if ds is None:
+                if name in ("position", "radius"):
+                    raise bad(f"frame {keys[frame]} has no '{name}' dataset ({gpath}/{name})")
+                arrays[target] = None
+                continue
+            arrays[target] = _numeric(ds, f"{gpath}/{name}", bad)
+        count = _rows(arrays, gpath, bad)
+        rows = np.arange(count)
+        names = _material_names(f, bad)
+        mds = _member(g, "material", bad, gpath)
+        if names and mds is not None:
+            if material not in names:
+                raise bad(f"holds no particles of material '{material}' (its materials: "
+                          f"{', '.join(_printable(n) for n in names)})")
+            index = _numeric(mds, f"{gpath}/material", bad)
+            if index.shape != (count,) or index.dtype.kind not in "iu":
+                raise bad(f"dataset {gpath}/material has shape {index.shape} and type "
+                          f"{index.dtype}; expected one material index (an integer) per "
+                          f"particle, shape ({count},)")
+            rows = np.nonzero(index == names.index(material))[0]
+            if not len(rows):
+                raise bad(f"frame {keys[frame]} holds no particles of material '{material}'")
+        _check_values(arrays, {n: f"{gpath}/{n}" for n in FRAME_DATASETS}, bad)
+        return {target: (None if a is None else a[rows].astype(float))
+                for target, a in arrays.items()}
+
+    def resolve_path(self, fname: str, key: str) -> Path:
+        """A file the scene names, relative to the scene's folder; a NUL byte
+        or another control character in the name is a SceneError for ``key``."""
+        char = control_character(fname)
+        if char is not None:
+            raise self.err(key, f"the file name contains the control character {char}; a "
+                                "path cannot hold it")
+        path = Path(fname)
+        return path if path.is_absolute() else self.base_dir / path
 
     def _inside_domain(self, out: dict, key: str) -> dict:
         """``out`` (read_frame's arrays) when every centre lies in this scene's domain."""
@@ -245,9 +292,10 @@ class ParticleSections:
         return out
 
     def read_csv(self, fname: str, key: str) -> dict[str, Optional[np.ndarray]]:
-        path = Path(fname)
-        if not path.is_absolute():
-            path = self.base_dir / path
+        """The particles of a CSV file (relative to the scene) with the header
+        x,y,z,radius[,vx,vy,vz[,wx,wy,wz]] (SI: m, m/s, rad/s); a SceneError naming the CSV
+        file, ``key``, the line and the column otherwise (never quoting the file's text)."""
+        path = self.resolve_path(fname, key)
         try:
             data = path.read_bytes()
         except FileNotFoundError:
@@ -271,10 +319,15 @@ class ParticleSections:
             raise bad("empty file; expected a header x,y,z,radius[,vx,vy,vz[,wx,wy,wz]]")
         hline, header = lines[0]
         names = [h.strip().lower() for h in header]
-        for n in names:
+        # the messages below never quote the file's text (a scene could name any readable
+        # file: /etc/passwd): they say where and what is wrong, and quote only column names
+        # once the header has proved to be one
+        for c, n in enumerate(names):
             if n not in CSV_COLUMNS:
-                raise bad(f"line {hline}: unknown column '{n}' in the header; "
-                          f"{_suggest(n, CSV_COLUMNS)}expected x,y,z,radius[,vx,vy,vz[,wx,wy,wz]]")
+                raise bad(f"line {hline}: column {c + 1} of the header is not a column "
+                          f"name; {_suggest(n, CSV_COLUMNS)}the header must be "
+                          f"x,y,z,radius[,vx,vy,vz[,wx,wy,wz]]; found {len(names)} "
+                          f"column{'s' if len(names) != 1 else ''}")
         for n in set(names):
             if names.count(n) > 1:
                 raise bad(f"line {hline}: column '{n}' appears twice in the header")
@@ -295,12 +348,13 @@ class ParticleSections:
                 try:
                     v = float(cell)
                 except ValueError:
-                    raise bad(f"line {lineno}, column '{names[c]}': cannot read {cell.strip()!r} "
-                              f"as a number") from None
+                    raise bad(f"line {lineno}, column '{names[c]}': not a number "
+                              "(expected a decimal number such as 0.004 or 4e-3)") from None
                 if not math.isfinite(v):
-                    raise bad(f"line {lineno}, column '{names[c]}': {cell.strip()} is not finite")
+                    raise bad(f"line {lineno}, column '{names[c]}': not finite (NaN or "
+                              "infinite)")
                 if v != 0.0 and not MIN_MAGNITUDE <= abs(v) <= MAX_MAGNITUDE:
-                    raise bad(f"line {lineno}, column '{names[c]}': {cell.strip()} is absurd "
+                    raise bad(f"line {lineno}, column '{names[c]}': {v:g} is absurd "
                               f"(SI magnitudes {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g} are "
                               "accepted; wrong units?)")
                 data[r, c] = v
@@ -346,43 +400,176 @@ def _region_volume(region: Region) -> float:
     return math.pi * region.radius ** 2 * region.length
 
 
-def _checkpoint_particles(f, where: str, key: str, material: str, reader) -> dict:
+# the per-particle datasets of a settled-start frame: dataset -> (read_frame's array, columns
+# (None: one value per particle), what its values must be)
+FRAME_DATASETS = {
+    "position": ("positions", 3, "finite"),
+    "radius": ("radii", None, "positive"),
+    "velocity": ("velocities", 3, "finite"),
+    "angular_velocity": ("angular_velocities", 3, "finite"),
+    "temperature": ("temperatures", None, "positive"),
+    "moisture": ("moistures", None, "nonnegative"),
+}
+_TARGETS = {target: name for name, (target, _, _) in FRAME_DATASETS.items()}
+
+
+def _printable(name: str) -> str:
+    """``name`` with control characters escaped (a dataset name quoted in a message)."""
+    return name if control_character(name) is None else name.encode("unicode_escape").decode()
+
+
+def _member(group, name: str, bad, gpath: str = ""):
+    """``group[name]`` (a dataset or group), None when absent; a link that cannot be followed
+    is ``bad``."""
+    try:
+        return group[name] if name in group else None
+    except (KeyError, OSError) as e:
+        raise bad(f"{gpath}/{name} cannot be opened (a broken link?): {e}") from None
+
+
+def _numeric(obj, dpath: str, bad) -> np.ndarray:
+    """The values of the dataset ``obj`` (at ``dpath``) when it holds real numbers."""
+    import h5py
+    if not isinstance(obj, h5py.Dataset):
+        raise bad(f"{dpath} is a group; expected a dataset of numbers")
+    if obj.dtype.kind not in "iuf":
+        raise bad(f"dataset {dpath} holds values of type {obj.dtype} "
+                  f"({_KINDS.get(obj.dtype.kind, 'not numbers')}); expected real numbers")
+    return np.asarray(obj[()])
+
+
+_KINDS = {"b": "booleans", "c": "complex numbers", "S": "byte strings", "U": "strings",
+          "O": "strings or objects", "V": "compound records or opaque data",
+          "M": "dates", "m": "time spans"}
+
+
+def _rows(arrays: dict, gpath: str, bad) -> int:
+    """The particle count N of a frame's ``arrays`` (read_frame's names): every dataset has
+    shape (N,) or (N, 3) as FRAME_DATASETS says, the same N everywhere."""
+    count = None
+    for target, a in arrays.items():
+        if a is None:
+            continue
+        name = _TARGETS[target]
+        columns = FRAME_DATASETS[name][1]
+        n = a.shape[0] if a.ndim else None
+        want = "(N,)" if columns is None else f"(N, {columns})"
+        if a.ndim != (1 if columns is None else 2) or (columns and a.shape[1] != columns):
+            shape = "is a scalar" if a.ndim == 0 else f"has shape {a.shape}"
+            raise bad(f"dataset {gpath}/{name} {shape}; expected {want}, one "
+                      f"{'value' if columns is None else 'vector'} per particle")
+        if count is None:
+            count = n
+        elif n != count:
+            first = next(_TARGETS[t] for t, b in arrays.items() if b is not None)
+            raise bad(f"dataset {gpath}/{name} has {n} rows but {gpath}/{first} has {count}; "
+                      "every dataset of a frame has one row per particle")
+    return count or 0
+
+
+def _check_values(arrays: dict, paths: dict, bad, row_numbers=None) -> None:
+    """Every value of a frame's ``arrays`` (read_frame's names; ``paths``: the dataset of
+    each, ``row_numbers``: each row's number in it) finite and within the SI magnitudes a scene
+    accepts; radii and temperatures > 0, moistures >= 0."""
+    for target, a in arrays.items():
+        if a is None:
+            continue
+        name = _TARGETS[target]
+        rule = FRAME_DATASETS[name][2]
+        values = a.astype(np.float64, copy=False).reshape(len(a), -1)
+        magnitude = np.abs(values)
+        tests = [(~np.isfinite(values), "is not finite (NaN or infinite)"),
+                 ((values != 0.0) & ~((magnitude >= MIN_MAGNITUDE) & (magnitude <= MAX_MAGNITUDE)),
+                  f"is absurd (SI magnitudes {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g} are "
+                  "accepted)")]
+        if rule == "positive":
+            tests.append((~(values > 0.0), "is not > 0"))
+        elif rule == "nonnegative":
+            tests.append((~(values >= 0.0), "is negative"))
+        for wrong, what in tests:
+            rows = np.nonzero(np.any(wrong, axis=1))[0]
+            if len(rows):
+                row = int(rows[0])
+                value = values[row][np.nonzero(wrong[row])[0][0]]
+                number = row if row_numbers is None else int(row_numbers[row])
+                raise bad(f"dataset {paths[name]}: {len(rows)} particle(s) with a "
+                          f"{name.replace('_', ' ')} that {what}, e.g. row {number} (from 0): "
+                          f"{value:g}")
+
+
+def _material_names(f, bad) -> list[str]:
+    """The file's ``materials`` attribute (the names of the frames' material indices)."""
+    names = f.attrs.get("materials", ())
+    if isinstance(names, (str, bytes)) or np.ndim(names) != 1:
+        raise bad("the file's 'materials' attribute is not a list of material names")
+    return [n.decode("utf-8", "replace") if isinstance(n, bytes) else str(n) for n in names]
+
+
+def _checkpoint_particles(f, where: str, key: str, material: str, reader, bad) -> dict:
     """read_frame for a checkpoint file (run/checkpoint.py): the alive particles of
     ``material`` in the engine's fields as saved, in id order, with the f64 residuals of a
-    split-precision state added back."""
+    split-precision state added back; every field used validated as a frame's datasets."""
     import tomllib
+    import h5py
     fields: dict = {}
 
     def collect(name, obj):              # (visititems stops at the first non-None return)
-        if hasattr(obj, "shape"):
-            fields.setdefault(name.rsplit("/", 1)[-1], obj)
-    f["fields"].visititems(collect)
-    count = int(f.attrs["count"])
+        if isinstance(obj, h5py.Dataset):
+            fields.setdefault(name.rsplit("/", 1)[-1], ("/fields/" + name, obj))
+    group = f["fields"]
+    if not isinstance(group, h5py.Group):
+        raise bad("/fields is a dataset; a checkpoint's /fields is a group of the engine's "
+                  "particle fields")
+    group.visititems(collect)
+    count = f.attrs["count"]
+    if np.ndim(count) != 0 or np.asarray(count).dtype.kind not in "iu" or int(count) < 0:
+        raise bad("the checkpoint's 'count' attribute is not a particle count (an integer "
+                  ">= 0)")
+    count = int(count)
+    for name in ("alive", "material", "position", "radius"):
+        if name not in fields:
+            raise bad(f"the checkpoint's /fields has no '{name}' dataset (is it a checkpoint "
+                      "of this version of taichi-dem?)")
+    if "serial" not in fields and "particle_id" not in fields:
+        raise bad("the checkpoint's /fields has neither a 'serial' nor a 'particle_id' "
+                  "dataset (is it a checkpoint of this version of taichi-dem?)")
     try:
         names = sorted(tomllib.loads(str(f.attrs.get("scene", ""))).get("materials", {}))
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError, AttributeError):
         names = []
     if material not in names:
         raise reader.err(key, f"{where} holds no particles of material '{material}' "
                               f"(its materials: {', '.join(names) or 'none named'})")
-    alive = fields["alive"][:count] != 0
-    rows = np.nonzero(alive & (fields["material"][:count] == names.index(material)))[0]
+
+    def column(name, columns=None) -> np.ndarray:
+        dpath, ds = fields[name]
+        a = _numeric(ds, dpath, bad)
+        want = (1 if columns is None else 2)
+        if a.ndim != want or a.shape[0] < count or (columns and a.shape[1] != columns):
+            shape = "is a scalar" if a.ndim == 0 else f"has shape {a.shape}"
+            raise bad(f"dataset {dpath} {shape}; expected at least {count} rows (the "
+                      f"checkpoint's count) of {'one value' if columns is None else 'a vector'}"
+                      " per particle")
+        return a[:count]
+    alive = column("alive") != 0
+    rows = np.nonzero(alive & (column("material") == names.index(material)))[0]
     if not len(rows):
         raise reader.err(key, f"the checkpoint {where} holds no particles of material "
                               f"'{material}'")
-    ids = fields["serial" if "serial" in fields else "particle_id"][:count][rows]
+    ids = column("serial" if "serial" in fields else "particle_id")[rows]
     rows = rows[np.argsort(ids, kind="stable")]
 
     def read(name):
         if name not in fields:
             return None
-        value = fields[name][:count][rows].astype(float)
+        columns = FRAME_DATASETS[name][1]
+        value = column(name, columns)[rows].astype(float)
         if name + "_residual" in fields:
-            value = value + fields[name + "_residual"][:count][rows]
+            value = value + column(name + "_residual", columns)[rows]
         return value
-    return {"positions": read("position"), "radii": read("radius"),
-            "velocities": read("velocity"), "angular_velocities": read("angular_velocity"),
-            "temperatures": read("temperature"), "moistures": read("moisture")}
+    out = {target: read(name) for name, (target, _, _) in FRAME_DATASETS.items()}
+    _check_values(out, {n: fields[n][0] for n in FRAME_DATASETS if n in fields}, bad, rows)
+    return out
 
 
 def fmt(v) -> str:
