@@ -9,6 +9,7 @@ must not start the Taichi runtime) and from ``run``; a diverged state says which
 """
 import contextlib
 import io
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -431,3 +432,36 @@ def test_run_exits_3_naming_an_overflowing_temperature(tmp_path):
     assert rc == 3 and "Traceback" not in message, message
     assert "has a non-finite temperature" in message and "heat balance overflowed" in message
     assert "velocity" not in message and "time step too large" not in message
+
+
+@pytest.mark.parametrize("section,name", [("walls", "flo/or"), ("walls", ".."), ("walls", " floor"),
+                                          ("bodies", "a/b"), ("bodies", "."),
+                                          ("outlets", ".."), ("outlets", "a/b")])
+def test_a_name_that_cannot_name_a_results_group_is_refused(section, name, tmp_path):
+    """Walls, bodies, factories, outlets and sensors name HDF5 groups (/series/walls/<name>/):
+    a '/' would silently nest the series under another group, '.' and '..' would name the
+    group itself or the one above. Refused on load, naming the key."""
+    from taichi_dem.errors import SceneError
+    from taichi_dem.scene.loader import parse_scene
+    base = Path(__file__).resolve().parents[2] / "demos" / "pile.toml"
+    text = base.read_text()
+    if section == "walls":
+        text = text.replace('name = "floor"', f'name = "{name}"', 1)
+    elif section == "bodies":
+        text += f'''
+[[bodies]]
+name = "{name}"
+material = "glass"
+mesh = {{ builder = "box", min = [-0.05, -0.05, 0.0], max = [0.05, 0.05, 0.01] }}
+'''
+    else:
+        text += f'''
+[[outlets]]
+name = "{name}"
+region = {{ box = {{ min = [-0.3, -0.3, -0.01], max = [0.3, 0.3, 0.0] }} }}
+'''
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    with pytest.raises(SceneError) as err:
+        parse_scene(text, source=str(path))
+    assert f"{section}[" in str(err.value) and ".name" in str(err.value), str(err.value)

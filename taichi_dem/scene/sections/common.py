@@ -97,6 +97,18 @@ class Reader:
                                 "choices are printable text")
         return value
 
+    def group_name(self, value: Any, key: str) -> str:
+        """A wall's or body's name: it names an HDF5 group (/series/walls/<name>/...) and a
+        Rerun entity, so a '/' would nest it in another group and '.' or '..' would name the
+        group above; leading or trailing blanks would make two names look alike."""
+        name = self.string(value, key)
+        if not name.strip():
+            raise self.err(key, "must be a non-empty name")
+        if "/" in name or name in (".", "..") or name != name.strip():
+            raise self.err(key, f"'{name}' cannot name a results group: no '/', not '.' or "
+                                "'..', no leading or trailing blanks")
+        return name
+
     def material_name(self, value: Any, key: str) -> str:
         name = self.string(value, key)
         if name not in self.materials:

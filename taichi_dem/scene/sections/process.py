@@ -94,9 +94,9 @@ class ProcessSections:
         if "name" not in t:
             raise self.err(f"{key}.name", "required key is missing")
         n = self.string(t["name"], f"{key}.name")
-        if not re.fullmatch(r"[A-Za-z0-9_.-]+", n):
-            raise self.err(f"{key}.name", f"'{n}' must be letters, digits, '_', '-' or '.' "
-                                          "(it names HDF5 groups)")
+        if not re.fullmatch(r"[A-Za-z0-9_.-]+", n) or n in (".", ".."):
+            raise self.err(f"{key}.name", f"'{n}' must be letters, digits, '_', '-' or '.', "
+                                          "and not '.' or '..' (it names HDF5 groups)")
         return n
 
     # -- process tooling ---------------------------------------------------------------------------

@@ -69,9 +69,7 @@ class SurfaceSections:
         for i, t in enumerate(items):
             key = f"walls[{i}]"
             self.check_keys(t, key, WALL)
-            name = self.string(t["name"], f"{key}.name")
-            if not name.strip():
-                raise self.err(f"{key}.name", "must be a non-empty name")
+            name = self.group_name(t["name"], f"{key}.name")
             if name in names:
                 raise self.err(f"{key}.name", f"duplicate wall name '{name}' (also {names[name]})")
             names[name] = key
@@ -91,9 +89,7 @@ class SurfaceSections:
         for i, t in enumerate(items):
             key = f"bodies[{i}]"
             self.check_keys(t, key, BODY)
-            name = self.string(t["name"], f"{key}.name")
-            if not name.strip():
-                raise self.err(f"{key}.name", "must be a non-empty name")
+            name = self.group_name(t["name"], f"{key}.name")
             if name in names:
                 raise self.err(f"{key}.name", f"duplicate name '{name}' (also {names[name]}); "
                                               "bodies and walls need distinct names")
