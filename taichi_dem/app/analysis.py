@@ -124,6 +124,29 @@ def segment_torque(mass: float, g: float, drum_radius: float, h: float, theta: f
     return mass * g * segment_centroid(drum_radius, h)[1] * math.sin(theta)
 
 
+def drum_dynamic_angle(position: np.ndarray, radius: np.ndarray, axis_point, axis_direction,
+                       bin_width: Optional[float] = None, keep=(0.2, 0.8)) -> float:
+    """Dynamic angle of repose of the bed in a drum turning about a horizontal axis (gravity
+    along -z), deg: the particle centres seen along the axis (the horizontal coordinate across
+    the axis and z, both from ``axis_point``), their free surface fitted by :func:`bed_surface`
+    over the ``keep`` quantiles of the chord (bins one diameter wide by default). The angle is
+    given as a magnitude, whichever way the drum turns."""
+    x = np.asarray(position, float) - np.asarray(axis_point, float)
+    a = np.asarray(axis_direction, float)
+    a = a / np.linalg.norm(a)
+    across = np.cross(a, [0.0, 0.0, 1.0])
+    if np.linalg.norm(across) < 1e-9:
+        raise ValueError("the drum's axis is vertical: no dynamic angle of repose")
+    across /= np.linalg.norm(across)
+    r = np.asarray(radius, float)
+    if len(r) < 10:
+        return float("nan")
+    if bin_width is None:
+        bin_width = 2.0 * float(np.median(r))
+    theta, _ = bed_surface(x @ across, x[:, 2], r, bin_width, keep)
+    return abs(math.degrees(theta))
+
+
 # ------------------------------------------------------------------------------ heap
 def heap_angle(p: dict, centre=(0.0, 0.0), bin_width: Optional[float] = None,
                keep=(0.2, 0.8)) -> tuple[float, float, int]:

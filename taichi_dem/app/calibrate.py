@@ -1,0 +1,1094 @@
+"""``taichi-dem calibrate SPEC.toml --out DIR``: contact parameters fitted to bench tests.
+
+A calibration spec (its own small TOML format, validated strictly: a bad key exits 2 naming the
+spec file, the dotted key and the reason) names the material, the bench tests users measure
+with their measured values, the contact parameters to vary (dotted scene keys, as ``taichi-dem
+sweep --set`` takes them) with their ranges, categorical factors (the rolling model) and the
+design. The command
+
+1. runs the design of experiments (every design point x bench test x placement seed) as sweep
+   runs on Dask (:mod:`taichi_dem.app.sweep`: one fresh process per run, ``DIR/runs/<id>/``,
+   finished runs are skipped when the command is started again, a LocalCluster unless
+   ``--scheduler`` names one);
+2. reads each bench test's response from each run's results file (:func:`response`);
+3. fits one quadratic response surface per test and per level of the categorical factors
+   (least squares in the continuous parameters scaled to [-1, 1]; R^2 and the residual
+   standard deviation are reported) and finds the parameters that minimise
+   sum(((response - target) / target_sd)^2) inside the ranges (:func:`optimise`); a target
+   the surface cannot reach inside the ranges is said so, with the reachable interval;
+4. verifies the optimum with fresh runs (new placement seeds) and reports the achieved values
+   with their scatter against the targets;
+5. writes ``DIR/calibrated_material.toml`` (the material and interaction blocks, ready to paste
+   into a scene, with the calibration record as comments and as a machine-readable table),
+   ``DIR/calibration.md`` (design, responses, fits, verification), ``DIR/calibration.json``
+   and ``DIR/calibration_response.png``.
+
+Bench tests (``kind``), each read from the last frame(s) of a run's results file:
+
+==================  ======  ==================================================================
+``angle_of_repose``  deg    the flank of a heap on z = 0 around ``centre`` (default [0, 0]),
+                            fitted by :func:`taichi_dem.app.analysis.heap_angle`; particles
+                            that never moved (a fixed rough base) are left out
+``discharge_rate``   kg/s   a hopper: the outputs' ``particles/discharge_rate`` (1/s, while
+                            15 - 60 % has left) times the mean particle mass
+``bulk_density``     kg/m3  the mass of the spheres whose centres lie in the vertical cylinder
+                            ``region = {radius, z_min, z_max, centre}`` over its volume
+``dynamic_angle``    deg    a rotating drum's free surface (:func:`analysis.drum_dynamic_angle`)
+                            averaged over the frames in the last ``window`` (default 0.5) of
+                            the run; the axis is the first rotating body's unless given
+==================  ======  ==================================================================
+"""
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import itertools
+import json
+import math
+import shlex
+import sys
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from ..errors import SceneError
+
+KINDS = {"angle_of_repose": "deg", "discharge_rate": "kg/s", "bulk_density": "kg/m3",
+         "dynamic_angle": "deg"}
+DESIGNS = ("latin_hypercube", "full_factorial")
+REGULARISATION = 1e-4      # weight of the pull towards `prefer` when many optima fit equally
+
+
+# ------------------------------------------------------------------------------ the spec
+@dataclass
+class Parameter:
+    """A continuous parameter: a dotted scene key varied over [low, high]; ``prefer`` is the
+    value chosen among equally good optima (default the middle of the range)."""
+    key: str
+    low: float
+    high: float
+    prefer: float
+    values: tuple = ()          # full factorial: the levels (default ``levels`` evenly spaced)
+
+
+@dataclass
+class Factor:
+    """A categorical factor: every key in ``keys`` is set to the same level."""
+    name: str
+    keys: tuple
+    levels: tuple
+
+
+@dataclass
+class BenchTest:
+    """A measured bench test: its base scene (absolute path), the simulated time per run (s;
+    None: the scene's end_time), the measured values and their mean and standard deviation."""
+    name: str
+    kind: str
+    scene: str
+    duration: Optional[float]
+    measured: tuple
+    target: float
+    target_sd: float
+    options: dict = field(default_factory=dict)
+
+    @property
+    def unit(self) -> str:
+        return KINDS[self.kind]
+
+
+@dataclass
+class Spec:
+    path: str
+    material: str
+    title: str
+    parameters: list
+    factors: list
+    tests: list
+    design: str = "latin_hypercube"
+    points: int = 8
+    levels: int = 3
+    design_seed: int = 1
+    seeds: int = 1
+    verify_seeds: int = 3
+    timeout: Optional[float] = None
+
+
+def _err(spec: str, key: str, reason: str) -> SceneError:
+    return SceneError(spec, key, reason)
+
+
+def _table(doc, where: str, spec: str, allowed: dict, required=()) -> dict:
+    """``doc`` checked as a table whose keys are in ``allowed`` ({key: type or tuple})."""
+    if not isinstance(doc, dict):
+        raise _err(spec, where, f"must be a table, got {type(doc).__name__}")
+    for k in doc:
+        if k not in allowed:
+            raise _err(spec, f"{where}.{k}" if where else k,
+                       f"unknown key (allowed here: {', '.join(sorted(allowed))})")
+    for k in required:
+        if k not in doc:
+            raise _err(spec, f"{where}.{k}" if where else k, "is required")
+    for k, v in doc.items():
+        types = allowed[k]
+        key = f"{where}.{k}" if where else k
+        if types is float:
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise _err(spec, key, f"must be a finite number, got {v!r}")
+        elif types is int:
+            if isinstance(v, bool) or not isinstance(v, int):
+                raise _err(spec, key, f"must be an integer, got {v!r}")
+        elif not isinstance(v, types):
+            names = types.__name__ if isinstance(types, type) else " or ".join(t.__name__ for t in types)
+            raise _err(spec, key, f"must be a {names}, got {v!r}")
+    return doc
+
+
+def _numbers(v, key: str, spec: str, n: Optional[int] = None) -> tuple:
+    if not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float))
+                                      or not math.isfinite(x) for x in v):
+        raise _err(spec, key, f"must be a list of finite numbers, got {v!r}")
+    if n is not None and len(v) != n:
+        raise _err(spec, key, f"must have {n} numbers, got {len(v)}")
+    return tuple(float(x) for x in v)
+
+
+def load_spec(path: str) -> Spec:
+    """Read and validate a calibration spec; every problem is a SceneError naming the spec
+    file, the dotted key and the reason. Base scenes resolve against the spec's directory."""
+    try:
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except OSError as e:
+        raise _err(path, "", f"cannot read the calibration spec: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise _err(path, "", f"not UTF-8 text: {e}") from None
+    try:
+        doc = tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, RecursionError) as e:
+        raise _err(path, "", f"not valid TOML: {e}") from None
+    _table(doc, "", path, {"calibration": dict, "design": dict, "parameters": list,
+                           "factors": list, "tests": list}, required=("calibration", "tests"))
+    cal = _table(doc["calibration"], "calibration", path, {"material": str, "title": str},
+                 required=("material",))
+    design = _table(doc.get("design", {}), "design", path,
+                    {"kind": str, "points": int, "levels": int, "seed": int, "seeds": int,
+                     "verify_seeds": int, "timeout": float})
+    kind = design.get("kind", "latin_hypercube")
+    if kind not in DESIGNS:
+        raise _err(path, "design.kind", f"must be one of {', '.join(DESIGNS)}, got {kind!r}")
+    for k, lo in (("points", 1), ("levels", 2), ("seeds", 1), ("verify_seeds", 1)):
+        if k in design and design[k] < lo:
+            raise _err(path, f"design.{k}", f"must be >= {lo}, got {design[k]}")
+    if "timeout" in design and design["timeout"] <= 0:
+        raise _err(path, "design.timeout", f"must be > 0 s, got {design['timeout']}")
+
+    params = []
+    for i, p in enumerate(doc.get("parameters", [])):
+        w = f"parameters.{i}"
+        _table(p, w, path, {"key": str, "range": list, "prefer": float, "values": list},
+               required=("key", "range"))
+        lo, hi = _numbers(p["range"], f"{w}.range", path, 2)
+        if not lo < hi:
+            raise _err(path, f"{w}.range", f"the low end must be below the high end, got [{lo}, {hi}]")
+        prefer = float(p.get("prefer", 0.5 * (lo + hi)))
+        if not lo <= prefer <= hi:
+            raise _err(path, f"{w}.prefer", f"{prefer} lies outside the range [{lo}, {hi}]")
+        values = _numbers(p["values"], f"{w}.values", path) if "values" in p else ()
+        if any(not lo <= v <= hi for v in values):
+            raise _err(path, f"{w}.values", f"every value must lie in the range [{lo}, {hi}]")
+        if "values" in p and len(values) < 2:
+            raise _err(path, f"{w}.values", "give at least two values")
+        _check_key(p["key"], f"{w}.key", path)
+        params.append(Parameter(p["key"], lo, hi, prefer, values))
+    factors = []
+    for i, fc in enumerate(doc.get("factors", [])):
+        w = f"factors.{i}"
+        _table(fc, w, path, {"name": str, "keys": list, "levels": list}, required=("keys", "levels"))
+        keys = fc["keys"]
+        if not keys or any(not isinstance(k, str) for k in keys):
+            raise _err(path, f"{w}.keys", "must be a non-empty list of dotted scene keys")
+        for j, k in enumerate(keys):
+            _check_key(k, f"{w}.keys.{j}", path)
+        levels = fc["levels"]
+        if len(levels) < 1 or any(isinstance(v, (list, dict)) for v in levels):
+            raise _err(path, f"{w}.levels", "must be a non-empty list of values")
+        if len(set(map(repr, levels))) != len(levels):
+            raise _err(path, f"{w}.levels", "a level is given twice")
+        factors.append(Factor(fc.get("name", keys[0]), tuple(keys), tuple(levels)))
+    all_keys = [p.key for p in params] + [k for f in factors for k in f.keys]
+    dup = next((k for k in all_keys if all_keys.count(k) > 1), None)
+    if dup:
+        raise _err(path, "parameters", f"the key {dup} is varied twice")
+
+    tests = []
+    names = set()
+    base = Path(path).resolve().parent
+    if not doc["tests"]:
+        raise _err(path, "tests", "give at least one bench test")
+    for i, t in enumerate(doc["tests"]):
+        w = f"tests.{i}"
+        _table(t, w, path, {"name": str, "kind": str, "scene": str, "duration": float,
+                            "measured": list, "mean": float, "sd": float, "centre": list,
+                            "region": dict, "axis_point": list, "axis_direction": list,
+                            "window": float}, required=("kind", "scene"))
+        if t["kind"] not in KINDS:
+            raise _err(path, f"{w}.kind", f"must be one of {', '.join(KINDS)}, got {t['kind']!r}")
+        name = t.get("name", t["kind"])
+        if name in names:
+            raise _err(path, f"{w}.name", f"two tests are called {name!r}")
+        names.add(name)
+        scene = (base / t["scene"]).resolve()
+        if not scene.is_file():
+            raise _err(path, f"{w}.scene", f"no such scene file: {scene}")
+        if "duration" in t and t["duration"] <= 0:
+            raise _err(path, f"{w}.duration", f"must be > 0 s, got {t['duration']}")
+        measured = _numbers(t["measured"], f"{w}.measured", path) if "measured" in t else ()
+        if measured and ("mean" in t or "sd" in t):
+            raise _err(path, f"{w}.measured", "give either measured (the repeats) or mean and sd")
+        if measured:
+            if len(measured) < 2:
+                raise _err(path, f"{w}.measured", "give at least two repeats (their scatter "
+                                                  "weights the fit), or mean and sd")
+            target, sd = float(np.mean(measured)), float(np.std(measured, ddof=1))
+        elif "mean" in t and "sd" in t:
+            target, sd = float(t["mean"]), float(t["sd"])
+        else:
+            raise _err(path, f"{w}.measured", "give the measured values (measured = [...]) or "
+                                              "their mean and sd")
+        if not sd > 0:
+            raise _err(path, f"{w}.sd" if not measured else f"{w}.measured",
+                       f"the standard deviation must be > 0, got {sd}")
+        opts = {}
+        if "centre" in t:
+            opts["centre"] = _numbers(t["centre"], f"{w}.centre", path, 2)
+        if "region" in t:
+            r = _table(t["region"], f"{w}.region", path,
+                       {"radius": float, "z_min": float, "z_max": float, "centre": list},
+                       required=("radius", "z_min", "z_max"))
+            if not r["radius"] > 0 or not r["z_min"] < r["z_max"]:
+                raise _err(path, f"{w}.region", "needs radius > 0 and z_min < z_max")
+            opts["region"] = {"radius": float(r["radius"]), "z_min": float(r["z_min"]),
+                              "z_max": float(r["z_max"]),
+                              "centre": _numbers(r.get("centre", [0, 0]), f"{w}.region.centre", path, 2)}
+        elif t["kind"] == "bulk_density":
+            raise _err(path, f"{w}.region", "a bulk density needs its region "
+                                            "{radius, z_min, z_max} (m)")
+        for k in ("axis_point", "axis_direction"):
+            if k in t:
+                opts[k] = _numbers(t[k], f"{w}.{k}", path, 3)
+        if "window" in t:
+            if not 0 < t["window"] <= 1:
+                raise _err(path, f"{w}.window", f"must be in (0, 1], got {t['window']}")
+            opts["window"] = float(t["window"])
+        tests.append(BenchTest(name, t["kind"], str(scene), t.get("duration"), measured, target,
+                               sd, opts))
+    n_par = len(params)
+    points = design.get("points", 8)
+    if kind == "latin_hypercube" and n_par and points < _n_coefficients(n_par, "linear") + 1:
+        raise _err(path, "design.points", f"{points} points cannot fit even a linear surface in "
+                                          f"{n_par} parameters: give at least {n_par + 2}")
+    return Spec(path=str(path), material=cal["material"], title=cal.get("title", Path(path).stem),
+                parameters=params, factors=factors, tests=tests, design=kind, points=points,
+                levels=design.get("levels", 3), design_seed=design.get("seed", 1),
+                seeds=design.get("seeds", 1), verify_seeds=design.get("verify_seeds", 3),
+                timeout=design.get("timeout"))
+
+
+def _check_key(key: str, where: str, spec: str) -> None:
+    if not key or any(not part for part in key.split(".")):
+        raise _err(spec, where, f"not a dotted scene key: {key!r}")
+
+
+# ------------------------------------------------------------------------------ the design
+def _round(v: float, digits: int = 4) -> float:
+    return float(f"{v:.{digits}g}")
+
+
+def design_points(spec: Spec) -> list[dict]:
+    """The design: a list of {key: value} override dicts, the continuous points (seeded Latin
+    hypercube of ``points`` or the full factorial) crossed with every level combination of
+    the categorical factors. Values are rounded to 4 significant digits."""
+    params = spec.parameters
+    if not params:
+        cont = [{}]
+    elif spec.design == "full_factorial":
+        axes = [p.values or tuple(np.linspace(p.low, p.high, spec.levels)) for p in params]
+        cont = [{p.key: _round(v) for p, v in zip(params, row)} for row in itertools.product(*axes)]
+    else:
+        from scipy.stats import qmc
+        u = qmc.LatinHypercube(d=len(params), seed=spec.design_seed).random(spec.points)
+        cont = [{p.key: _round(p.low + x * (p.high - p.low)) for p, x in zip(params, row)} for row in u]
+    out = []
+    for combo in itertools.product(*(f.levels for f in spec.factors)):
+        lev = {k: v for f, v in zip(spec.factors, combo) for k in f.keys}
+        out += [{**lev, **c} for c in cont]
+    return out
+
+
+def level_of(point: dict, spec: Spec) -> tuple:
+    """The categorical level combination of a design point (one value per factor)."""
+    return tuple(point[f.keys[0]] for f in spec.factors)
+
+
+def _plan(spec: Spec, combos: list[dict], seeds: int, threads: int, arch: str,
+          seed_offset: int = 0) -> list:
+    """(test index, combo index, RunSpec) for every test x combo x seed. ``seed_offset`` > 0:
+    seeds scene seed + offset + k (fresh placements for the verification)."""
+    from . import sweep
+    out = []
+    for ti, test in enumerate(spec.tests):
+        try:
+            base_seed = sweep.scene_seed(tomllib.loads(Path(test.scene).read_text(encoding="utf-8-sig")))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, RecursionError) as err:
+            raise _err(spec.path, f"tests.{ti}.scene", f"cannot read the base scene "
+                                                      f"{test.scene}: {err}") from None
+        for ci, combo in enumerate(combos):
+            try:
+                if seed_offset:
+                    runs = sweep.plan(test.scene, [{**combo, "simulation.seed": base_seed + seed_offset + k}
+                                                   for k in range(seeds)], 1, duration=test.duration,
+                                      threads=threads, arch=arch)
+                else:
+                    runs = sweep.plan(test.scene, [combo], seeds, duration=test.duration,
+                                      threads=threads, arch=arch)
+            except SceneError as err:
+                raise _err(spec.path, _culprit(spec, err, ti),
+                           f"the design does not give a valid scene in tests.{ti}'s base scene: "
+                           f"{err}") from None
+            except tomllib.TOMLDecodeError as err:
+                raise _err(spec.path, f"tests.{ti}.scene", f"not valid TOML: {err}") from None
+            for r in runs:
+                r.labels = {"test": test.name}
+                out.append((ti, ci, r))
+    return out
+
+
+def _culprit(spec: Spec, err: SceneError, test_index: int) -> str:
+    """The spec key a scene's SceneError comes from: a parameter's or factor's key (the scene
+    format does not know it, or the index is past the end), its range or its levels (a value
+    the loader refuses); else the test."""
+    for i, p in enumerate(spec.parameters):
+        if f"--set {p.key}=" in err.reason or err.key == p.key:
+            return f"parameters.{i}.key" if _is_key_problem(err) else f"parameters.{i}.range"
+    for i, f in enumerate(spec.factors):
+        for j, k in enumerate(f.keys):
+            if f"--set {k}=" in err.reason or err.key == k:
+                return f"factors.{i}.keys.{j}" if _is_key_problem(err) else f"factors.{i}.levels"
+    return f"tests.{test_index}"
+
+
+def _is_key_problem(err: SceneError) -> bool:
+    return any(w in err.reason for w in ("unknown key", "past the end", "index it", "not a table"))
+
+
+# ------------------------------------------------------------------------------ responses
+def _frames(h5_path: str):
+    import h5py
+    f = h5py.File(h5_path, "r")
+    keys = sorted(f["frames"], key=int) if "frames" in f else []
+    return f, keys
+
+
+def _moving(first, last) -> np.ndarray:
+    """Mask over the last frame's particles: those that moved since the first frame (a fixed
+    rough base never does)."""
+    ids0, pos0 = first["id"][()], first["position"][()]
+    ids1, pos1 = last["id"][()], last["position"][()]
+    where = {int(i): k for k, i in enumerate(ids0)}
+    idx = np.array([where.get(int(i), -1) for i in ids1])
+    still = np.zeros(len(ids1), bool)
+    ok = idx >= 0
+    still[ok] = np.all(pos1[ok] == pos0[idx[ok]], axis=1)
+    return ~still
+
+
+def _material_density(doc: dict, name: str) -> float:
+    v = doc.get("materials", {}).get(name, {}).get("density")
+    if isinstance(v, (int, float)):
+        return float(v)
+    from ..scene.units import parse_quantity      # a quantity string such as "870 kg/m3"
+    return float(parse_quantity(v, "density"))
+
+
+def response(test: BenchTest, h5_path: str, material: str) -> float:
+    """The bench test's measured quantity (its unit: ``KINDS``) from one run's results file;
+    NaN when the run does not show it (e.g. a hopper that did not empty to 60 %)."""
+    if test.kind == "discharge_rate":
+        from .outputs import key_outputs
+        rate = key_outputs(h5_path).get("particles/discharge_rate", math.nan)
+        f, keys = _frames(h5_path)
+        with f:
+            doc = tomllib.loads(str(f.attrs.get("scene", "")))
+            r = f["frames"][keys[0]]["radius"][()]
+        mass = float(np.mean(4.0 / 3.0 * math.pi * r ** 3)) * _material_density(doc, material)
+        return rate * mass
+    f, keys = _frames(h5_path)
+    with f:
+        if not keys:
+            return math.nan
+        doc = tomllib.loads(str(f.attrs.get("scene", "")))
+        first, last = f["frames"][keys[0]], f["frames"][keys[-1]]
+        if test.kind == "angle_of_repose":
+            from .analysis import heap_angle
+            m = _moving(first, last)
+            p = {"position": last["position"][()][m], "radius": last["radius"][()][m]}
+            if len(p["radius"]) < 10:
+                return math.nan
+            return heap_angle(p, centre=test.options.get("centre", (0.0, 0.0)))[0]
+        if test.kind == "bulk_density":
+            reg = test.options["region"]
+            x = last["position"][()]
+            r = last["radius"][()]
+            c = reg["centre"]
+            sel = ((np.hypot(x[:, 0] - c[0], x[:, 1] - c[1]) < reg["radius"])
+                   & (x[:, 2] > reg["z_min"]) & (x[:, 2] < reg["z_max"]))
+            vol = math.pi * reg["radius"] ** 2 * (reg["z_max"] - reg["z_min"])
+            return float(np.sum(4.0 / 3.0 * math.pi * r[sel] ** 3)) / vol * _material_density(doc, material)
+        if test.kind == "dynamic_angle":
+            from .analysis import drum_dynamic_angle
+            point, direction = test.options.get("axis_point"), test.options.get("axis_direction")
+            if point is None or direction is None:
+                rot = next((b["motion"]["rotate"] for b in doc.get("bodies", [])
+                            if isinstance(b.get("motion"), dict) and "rotate" in b["motion"]), None)
+                if rot is None:
+                    return math.nan
+                point = point or rot.get("axis_point", [0, 0, 0])
+                direction = direction or rot.get("axis_direction", [1, 0, 0])
+            window = test.options.get("window", 0.5)
+            use = keys[-max(1, int(round(len(keys) * window))):]
+            angles = [drum_dynamic_angle(f["frames"][k]["position"][()], f["frames"][k]["radius"][()],
+                                         point, direction) for k in use]
+            return float(np.nanmean(angles)) if angles else math.nan
+    raise ValueError(test.kind)
+
+
+# ------------------------------------------------------------------------------ the fit
+def _n_coefficients(d: int, model: str) -> int:
+    return {"quadratic": 1 + 2 * d + d * (d - 1) // 2, "linear": 1 + d, "constant": 1}[model]
+
+
+def design_matrix(x: np.ndarray, model: str) -> np.ndarray:
+    """Columns of the response surface at scaled points ``x`` (n, d): 1, x_i, and for
+    ``quadratic`` also x_i^2 and x_i x_j (i < j)."""
+    x = np.atleast_2d(np.asarray(x, float))
+    n, d = x.shape
+    cols = [np.ones(n)]
+    if model in ("linear", "quadratic"):
+        cols += [x[:, i] for i in range(d)]
+    if model == "quadratic":
+        cols += [x[:, i] ** 2 for i in range(d)]
+        cols += [x[:, i] * x[:, j] for i in range(d) for j in range(i + 1, d)]
+    return np.column_stack(cols)
+
+
+@dataclass
+class Surface:
+    """A least-squares response surface in scaled parameters (each range mapped to [-1, 1]).
+    ``r2``: coefficient of determination; ``residual_sd``: sqrt(SS_res / (n - p)) in the
+    response's unit (NaN with no residual degrees of freedom)."""
+    model: str
+    coef: np.ndarray
+    r2: float
+    residual_sd: float
+    n: int
+
+    def __call__(self, x) -> np.ndarray:
+        return design_matrix(x, self.model) @ self.coef
+
+
+def fit_surface(x: np.ndarray, y: np.ndarray) -> Surface:
+    """Quadratic least squares when the points leave residual degrees of freedom (n > its
+    coefficients), else linear (n >= d + 1: through two points a line), else the mean. ``x``: (n, d) scaled parameters; ``y``: responses (NaNs left out)."""
+    x = np.atleast_2d(np.asarray(x, float)).reshape(len(y), -1)
+    y = np.asarray(y, float)
+    ok = np.isfinite(y)
+    x, y = x[ok], y[ok]
+    d = x.shape[1]
+    n = len(y)
+    if n == 0:
+        return Surface("constant", np.array([math.nan]), math.nan, math.nan, 0)
+    if d > 0 and n > _n_coefficients(d, "quadratic"):
+        model = "quadratic"
+    elif d > 0 and n >= _n_coefficients(d, "linear"):
+        model = "linear"
+    else:
+        model = "constant"
+    a = design_matrix(x, model)
+    coef, *_ = np.linalg.lstsq(a, y, rcond=None)
+    res = y - a @ coef
+    ss_res, ss_tot = float(res @ res), float(np.sum((y - y.mean()) ** 2))
+    p = a.shape[1]
+    r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else math.nan
+    sd = math.sqrt(ss_res / (n - p)) if n > p else math.nan
+    return Surface(model, coef, r2, sd, n)
+
+
+def _starts(d: int, rng_seed: int = 0) -> np.ndarray:
+    if d == 0:
+        return np.zeros((1, 0))
+    if d <= 3:
+        g = np.linspace(-1, 1, 5)
+        return np.array(list(itertools.product(*([g] * d))))
+    return np.random.default_rng(rng_seed).uniform(-1, 1, (60, d))
+
+
+def _minimise(fun, d: int) -> tuple[np.ndarray, float]:
+    from scipy.optimize import minimize
+    if d == 0:
+        x = np.zeros(0)
+        return x, float(fun(x))
+    best = (None, math.inf)
+    for s in _starts(d):
+        r = minimize(fun, s, method="L-BFGS-B", bounds=[(-1.0, 1.0)] * d)
+        if r.fun < best[1]:
+            best = (np.clip(r.x, -1, 1), float(r.fun))
+    return best
+
+
+def optimise(surfaces: list[Surface], targets: list[float], sds: list[float], d: int,
+             prefer: Optional[np.ndarray] = None) -> tuple[np.ndarray, float]:
+    """The scaled point in [-1, 1]^d minimising sum(((surface - target) / sd)^2), and that sum.
+    Among points that fit equally (more parameters than tests) the one nearest ``prefer``
+    (scaled) is taken: a pull of weight REGULARISATION per unit squared distance."""
+    prefer = np.zeros(d) if prefer is None else np.asarray(prefer, float)
+
+    def chi2(x):
+        x = np.asarray(x, float).reshape(1, d)
+        return float(sum(((s(x)[0] - t) / sd) ** 2 for s, t, sd in zip(surfaces, targets, sds)))
+
+    x, _ = _minimise(lambda x: chi2(x) + REGULARISATION * float(np.sum((x - prefer) ** 2)), d)
+    return x, chi2(x)
+
+
+def reachable(surface: Surface, d: int) -> tuple[float, float]:
+    """(lowest, highest) value of ``surface`` inside [-1, 1]^d."""
+    lo = _minimise(lambda x: float(surface(np.reshape(x, (1, d)))[0]), d)[1]
+    hi = -_minimise(lambda x: -float(surface(np.reshape(x, (1, d)))[0]), d)[1]
+    return lo, hi
+
+
+def scale(spec: Spec, point: dict) -> np.ndarray:
+    """A design point's continuous parameters mapped to [-1, 1]."""
+    return np.array([2.0 * (point[p.key] - p.low) / (p.high - p.low) - 1.0 for p in spec.parameters])
+
+
+def unscale(spec: Spec, x: np.ndarray) -> dict:
+    return {p.key: p.low + 0.5 * (xi + 1.0) * (p.high - p.low) for p, xi in zip(spec.parameters, x)}
+
+
+# ------------------------------------------------------------------------------ running
+def _stats(values) -> tuple[float, float]:
+    v = np.asarray([x for x in values if np.isfinite(x)], float)
+    if len(v) == 0:
+        return math.nan, math.nan
+    return float(v.mean()), float(v.std(ddof=1)) if len(v) > 1 else math.nan
+
+
+def _responses(spec: Spec, planned, records, out: Path) -> dict:
+    """{(test index, combo index): [response per seed]} from the finished runs."""
+    res: dict = {}
+    for (ti, ci, s), rec in zip(planned, records):
+        val = math.nan
+        if rec.get("status") == "done":
+            try:
+                val = response(spec.tests[ti], str(out / "runs" / s.id / "results.h5"), spec.material)
+            except (OSError, KeyError, ValueError) as err:
+                print(f"calibrate: cannot read {spec.tests[ti].name} from run {s.id}: {err}",
+                      file=sys.stderr)
+        res.setdefault((ti, ci), []).append(val)
+    return res
+
+
+def _dedupe(planned):
+    seen, uniq = set(), []
+    for _, _, s in planned:
+        if s.id not in seen:
+            seen.add(s.id)
+            uniq.append(s)
+    return uniq
+
+
+def fit_design(spec: Spec, points: list[dict], design_resp: dict) -> tuple[list, dict, dict]:
+    """The response surfaces and the optimum of each level of the categorical factors, from
+    ``design_resp`` ({(test index, point index): [response per seed]}). Returns (per level:
+    {level, fits, x (scaled optimum), chi2, reach, predicted}; the best level's entry; the
+    optimum as overrides, continuous values rounded to 3 significant digits)."""
+    d = len(spec.parameters)
+    prefer = np.array([2.0 * (p.prefer - p.low) / (p.high - p.low) - 1.0 for p in spec.parameters])
+    per_level = []
+    for lev in itertools.product(*(f.levels for f in spec.factors)):
+        idx = [ci for ci, pt in enumerate(points) if level_of(pt, spec) == lev]
+        fits = []
+        for ti in range(len(spec.tests)):
+            xs, ys = [], []
+            for ci in idx:
+                for v in design_resp.get((ti, ci), []):
+                    xs.append(scale(spec, points[ci]))
+                    ys.append(v)
+            fits.append(fit_surface(np.array(xs).reshape(len(xs), d), np.array(ys)))
+        if all(np.all(np.isfinite(s.coef)) for s in fits):
+            xopt, chi2 = optimise(fits, [t.target for t in spec.tests],
+                                  [t.target_sd for t in spec.tests], d, prefer)
+            reach = [reachable(s, d) for s in fits]
+            pred = [float(s(xopt.reshape(1, d))[0]) for s in fits]
+        else:
+            xopt, chi2 = np.zeros(d), math.inf
+            reach, pred = [(math.nan, math.nan)] * len(fits), [math.nan] * len(fits)
+        per_level.append({"level": lev, "fits": fits, "x": xopt, "chi2": chi2, "reach": reach,
+                          "predicted": pred})
+    best = min(per_level, key=lambda r: r["chi2"])
+    if not math.isfinite(best["chi2"]):
+        raise RuntimeError("no level of the design gave responses to fit (did every run fail? "
+                           "see the runs' log.txt)")
+    optimum = {k: lv for f, lv in zip(spec.factors, best["level"]) for k in f.keys}
+    optimum.update({k: _round(v, 3) for k, v in unscale(spec, best["x"]).items()})
+    return per_level, best, optimum
+
+
+def _sweep(specs, out: Path, state: dict, progress: bool, timeout) -> list[dict]:
+    """sweep.run_sweep on the client in ``state`` (made on first need: a command started again
+    with every run finished starts no cluster)."""
+    from . import sweep
+    if state.get("client") is None and any(not (out / "runs" / s.id / "done.json").exists()
+                                           for s in specs):
+        state["client"] = sweep.make_client(state["scheduler"], state["workers"])
+    return sweep.run_sweep(specs, str(out), state.get("client"), progress=progress, timeout=timeout)
+
+
+def calibrate(spec: Spec, out_dir: str, *, scheduler=None, workers=None, threads=None,
+              arch: str = "cpu", progress: bool = True, command: str = "") -> dict:
+    """Run the design, fit, optimise, verify and write the outputs (module docstring); returns
+    the result dict also written to ``calibration.json``."""
+    from . import sweep
+    out = Path(out_dir)
+    points = design_points(spec)
+    nthreads = sweep.threads_per_run(workers, threads)
+    planned = _plan(spec, points, spec.seeds, nthreads, arch)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "runs").mkdir(exist_ok=True)
+    except OSError as e:
+        raise SceneError("--out", str(out), f"cannot make the output directory: {e.strerror or e}") from None
+    if progress:
+        print(f"calibrate: {len(points)} design points x {len(spec.tests)} tests x {spec.seeds} "
+              f"seeds = {len(planned)} runs ({len(_dedupe(planned))} distinct), then "
+              f"{spec.verify_seeds} verification runs per test, in {out}", file=sys.stderr)
+    state = {"client": None, "scheduler": scheduler, "workers": workers}
+    try:
+        recs = {r["id"]: r for r in _sweep(_dedupe(planned), out, state, progress, spec.timeout)}
+        records = [recs[s.id] for _, _, s in planned]
+        design_resp = _responses(spec, planned, records, out)
+        per_level, best, optimum = fit_design(spec, points, design_resp)
+        vplanned = _plan(spec, [optimum], spec.verify_seeds, nthreads, arch, seed_offset=100)
+        if progress:
+            print(f"calibrate: the optimum {_show_point(optimum)} (predicted "
+                  + ", ".join(f"{t.name} {p:.4g} {t.unit}" for t, p in zip(spec.tests, best["predicted"]))
+                  + f"); verifying with {len(_dedupe(vplanned))} runs", file=sys.stderr)
+        vrecs = {r["id"]: r for r in _sweep(_dedupe(vplanned), out, state, progress, spec.timeout)}
+        vrecords = [vrecs[s.id] for _, _, s in vplanned]
+        vresp = _responses(spec, vplanned, vrecords, out)
+    finally:
+        if state["client"] is not None:
+            sweep.close_client(state["client"])
+    result = assemble(spec, points, planned, records, design_resp, per_level, best, optimum,
+                      vplanned, vrecords, vresp, command, out)
+    write_outputs(result, spec, out)
+    return result
+
+
+def _show_point(point: dict) -> str:
+    return ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
+                     for k, v in point.items())
+
+
+def _run_cost(records) -> dict:
+    done = [r for r in records if r.get("status") == "done"]
+    return {"runs": len(records), "finished": len(done),
+            "wall_s": float(sum(r.get("wall_s", 0.0) for r in done)),
+            "cpu_s": float(sum(r.get("cpu_s", 0.0) for r in done))}
+
+
+def _sphere_sizes(spec: Spec) -> list:
+    """The radii the base scenes give the calibrated material's particles, as written."""
+    sizes = []
+    for t in spec.tests:
+        doc = tomllib.loads(Path(t.scene).read_text(encoding="utf-8-sig"))
+        for p in doc.get("particles", []):
+            if p.get("material") == spec.material and "radius" in p and p["radius"] not in sizes:
+                sizes.append(p["radius"])
+    return sizes
+
+
+def assemble(spec, points, planned, records, design_resp, per_level, best, optimum, vplanned,
+             vrecords, vresp, command, out) -> dict:
+    """The result: everything the outputs show (written as ``calibration.json``). ``planned``
+    and ``vplanned``: (test index, point index, RunSpec) of the design and the verification;
+    ``records`` / ``vrecords``: their sweep records; ``vresp``: {(test index, 0): [response]}."""
+    tests = []
+    for ti, t in enumerate(spec.tests):
+        achieved = vresp.get((ti, 0), [])
+        mean, sd = _stats(achieved)
+        fit = best["fits"][ti]
+        lo, hi = best["reach"][ti]
+        reach_ok = lo - t.target_sd <= t.target <= hi + t.target_sd
+        tests.append({
+            "name": t.name, "kind": t.kind, "unit": t.unit,
+            "scene": _rel(t.scene), "duration": t.duration,
+            "measured": list(t.measured), "target": t.target, "target_sd": t.target_sd,
+            "predicted": best["predicted"][ti], "achieved": achieved, "achieved_mean": mean,
+            "achieved_sd": sd, "within_scatter": bool(abs(mean - t.target) <= t.target_sd),
+            "reachable": [lo, hi], "target_reachable": bool(reach_ok),
+            "fit": {"model": fit.model, "points": fit.n, "r2": fit.r2, "residual_sd": fit.residual_sd},
+        })
+    levels = []
+    for r in per_level:
+        levels.append({
+            "level": list(r["level"]), "chi2": r["chi2"],
+            "optimum": {k: _round(v, 3) for k, v in unscale(spec, r["x"]).items()},
+            "fits": [{"test": t.name, "model": s.model, "points": s.n, "r2": s.r2,
+                      "residual_sd": s.residual_sd, "coefficients": [float(c) for c in s.coef]}
+                     for t, s in zip(spec.tests, r["fits"])],
+            "reachable": [list(x) for x in r["reach"]], "predicted": r["predicted"]})
+    design_rows = []
+    for ci, pt in enumerate(points):
+        row = {"point": ci, "overrides": pt}
+        for ti, t in enumerate(spec.tests):
+            row[t.name] = design_resp.get((ti, ci), [])
+        design_rows.append(row)
+    failed = [{"id": s.id, "message": r.get("message", "")} for (_, _, s), r in
+              zip(list(planned) + list(vplanned), list(records) + list(vrecords))
+              if r.get("status") != "done"]
+    return {
+        "title": spec.title, "material": spec.material, "spec": _rel(spec.path),
+        "command": command, "date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "sphere_radius": _sphere_sizes(spec),
+        "design": {"kind": spec.design, "points": spec.points if spec.design == "latin_hypercube" else None,
+                   "levels": ([len(p.values) or spec.levels for p in spec.parameters]
+                              if spec.design == "full_factorial" else None),
+                   "seed": spec.design_seed, "seeds": spec.seeds, "verify_seeds": spec.verify_seeds,
+                   "design_points": len(points)},
+        "parameters": [{"key": p.key, "range": [p.low, p.high], "value": optimum[p.key]}
+                       for p in spec.parameters],
+        "factors": [{"name": f.name, "keys": list(f.keys), "levels": list(f.levels),
+                     "value": optimum[f.keys[0]]} for f in spec.factors],
+        "optimum": optimum, "chi2": best["chi2"], "tests": tests, "levels": levels,
+        "design_rows": design_rows,
+        "verification": [{"id": s.id, "test": spec.tests[ti].name, "seed": s.seed,
+                          "status": r.get("status")} for (ti, _, s), r in zip(vplanned, vrecords)],
+        "within_scatter": all(t["within_scatter"] for t in tests),
+        "cost": {"design": _run_cost(records), "verification": _run_cost(vrecords)},
+        "failed": failed, "out": str(out),
+    }
+
+
+def _rel(path: str) -> str:
+    try:
+        return str(Path(path).resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
+# ------------------------------------------------------------------------------ outputs
+def material_blocks(scene_path: str, material: str, optimum: dict) -> dict:
+    """{"materials": {material: {...}}, "interactions": [...]} of the base scene with the
+    optimum's overrides applied: the calibrated material and every interaction it takes part
+    in."""
+    from . import overrides as ov
+    doc = tomllib.loads(Path(scene_path).read_text(encoding="utf-8-sig"))
+    doc = ov.apply(doc, optimum, scene_path)
+    mats = doc.get("materials", {})
+    return {"materials": {material: dict(mats.get(material, {}))},
+            "interactions": [dict(i) for i in doc.get("interactions", [])
+                             if material in i.get("pair", [])]}
+
+
+def calibration_record(result: dict) -> dict:
+    """The machine-readable record (TOML-ready: no None, no tuples): what a scene's
+    ``materials.<name>.calibration`` table would hold."""
+    def clean(v):
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items() if x is not None}
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        if isinstance(v, (np.floating, float)):
+            return float(v)
+        if isinstance(v, np.integer):
+            return int(v)
+        return v
+    tests = [{k: t[k] for k in ("name", "kind", "unit", "scene", "duration", "measured", "target",
+                                "target_sd", "achieved", "achieved_mean", "achieved_sd",
+                                "within_scatter", "reachable", "target_reachable", "fit")}
+             for t in result["tests"]]
+    rec = {"date": result["date"], "command": result["command"], "spec": result["spec"],
+           "sphere_radius": result["sphere_radius"], "within_scatter": result["within_scatter"],
+           "design": result["design"], "parameters": result["parameters"],
+           "factors": [{k: f[k] for k in ("keys", "levels", "value")} for f in result["factors"]],
+           "tests": tests}
+    return clean(rec)
+
+
+def _fmt(v, digits=4) -> str:
+    if isinstance(v, float):
+        return "nan" if math.isnan(v) else f"{v:.{digits}g}"
+    return str(v)
+
+
+def _pm(mean, sd) -> str:
+    return f"{_fmt(mean)} +- {_fmt(sd, 2)}"
+
+
+def write_material(result: dict, spec: Spec, path: Path) -> None:
+    """``calibrated_material.toml``: a comment block with the record, the material and
+    interaction blocks (paste them into a scene), then the record as the table
+    ``[materials.<name>.calibration]``."""
+    import tomli_w
+    blocks = material_blocks(spec.tests[0].scene, spec.material, result["optimum"])
+    lines = [f"# Calibrated material {spec.material!r}: {spec.title}",
+             f"# {result['date']}; command: {result['command']}",
+             f"# Sphere radius (as the base scenes give it): "
+             f"{', '.join(map(str, result['sphere_radius'])) or 'see the scenes'} -- "
+             "calibrated for this size only: another size is another material.",
+             f"# Design: {result['design']['kind']}, {result['design']['design_points']} points x "
+             f"{result['design']['seeds']} seeds; verified with {result['design']['verify_seeds']} "
+             "fresh seeds at the optimum.",
+             "# Parameters (range -> calibrated value):"]
+    for p in result["parameters"]:
+        lines.append(f"#   {p['key']}: [{_fmt(p['range'][0])}, {_fmt(p['range'][1])}] -> {_fmt(p['value'])}")
+    for f in result["factors"]:
+        lines.append(f"#   {', '.join(f['keys'])}: one of {f['levels']} -> {f['value']!r}")
+    lines.append("# Tests (target = measured mean +- sd; achieved = verification mean +- sd):")
+    for t in result["tests"]:
+        lines.append(f"#   {t['name']} ({t['scene']}): target {_pm(t['target'], t['target_sd'])} "
+                     f"{t['unit']}, achieved {_pm(t['achieved_mean'], t['achieved_sd'])} {t['unit']} "
+                     f"({len(t['achieved'])} runs) -> "
+                     + ("within the measured scatter" if t["within_scatter"] else "NOT within the measured scatter")
+                     + ("" if t["target_reachable"] else
+                        f"; the target lies outside what the ranges reach "
+                        f"({_fmt(t['reachable'][0])} - {_fmt(t['reachable'][1])} {t['unit']})"))
+    lines += ["#", "# Paste the [materials] and [[interactions]] blocks below into a scene (the partner",
+              "# materials come from the scene). The record at the end is the value of a",
+              f"# materials.{spec.material}.calibration key.", ""]
+    body = tomli_w.dumps({"materials": blocks["materials"]}) + "\n"
+    body += tomli_w.dumps({"interactions": blocks["interactions"]}) + "\n"
+    rec = tomli_w.dumps({"materials": {spec.material: {"calibration": calibration_record(result)}}})
+    # tomli-w writes the record as [materials.ash.calibration] and its sub-tables; drop the
+    # empty [materials] / [materials.ash] headers it may repeat
+    rec_lines = [l for l in rec.splitlines() if l.strip() not in ("[materials]", f"[materials.{spec.material}]")]
+    text = "\n".join(lines) + "\n" + body + "# ---- calibration record " + "-" * 60 + "\n" + \
+        "\n".join(rec_lines) + "\n"
+    tomllib.loads(text)          # it must read back
+    path.write_text(text)
+
+
+def write_report(result: dict, spec: Spec, path: Path, png: Optional[str]) -> None:
+    """``calibration.md``: the tests, the design with its responses, the fits per level, the
+    optimum and the verification."""
+    keys = [p.key for p in spec.parameters]
+    fkeys = [f.keys[0] for f in spec.factors]
+    L = [f"# Calibration: {result['title']}", "", f"`{result['command']}`", "",
+         f"{result['date']}. Material `{spec.material}`, spheres of radius "
+         f"{', '.join(map(str, result['sphere_radius']))} (m, as the base scenes give it): the "
+         "calibration holds for this size.", "", "## Bench tests", "",
+         "| test | base scene | duration (s) | measured | target (mean +- sd) |", "|---|---|---|---|---|"]
+    for t in result["tests"]:
+        L.append(f"| {t['name']} | `{t['scene']}` | {_fmt(t['duration']) if t['duration'] else 'scene'} | "
+                 f"{', '.join(_fmt(v) for v in t['measured']) or '-'} | "
+                 f"{_pm(t['target'], t['target_sd'])} {t['unit']} |")
+    L += ["", "## Parameters", "", "| key | range | calibrated |", "|---|---|---|"]
+    for p in result["parameters"]:
+        L.append(f"| `{p['key']}` | {_fmt(p['range'][0])} - {_fmt(p['range'][1])} | {_fmt(p['value'])} |")
+    for f in result["factors"]:
+        L.append(f"| `{'`, `'.join(f['keys'])}` | {', '.join(map(str, f['levels']))} | {f['value']} |")
+    d = result["design"]
+    L += ["", "## Design and responses", "",
+          f"{d['kind'].replace('_', ' ')}"
+          + (f" of {d['points']} points (seed {d['seed']})" if d["kind"] == "latin_hypercube" else
+             f" at {' x '.join(map(str, d['levels'] or [])) or 1} levels")
+          + (" per level of " + ", ".join(f['name'] for f in result["factors"]) if result["factors"] else "")
+          + f"; {d['seeds']} placement seed(s) per point. Responses per seed.", "",
+          "| # | " + " | ".join(fkeys + keys) + " | " + " | ".join(
+              f"{t['name']} ({t['unit']})" for t in result["tests"]) + " |",
+          "|" + "---|" * (1 + len(fkeys) + len(keys) + len(result["tests"]))]
+    for row in result["design_rows"]:
+        o = row["overrides"]
+        L.append(f"| {row['point']} | " + " | ".join(_fmt(o[k]) for k in fkeys + keys) + " | "
+                 + " | ".join(", ".join(_fmt(v) for v in row[t["name"]]) for t in result["tests"]) + " |")
+    L += ["", "## Response surfaces", "",
+          "Least squares in the parameters scaled to [-1, 1] (quadratic where the points allow it). "
+          "R^2 and the residual standard deviation (in the response's unit; compare it with the "
+          "seed-to-seed scatter) per level; `reach`: the lowest and highest value of the surface "
+          "inside the ranges; chi2 = sum(((surface - target) / target_sd)^2) at that level's optimum.", "",
+          "| level | test | model | points | R^2 | residual sd | reach | level's optimum | predicted | chi2 |",
+          "|---|---|---|---|---|---|---|---|---|---|"]
+    for lv in result["levels"]:
+        for k, f in enumerate(lv["fits"]):
+            L.append(f"| {', '.join(map(str, lv['level'])) or '-'} | {f['test']} | {f['model']} | {f['points']} | "
+                     f"{_fmt(f['r2'], 3)} | {_fmt(f['residual_sd'], 3)} | "
+                     f"{_fmt(lv['reachable'][k][0])} - {_fmt(lv['reachable'][k][1])} | "
+                     f"{_show_point(lv['optimum']) or '-'} | {_fmt(lv['predicted'][k])} | {_fmt(lv['chi2'], 3)} |")
+    L += ["", "## Verification at the optimum", "",
+          f"The optimum: {_show_point(result['optimum'])}. Fresh runs (placement seeds the design "
+          "did not use):", "",
+          "| test | target | predicted | achieved (each run) | achieved mean +- sd | within the measured scatter |",
+          "|---|---|---|---|---|---|"]
+    for t in result["tests"]:
+        L.append(f"| {t['name']} | {_pm(t['target'], t['target_sd'])} {t['unit']} | {_fmt(t['predicted'])} | "
+                 f"{', '.join(_fmt(v) for v in t['achieved'])} | {_pm(t['achieved_mean'], t['achieved_sd'])} | "
+                 f"{'yes' if t['within_scatter'] else 'NO'} |")
+    L.append("")
+    for t in result["tests"]:
+        if not t["target_reachable"]:
+            L.append(f"- **{t['name']}: the target {_fmt(t['target'])} {t['unit']} lies outside what the "
+                     f"ranges reach at the chosen level ({_fmt(t['reachable'][0])} - "
+                     f"{_fmt(t['reachable'][1])} {t['unit']}).**")
+    for lv in result["levels"]:
+        for k, t in enumerate(result["tests"]):
+            lo, hi = lv["reachable"][k]
+            if lv["level"] and math.isfinite(lo) and not lo - t["target_sd"] <= t["target"] <= hi + t["target_sd"]:
+                L.append(f"- At {', '.join(map(str, lv['level']))}: {t['name']} reaches only "
+                         f"{_fmt(lo)} - {_fmt(hi)} {t['unit']} inside the ranges; the target "
+                         f"{_fmt(t['target'])} {t['unit']} is out of its reach.")
+    c = result["cost"]
+    L += ["", "## Cost", "",
+          f"Design: {c['design']['finished']} of {c['design']['runs']} runs finished, "
+          f"{c['design']['wall_s']:.0f} s of run wall time in all ({c['design']['cpu_s']:.0f} s stepping CPU); "
+          f"verification: {c['verification']['finished']} of {c['verification']['runs']}, "
+          f"{c['verification']['wall_s']:.0f} s ({c['verification']['cpu_s']:.0f} s CPU)."]
+    if result["failed"]:
+        L += ["", "Failed runs:", ""] + [f"- `{f['id']}`: {f['message']}" for f in result["failed"]]
+    if png:
+        L += ["", f"![The responses against {keys[0] if keys else 'the design'}]({png})"]
+    path.write_text("\n".join(L) + "\n")
+
+
+def write_plot(result: dict, spec: Spec, path: Path) -> bool:
+    """PNG: each test's response against the main parameter (the first one), the design
+    points per level, each level's surface through its optimum, the target band and the
+    verification (mean +- sd). False when there is no continuous parameter to plot against."""
+    if not spec.parameters:
+        return False
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    p0 = spec.parameters[0]
+    n = len(spec.tests)
+    fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.2), squeeze=False)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    grid = np.linspace(-1, 1, 101)
+    for k, (ax, t) in enumerate(zip(axes[0], result["tests"])):
+        ax.axhspan(t["target"] - t["target_sd"], t["target"] + t["target_sd"], color="0.85",
+                   label=f"measured {_pm(t['target'], t['target_sd'])}")
+        ax.axhline(t["target"], color="0.5", lw=0.8)
+        for li, lv in enumerate(result["levels"]):
+            c = colours[li % len(colours)]
+            name = ", ".join(map(str, lv["level"])) or "design"
+            xs, ys = [], []
+            for row in result["design_rows"]:
+                if tuple(row["overrides"][f.keys[0]] for f in spec.factors) == tuple(lv["level"]):
+                    for v in row[t["name"]]:
+                        xs.append(row["overrides"][p0.key])
+                        ys.append(v)
+            ax.plot(xs, ys, "o", color=c, label=f"{name}: runs")
+            fit = lv["fits"][k]
+            xopt = scale(spec, lv["optimum"])
+            pts = np.tile(xopt, (len(grid), 1))
+            pts[:, 0] = grid
+            s = Surface(fit["model"], np.array(fit["coefficients"]), fit["r2"], fit["residual_sd"], fit["points"])
+            ax.plot(p0.low + 0.5 * (grid + 1) * (p0.high - p0.low), s(pts), "-", color=c,
+                    label=f"{name}: fit (R$^2$ {_fmt(fit['r2'], 2)})")
+        xv = result["optimum"][p0.key]
+        ax.errorbar([xv], [t["achieved_mean"]], yerr=[t["achieved_sd"] if math.isfinite(t["achieved_sd"]) else 0],
+                    fmt="k*", ms=12, capsize=4, label="verified optimum")
+        ax.set_xlabel(p0.key)
+        ax.set_ylabel(f"{t['name']} ({t['unit']})")
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+    others = ", ".join(p.key for p in spec.parameters[1:])
+    fig.suptitle(f"{result['title']}" + (f" (other parameters at each level's optimum: {others})"
+                                         if others else ""), fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
+
+
+def write_outputs(result: dict, spec: Spec, out: Path) -> None:
+    def default(o):
+        if isinstance(o, (np.floating, np.integer)):
+            return o.item()
+        if isinstance(o, np.ndarray):
+            return o.tolist()
+        return str(o)
+    (out / "calibration.json").write_text(json.dumps(result, indent=1, default=default))
+    write_material(result, spec, out / "calibrated_material.toml")
+    png = "calibration_response.png" if write_plot(result, spec, out / "calibration_response.png") else None
+    write_report(result, spec, out / "calibration.md", png)
+
+
+# ------------------------------------------------------------------------------ CLI
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("spec", help="the calibration spec (TOML): material, bench tests with their "
+                                "measured values, parameters and ranges, design")
+    p.add_argument("--out", default="calibration", help="directory for the runs and the results "
+                                                        "(default calibration)")
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="an existing Dask scheduler "
+                                                                  "(default: a LocalCluster here)")
+    p.add_argument("--workers", type=int, metavar="N", help="LocalCluster workers (default: cores)")
+    p.add_argument("--threads", type=int, metavar="N", help="CPU threads per run (default cores / workers)")
+    p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"],
+                   help="where each run's kernels run (default cpu)")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``calibrate`` subcommand to an argparse ``subparsers``; returns its parser."""
+    p = subparsers.add_parser("calibrate", help="fit contact parameters to measured bench tests "
+                                                "(angle of repose, discharge rate, bulk density, "
+                                                "dynamic angle) by a design of experiments on Dask")
+    add_arguments(p)
+    return p
+
+
+def run(args) -> int:
+    """The command: 0 when calibrated (even when a target is out of reach: the report says so),
+    1 when the runs gave nothing to fit, 2 on bad input (one paragraph: file, key, reason)."""
+    try:
+        if args.workers is not None and args.workers < 1:
+            raise SceneError("--workers", "", f"must be >= 1, got {args.workers}")
+        spec = load_spec(args.spec)
+        argv = sys.argv[1:]
+        command = ("taichi-dem calibrate " + " ".join(map(shlex.quote, argv[1:]))
+                   if argv[:1] == ["calibrate"] else
+                   "taichi-dem calibrate " + " ".join(map(shlex.quote, [args.spec, "--out", args.out]
+                                                     + (["--workers", str(args.workers)] if args.workers else []))))
+        result = calibrate(spec, args.out, scheduler=args.scheduler, workers=args.workers,
+                           threads=args.threads, arch=args.arch, progress=not args.quiet,
+                           command=command)
+    except SceneError as err:
+        print(f"taichi-dem: {err}", file=sys.stderr)
+        return 2
+    except RuntimeError as err:
+        print(f"taichi-dem: calibrate: {err}", file=sys.stderr)
+        return 1
+    for t in result["tests"]:
+        print(f"{t['name']}: target {_pm(t['target'], t['target_sd'])} {t['unit']}, achieved "
+              f"{_pm(t['achieved_mean'], t['achieved_sd'])} ({len(t['achieved'])} runs): "
+              + ("within the measured scatter" if t["within_scatter"] else "NOT within the measured scatter")
+              + ("" if t["target_reachable"] else " (the target is out of the ranges' reach)"))
+    print(f"calibrated: {_show_point(result['optimum'])}")
+    print(f"results: {Path(args.out) / 'calibrated_material.toml'}, {Path(args.out) / 'calibration.md'}")
+    return 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m taichi_dem.app.calibrate",
+                                description=add_parser.__doc__)
+    add_arguments(p)
+    return run(p.parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
