@@ -44,6 +44,19 @@ from .registry import (BUILDERS, COMMON, KINDS, MAX_COUNT, REQUIRED, Builder, Pa
 
 _Bad = ParameterError        # the builders' short name for it
 
+# The range one parameter has by itself in its builder's checks below (the others relate
+# several parameters: a flight lower than the radius, an orifice smaller than the top), for
+# the JSON Schema (scene/schema.py): (builder, parameter) -> (minimum, maximum, exclusive),
+# in the parameter's unit (degrees for *_deg); None: unbounded on that side.
+# tests/unit/test_schema.py builds each at and within its bounds.
+PARAMETER_RANGES = {
+    ("drum", "incline_deg"): (-45.0, 45.0, True),
+    ("drum", "flight_lip_angle_deg"): (0.0, 180.0, True),
+    ("drum", "segments"): (3, None, False),
+    ("paddle_shaft", "paddle_pitch_deg"): (-90.0, 90.0, False),
+    ("chute", "incline_deg"): (-90.0, 90.0, True),
+}
+
 
 # ------------------------------------------------------------------------------ helpers
 def default_segments(multiple_of: int = 4, chord_error: float = 0.01) -> int:

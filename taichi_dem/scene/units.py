@@ -201,3 +201,72 @@ def parse_vec3(value: Any, dimension: str, *, file: str = "<string>",
                                     f"got {len(value)} values")
     return tuple(parse_quantity(v, dimension, file=file, key=f"{key}[{i}]")
                  for i, v in enumerate(value))  # type: ignore[return-value]
+
+
+# ---------------------------------------------------------------------------------- patterns
+# Regular expressions that accept exactly the strings parse_quantity reads, per dimension (for
+# the JSON Schema, scene/schema.py). They follow _NUMBER and _lookup: the number as _NUMBER
+# reads it (greedy, so a unit that starts with a digit needs a space or '^' before it), then
+# the unit with spaces, tabs and '^' anywhere in it, '²' '³' '·' for 2 3 *, and any letter
+# case where the lower-case spelling names one unit only. What a pattern cannot check is the
+# value after conversion (its range, its SI magnitude): JSON Schema has no units.
+_NUM_BODY = r"(?:\d+(?:_\d+)*\.?\d*|\.\d+)"
+_ZERO_BODY = r"(?:0+(?:_0+)*\.?0*|\.0+)"
+_EXPONENT = r"(?:[eE][+-]?\d+)?"
+_UNIT_SEP = r"[ \t^]*"
+_UNIT_CHARS = {"2": "[2²]", "3": "[3³]", "*": "[*·⋅]"}
+SIGNS = ("any", "nonnegative", "positive", "zero")
+
+
+def number_pattern(sign: str = "any") -> str:
+    """A regex (no anchors) for the number of a quantity string: any, nonnegative (a minus
+    only before a zero), positive (a nonzero digit, no minus) or zero."""
+    if sign == "any":
+        return rf"[+-]?{_NUM_BODY}{_EXPONENT}"
+    if sign == "nonnegative":
+        return rf"(?:\+?{_NUM_BODY}|-{_ZERO_BODY}){_EXPONENT}"
+    if sign == "positive":
+        return rf"\+?(?=[\d_.]*[^\D0]){_NUM_BODY}{_EXPONENT}"
+    if sign == "zero":
+        return rf"[+-]?{_ZERO_BODY}{_EXPONENT}"
+    raise ValueError(f"unknown sign {sign!r}; known: {', '.join(SIGNS)}")
+
+
+def _unit_regex(unit: str) -> str:
+    fold = _LOWER.get(unit.lower(), []) == [unit]
+    parts = []
+    for c in unit:
+        if c in _UNIT_CHARS:
+            parts.append(_UNIT_CHARS[c])
+        elif fold and c.lower() != c.upper():
+            variants = sorted({v for v in (c, c.lower(), c.upper()) if len(v) == 1})
+            parts.append("[" + "".join(re.escape(v) for v in variants) + "]")
+        else:
+            parts.append(re.escape(c))
+    return _UNIT_SEP + _UNIT_SEP.join(parts) + _UNIT_SEP
+
+
+def quantity_pattern(dimension: str, sign: str = "any") -> str:
+    """A regex (anchored) accepting exactly the quantity strings parse_quantity reads for
+    ``dimension`` with the given sign (SIGNS) of the number; units with an offset (C, F)
+    take any sign, since their SI value's sign is not the number's (a temperature in K is
+    never negative)."""
+    if dimension not in DIMENSIONS:
+        raise ValueError(f"unknown dimension {dimension!r}; known: {', '.join(DIMENSIONS)}")
+    if dimension == "temperature" and sign == "any":
+        sign = "nonnegative"        # in K (or a bare number) a minus is below absolute zero
+    groups: dict[str, list[str]] = {}
+    for unit, (d, _, offset) in _UNITS.items():
+        if d == dimension and not (offset and sign == "zero"):
+            groups.setdefault("any" if offset else sign, []).append(unit)
+    alts = [number_pattern(sign)]           # a bare number: SI
+    for s, units in groups.items():
+        plain = [_unit_regex(u) for u in units if not u[0].isdigit()]
+        digit = [_unit_regex(u) for u in units if u[0].isdigit()]
+        tail = []
+        if plain:
+            tail.append(r"\s*(?:" + "|".join(plain) + ")")
+        if digit:
+            tail.append(r"(?=[\s^])\s*(?:" + "|".join(digit) + ")")
+        alts.append(number_pattern(s) + "(?:" + "|".join(tail) + ")")
+    return r"^\s*(?:" + "|".join(alts) + r")\s*$"

@@ -11,7 +11,16 @@ Categories (``CATEGORIES``): wrong_type, missing_key, bad_number (NaN, inf, zero
 out of range, beyond the 1e-30 .. 1e30 SI magnitudes), wrong_unit, unknown_key, bad_choice
 (a near miss of an enum or a reference), bad_name, empty_region, absurd_size, overfull (more
 spheres than a region packs: refused by the placement, not the loader), broken_mesh,
-broken_csv, truncated, duplicate_key, garbage, non_utf8.
+broken_csv, truncated, duplicate_key, garbage, non_utf8, and schema: mutations drawn from
+``taichi-dem schema`` (scene/schema.py) rather than from the lists here, so a key is fuzzed the
+day it is declared. For a value anywhere in a base scene, its schema (the quantity's range,
+SI magnitudes and unit pattern, an integer's bounds, an enum, a name's pattern, a vector's
+length, a table's required and allowed keys, a builder parameter's kind) gives the breakages:
+a bound crossed just (the next float past it), the wrong type, NaN / inf / 1e308, a unit of
+another dimension, a float for an integer (3000.0), a near miss of a choice, a control
+character in a name, an unknown key beside a declared one, a required key removed. A mutation
+is kept only when the schema refuses the mutated scene (invalid by construction); the loader
+must refuse it too, naming the key (tests/fuzz/test_schema_agrees.py compares the two).
 
 Offline, many more cases than the suite keeps::
 
@@ -47,13 +56,13 @@ from taichi_dem.thermal.settings import PLUG_FLOW_REQUIRED as _PLUG_FLOW_REQUIRE
 
 CATEGORIES = ("wrong_type", "missing_key", "bad_number", "wrong_unit", "unknown_key",
               "bad_choice", "bad_name", "empty_region", "absurd_size", "overfull", "broken_mesh",
-              "broken_csv", "truncated", "duplicate_key", "garbage", "non_utf8")
+              "broken_csv", "truncated", "duplicate_key", "garbage", "non_utf8", "schema")
 # relative frequency of each category in a generated corpus
 WEIGHTS = {"wrong_type": 12, "missing_key": 10, "bad_number": 14, "wrong_unit": 10,
            "unknown_key": 8, "bad_choice": 6, "bad_name": 4, "empty_region": 6,
            "absurd_size": 8, "overfull": 2, "broken_mesh": 7, "broken_csv": 3, "truncated": 7,
            "duplicate_key": 2, "garbage": 3,
-           "non_utf8": 3}
+           "non_utf8": 3, "schema": 40}
 
 
 @dataclass
@@ -83,8 +92,8 @@ def _value(v) -> str:
         return repr(v)
     if isinstance(v, int):
         return str(v)
-    if isinstance(v, str):
-        return json.dumps(v, ensure_ascii=False)
+    if isinstance(v, str):        # TOML's basic strings: JSON's escapes, and DEL escaped too
+        return json.dumps(v, ensure_ascii=False).replace("\x7f", "\\u007f")
     if isinstance(v, list):
         return "[" + ", ".join(_value(x) for x in v) + "]"
     if isinstance(v, dict):
@@ -1250,7 +1259,8 @@ class Fuzzer:
                           expect_fragments=("TOML syntax error", f"line {line}"))
 
     # -- scenes whose keys are each valid but do not work together (issue 33 item 7) -----------
-    INCONSISTENT = ("interval", "behind_wall", "flipped_wall", "h5")
+    # (an output interval longer than the run is valid: CONTRACT.md, a benchmark wants it)
+    INCONSISTENT = ("frame_interval", "behind_wall", "flipped_wall", "h5")
 
     def inconsistent_cases(self, n: int, seed: int = 0) -> list[Case]:
         """``n`` cases, each kind of INCONSISTENT in turn, from ``seed``."""
@@ -1266,14 +1276,16 @@ class Fuzzer:
 
     def m_inconsistent(self, rng, base, kind):
         doc = copy.deepcopy(base.doc)
-        sim = doc.get("simulation", {})
-        if kind == "interval":
-            end = sim.get("end_time")
-            if not isinstance(end, (int, float)) or isinstance(end, bool):
+        if kind == "frame_interval":
+            # frames are taken at samples: a frame interval that is not a whole multiple of
+            # the sample interval (each valid alone) would drift
+            out = doc.setdefault("output", {})
+            interval = out.get("interval", 0.05)
+            if not isinstance(interval, (int, float)) or isinstance(interval, bool):
                 return None
-            doc.setdefault("output", {})["interval"] = float(end) * rng.choice([1.5, 3.0, 10.0])
-            return self._case("inconsistent", base, "interval past end_time", doc,
-                              ("output.interval",))
+            out["frame_interval"] = float(interval) * rng.choice([0.5, 1.5, 2.25, 3.7])
+            return self._case("inconsistent", base, "frame_interval between samples", doc,
+                              ("output.frame_interval",))
         if kind == "h5":
             doc.setdefault("output", {})["h5"] = "/etc/passwd/results.h5"
             return self._case("inconsistent", base, "h5 under a file", doc, ("output.h5",))
@@ -1321,6 +1333,28 @@ class Fuzzer:
         return self._case("inconsistent", base, f"{sec}[{i}] region behind walls[{j}]", doc,
                           ((sec, i, "region"),))
 
+    # -- drawn from the schema (taichi-dem schema) -----------------------------------------------
+    SCHEMA_KINDS = ("bound", "nonfinite", "wrong_type", "wrong_unit", "integer_float",
+                    "bad_enum", "bad_string", "bad_length", "unknown_key", "missing_key")
+
+    def m_schema(self, rng, base):
+        """One breakage of one value (or table) of ``base``, drawn from its schema; kept
+        only when the schema refuses the result."""
+        doc = copy.deepcopy(base.doc)
+        if base.name not in _SPOTS:
+            _SPOTS[base.name] = list(schema_spots(base.doc))
+        options = [o for path, node in _SPOTS[base.name]
+                   for o in schema_mutations(rng, node, get(doc, path) if path else doc, path)]
+        for _ in range(20):
+            kind = rng.choice(sorted({o[0] for o in options}))
+            _, what, apply, expect = rng.choice([o for o in options if o[0] == kind])
+            new = copy.deepcopy(doc)
+            apply(new)
+            if schema_valid(new):
+                continue             # not invalid by construction: draw again
+            return self._case("schema", base, f"{kind} {what}", new, expect)
+        return None
+
     def m_garbage(self, rng, base):
         how = rng.choice(["bytes", "ascii", "nul", "utf16", "binary_prefix"])
         if how == "bytes":
@@ -1357,6 +1391,201 @@ class Fuzzer:
             b"".join(b"\n" + ln.encode() for ln in lines[i + 1:])
         return self._case("non_utf8", base, f"line {i + 1}", {}, (), text=data,
                           expect_fragments=("not a UTF-8 text file", f"line {i + 1}"))
+
+
+# ---------------------------------------------------------------------------------- from the schema
+_SCHEMA: dict = {}
+_SPOTS: dict = {}        # base name -> schema_spots(base.doc)
+
+
+def scene_schema():
+    """(schema, validator) of ``taichi-dem schema``, made once."""
+    if not _SCHEMA:
+        from taichi_dem.scene import schema as _schema_module
+        _SCHEMA["schema"] = _schema_module.scene_schema()
+        _SCHEMA["validator"] = _schema_module.validator(_SCHEMA["schema"])
+        _SCHEMA["module"] = _schema_module
+    return _SCHEMA["schema"], _SCHEMA["validator"]
+
+
+def schema_valid(doc) -> bool:
+    """Whether the schema accepts ``doc`` (TOML data: nan, inf as json_compatible says)."""
+    _, v = scene_schema()
+    return v.is_valid(_SCHEMA["module"].json_compatible(doc))
+
+
+def _branch(node: dict, value):
+    """The branch of an anyOf / oneOf that ``value`` satisfies (the node itself without
+    one); None when none does."""
+    _, v = scene_schema()
+    for key in ("anyOf", "oneOf"):
+        if key in node:
+            for b in node[key]:
+                b = _branch(b, value)
+                if b is not None and v.evolve(schema=b).is_valid(
+                        _SCHEMA["module"].json_compatible(value)):
+                    return b
+            return None
+    return node
+
+
+def schema_spots(doc):
+    """(path, schema node) of every value in ``doc`` (the root too), the node being the
+    anyOf branch the value satisfies."""
+    root, _ = scene_schema()
+
+    def walk(value, node, path):
+        node = _branch(node, value)
+        if node is None:
+            return
+        yield path, node
+        if isinstance(value, dict):
+            props = node.get("properties", {})
+            extra = node.get("additionalProperties")
+            for k, v in value.items():
+                sub = props.get(k, extra if isinstance(extra, dict) else None)
+                if sub is not None:
+                    yield from walk(v, sub, path + (k,))
+        elif isinstance(value, list):
+            prefix = node.get("prefixItems", [])
+            items = node.get("items")
+            for i, v in enumerate(value):
+                sub = prefix[i] if i < len(prefix) else items
+                if isinstance(sub, dict):
+                    yield from walk(v, sub, path + (i,))
+
+    yield from walk(doc, root, ())
+
+
+def _types(node: dict) -> list:
+    t = node.get("type", [])
+    return list(t) if isinstance(t, list) else [t]
+
+
+def _table_key(path) -> tuple:
+    """The key the loader names for a value at ``path``: an array's items (a vector's
+    components, a schedule's entries, a builder point's coordinates) under the array."""
+    path = tuple(path)
+    while path and isinstance(path[-1], int) and len(path) > 1 and \
+            not (isinstance(path[-2], str) and path[-2] in TABLE_ARRAYS) and path[-2] != "mesh":
+        path = path[:-1]
+    return path
+
+
+def _past(bound: float, direction: int) -> float:
+    """The next float past ``bound`` (in ``direction``); past 0, the smallest magnitude the
+    loader reads, 1e-30, not a subnormal float (which a process that started Taichi, with
+    denormals flushed to zero, compares as 0)."""
+    if bound == 0:
+        return direction * 1e-30
+    return math.nextafter(float(bound), direction * math.inf)
+
+
+def _other_units(node: dict) -> list[str]:
+    """Quantity strings of another dimension than ``node``'s pattern accepts."""
+    from taichi_dem.scene.units import DIMENSIONS, units_for
+    pattern = re.compile(node["pattern"])
+    out = []
+    for d in DIMENSIONS:
+        for u in units_for(d)[:3] + ["ft", "in", "deg"]:
+            text = f"3 {u}"
+            if not pattern.search(text):
+                out.append(text)
+    return sorted(set(out))
+
+
+# strings that break a name's or a path's pattern (control characters; '/', '.', '..' and
+# blanks at the ends, which cannot name a results group)
+BAD_STRINGS = ["", "  ", "tab\tname", "nul\x00byte", "bell\x07", "del\x7f", "new\nline",
+               "in let", "a/b", "caf\u00e9", ".", "..", " padded "]
+
+
+def schema_mutations(rng, node: dict, value, path) -> list:
+    """[(kind, what, apply(doc), expected keys)] that break ``value`` at ``path`` as its
+    schema ``node`` says (the caller keeps those the schema refuses)."""
+    out = []
+    where = dotted(path) or "<root>"
+    expect = (_table_key(path),) if path else ()
+    if expect and expect[0][-1:] in (("min",), ("max",)):
+        # a box corner: moving one may put min above max, which the loader blames on max
+        expect = (expect[0][:-1],)
+
+    def put_value(kind, new):
+        def apply(doc, new=new):
+            put(doc, path, copy.deepcopy(new))
+        out.append((kind, f"{where}={_short(new)}", apply, expect))
+
+    if not path:
+        return out
+    types = _types(node)
+    numeric = "number" in types or "integer" in types
+    if numeric:
+        for k in ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum"):
+            if k not in node:
+                continue
+            b = node[k]
+            if "integer" in types:
+                new = {"minimum": b - 1, "exclusiveMinimum": b, "maximum": b + 1,
+                       "exclusiveMaximum": b}[k]
+            else:
+                new = {"minimum": _past(b, -1), "exclusiveMinimum": float(b),
+                       "maximum": _past(b, 1), "exclusiveMaximum": float(b)}[k]
+            put_value("bound", new)
+        if "not" in node and "exclusiveMaximum" in node["not"]:     # the SI magnitudes
+            put_value("bound", node["not"]["exclusiveMaximum"] * 0.5)
+        for new in (math.nan, math.inf, -math.inf, 1e308):
+            put_value("nonfinite", new)
+        if "integer" in types and isinstance(value, int) and not isinstance(value, bool):
+            put_value("integer_float", float(value))
+            put_value("integer_float", value + 0.5)
+        if "multipleOf" in node:
+            put_value("integer_float", 2.5)
+    if "string" in types and "pattern" in node:
+        if "x-dimension" in node or numeric:
+            for new in rng.sample(_other_units(node), 3):
+                put_value("wrong_unit", new)
+        for new in rng.sample(GARBAGE_STRINGS + BAD_STRINGS, 4):
+            put_value("bad_string", new)
+    elif "string" in types:
+        for new in BAD_STRINGS[:2]:
+            put_value("bad_string", new)
+    if "enum" in node or "const" in node:
+        words = [w for w in node.get("enum", [node.get("const")]) if isinstance(w, str)]
+        if words:
+            put_value("bad_enum", _typo(rng, rng.choice(words)))
+        put_value("wrong_type", 3)
+    if types and "boolean" not in types:
+        put_value("wrong_type", True)
+    if types and not numeric and "boolean" in types:
+        for new in (1, "true"):
+            put_value("wrong_type", new)
+    if "array" in types and isinstance(value, list):
+        if value:
+            put_value("bad_length", value[:-1])
+        put_value("bad_length", value + value[:1] if value else [1.0])
+        if "not" in node and "items" in node["not"]:               # a direction
+            put_value("bound", [0, 0, 0])
+        put_value("wrong_type", {"x_fuzz": 1})
+    if "object" in types and isinstance(value, dict):
+        if "string" not in types:
+            put_value("wrong_type", [1.0])
+        props = node.get("properties")
+        if props is not None and node.get("additionalProperties") is False:
+            siblings = [k for k in value if isinstance(k, str)]
+            for _ in range(10):
+                new = _typo(rng, rng.choice(siblings)) if siblings and rng.random() < 0.7 \
+                    else "x_fuzz_" + rng.choice(["colour", "unit", "notes"])
+                if new not in props and new not in ALL_KEYS:
+                    def apply(doc, k=new):
+                        get(doc, path)[k] = 1.0
+                    out.append(("unknown_key", f"{where}.{new}", apply, (path + (new,),)))
+                    break
+        for k in node.get("required", []):
+            if k in value:
+                def apply(doc, k=k):
+                    del get(doc, path)[k]
+                out.append(("missing_key", f"del {where}.{k}", apply, (path + (k,), path)))
+    return out
 
 
 def _short(v) -> str:
@@ -1530,8 +1759,11 @@ def required_deletions(doc):
                     if k in v:
                         yield path + (k,), (path + (k,),)
     for i, f in enumerate(doc.get("factories", [])):
-        for k in ("name", "material", "region", "mass_rate"):
-            yield ("factories", i, k), (("factories", i, k),)
+        sheet = f.get("pattern") == "sheet"
+        for k in ("name", "material", "mass_rate") + (("face", "velocity") if sheet
+                                                      else ("region",)):
+            if k in f:
+                yield ("factories", i, k), (("factories", i, k),)
         k = "radius" if "radius" in f else "sizes"
         yield ("factories", i, k), (("factories", i, "radius"),)
     for i, o in enumerate(doc.get("outlets", [])):
@@ -1748,6 +1980,24 @@ def judge(case: Case, scene: Path, o: Outcome) -> list[str]:
     return problems
 
 
+PROBLEM_KINDS = ("traceback", "hang", "exit 0", "other exit", "message")
+
+
+def problem_kind(o: Outcome) -> str:
+    """What went wrong with a judged case: a Python exception (a traceback), a hang (past
+    the limit), exit 0 (accepted: a silent wrong result), another exit status, or a message
+    that names the wrong key, file or line."""
+    if o.rc == "timeout":
+        return "hang"
+    if o.exception is not None or "Traceback" in o.message:
+        return "traceback"
+    if o.rc == 0:
+        return "exit 0"
+    if o.rc != 2:
+        return "other exit"
+    return "message"
+
+
 def main(argv=None) -> int:
     import argparse
     import collections
@@ -1771,6 +2021,7 @@ def main(argv=None) -> int:
     tmp = Path(tempfile.mkdtemp(prefix="scene_fuzz_"))
     counts: collections.Counter = collections.Counter()
     failed: collections.Counter = collections.Counter()
+    kinds: collections.Counter = collections.Counter()     # traceback, hang, exit 0, ...
     slow = []
     shown = 0
     t0 = time.perf_counter()
@@ -1780,6 +2031,7 @@ def main(argv=None) -> int:
         slow.append((o.seconds, case.ident))
         if o.problems:
             failed[case.category] += 1
+            kinds[problem_kind(o)] += 1
             if shown < args.show:
                 shown += 1
                 print(f"FAIL {case.ident}\n    {'; '.join(o.problems)}\n    "
@@ -1790,6 +2042,7 @@ def main(argv=None) -> int:
     for c in CATEGORIES:
         if counts[c]:
             print(f"  {c:14s} {counts[c]:5d} cases, {failed[c]:4d} failed")
+    print("problems:", ", ".join(f"{kinds[k]} {k}" for k in PROBLEM_KINDS))
     slow.sort(reverse=True)
     print("slowest:", ", ".join(f"{s:.2f}s {i}" for s, i in slow[:5]))
     return 1 if failed else 0
