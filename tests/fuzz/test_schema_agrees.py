@@ -202,9 +202,6 @@ def test_a_quantity_string_is_exempt_only_for_its_value(tmp_path):
     assert exemption(number, {"simulation": {"skin": 1e40}}, scene) is None
 
 
-@pytest.mark.xfail(strict=True, reason="effects/mobility/settings.py returns before reading the "
-                   "section's other keys when enabled = false, so their bad values are "
-                   "accepted; the schema refuses them (a loader looseness, reported)")
 def test_a_disabled_mobility_section_is_still_checked(tmp_path):
     """[mobility] enabled = false with a solid fraction of 5 and an unknown mode: the schema
     refuses it; the loader should too (a key that is wrong is wrong whether used or not)."""

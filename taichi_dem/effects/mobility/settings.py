@@ -68,8 +68,9 @@ def parse(table: Any, file: str, gravity, sources, bodies) -> Optional[MobilityS
     if not isinstance(table, dict):
         raise SceneError(file, key, f"expected a table, got {type_name(table)}")
     SECTION.check(table, file, key)
-    if "enabled" in table and not SECTION["enabled"].read(table["enabled"], file, f"{key}.enabled"):
-        return None
+    # a disabled section is still read whole: a wrong value is wrong whether used or not
+    enabled = ("enabled" not in table
+               or SECTION["enabled"].read(table["enabled"], file, f"{key}.enabled"))
     radii = [f.largest_radius for f in sources]
     d_max = 2.0 * max(radii) if radii else 0.0
     kw: dict[str, Any] = {}
@@ -101,7 +102,7 @@ def parse(table: Any, file: str, gravity, sources, bodies) -> Optional[MobilityS
                                       "(e.g. 1e-4 or \"1e-4 m^2/s^2\"), or \"auto\"") from None
     if threshold == AUTO:
         g = math.sqrt(sum(c * c for c in gravity))
-        if g == 0.0 or d_max == 0.0:
+        if (g == 0.0 or d_max == 0.0) and enabled:
             raise SceneError(file, k, "\"auto\" scales with g d (gravity x the largest diameter), "
                                       "but this scene has " + ("no gravity" if g == 0.0 else "no particles")
                              + ": give a value in (m/s)^2, e.g. 1e-3 x (a reference speed)^2")
@@ -117,8 +118,8 @@ def parse(table: Any, file: str, gravity, sources, bodies) -> Optional[MobilityS
         kw["cell_size"] = CELL_DIAMETERS * d_max
     else:
         kw["cell_size"] = cell
-        if d_max > 0 and cell < 2.0 * d_max:
+        if enabled and d_max > 0 and cell < 2.0 * d_max:
             raise SceneError(file, k, f"{cell:.3g} m is less than two largest diameters "
                                       f"({2 * d_max:.3g} m): too few particles per cell for a "
                                       "granular temperature or a solid fraction")
-    return MobilitySettings(**kw)
+    return MobilitySettings(**kw) if enabled else None
