@@ -283,6 +283,10 @@ def describe_scene(scene) -> str:
                      f"of the smallest radius per step)")
         for note in narrow_gap_notes(scene, float(np.max(radii))):
             ts.notes.append(note)
+    if scene.simulation.max_particles is not None and not scene.factories:
+        ts.notes.append(f"simulation.max_particles = {scene.simulation.max_particles:,} is not "
+                        "used: a scene without factories allocates exactly the particles its "
+                        f"fills place ({n_initial:,})")
     lines += [f"note: {note}" for note in ts.notes]
     return "\n".join(lines)
 

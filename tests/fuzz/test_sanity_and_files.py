@@ -187,6 +187,18 @@ def test_max_particles_below_the_placed_count_is_refused(tmp_path, capsys, no_ta
     assert rc == 0, err
 
 
+def test_max_particles_without_factories_is_named_as_unused(tmp_path, capsys,
+                                                             no_taichi_runtime):
+    """Without factories the fills alone set the slots: max_particles = 2147483647 allocates
+    nothing more, and check says so rather than ignoring it silently (the estimate stays that
+    of the 200 beads)."""
+    path = write(tmp_path, pile(simulation="max_particles = 2147483647"))
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "max_particles = 2,147,483,647 is not used" in out, out
+    assert "(200)" in out
+
+
 FACTORY = """
 [[factories]]
 name = "inlet"
