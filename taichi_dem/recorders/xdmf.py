@@ -48,6 +48,26 @@ def _body_grid(parent, h5_name: str, f, name: str, key: str) -> None:
     _data_item(geometry, h5_name, "/" + vertices, f[vertices])
 
 
+def foreign_xdmf_problem(xdmf_path) -> str | None:
+    """Why the existing file ``xdmf_path`` must not be replaced by our XDMF (a reason), or None:
+    absent, empty, or an XDMF description of a results file's frames as this module writes
+    them (an XML Xdmf document whose data items point into /frames/ of an HDF5 file)."""
+    p = Path(xdmf_path)
+    if not p.is_file():
+        return None
+    try:
+        head = p.read_bytes()[:4096]
+    except OSError as err:
+        return f"exists and cannot be read ({err.strerror or err}); refusing to overwrite it"
+    if not head:
+        return None
+    if head.lstrip().startswith(b"<?xml") and b"<Xdmf" in head and b":/frames/" in head:
+        return None
+    return ("exists and is not an XDMF description taichi_dem wrote; refusing to overwrite it "
+            "(move it away, or write the XDMF elsewhere: taichi-dem export RESULTS.h5 --xdmf "
+            "--out FILE.xdmf)")
+
+
 def write_xdmf(h5_path, xdmf_path=None) -> tuple[Path, int]:
     """Write the XDMF description of ``h5_path``'s frames (default: beside it, same stem,
     ``.xdmf``); returns (its path, the frames described)."""
@@ -105,6 +125,9 @@ def write_xdmf(h5_path, xdmf_path=None) -> tuple[Path, int]:
                                           Center="Node")
                 _data_item(attribute, h5_name, f"/frames/{key}/{name}", data)
     ET.indent(root)
+    problem = foreign_xdmf_problem(xdmf_path)
+    if problem:
+        raise SceneError(str(xdmf_path), "", problem)
     xdmf_path.write_text('<?xml version="1.0" ?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n'
                          + ET.tostring(root, encoding="unicode") + "\n")
     return xdmf_path, len(keys)

@@ -420,3 +420,9 @@ def test_a_run_writes_beside_its_scene_not_in_the_current_folder(tmp_path, monke
         assert main(["run", str(path), "--until", "0.001", "--quiet"]) == 0
     assert (tmp_path / "scenes" / "out" / "p.h5").is_file()
     assert not os.listdir(elsewhere)
+    # the XDMF beside it is ours too, and replaced; a file of the user's in its place is not
+    xdmf = tmp_path / "scenes" / "out" / "p.xdmf"
+    assert xdmf.is_file()
+    xdmf.write_text("my ParaView notes\n")
+    assert main(["run", str(path), "--until", "0.001", "--quiet"]) == 0
+    assert xdmf.read_text() == "my ParaView notes\n"
