@@ -60,6 +60,7 @@ KINDS = {"angle_of_repose": "deg", "discharge_rate": "kg/s", "bulk_density": "kg
          "dynamic_angle": "deg"}
 DESIGNS = ("latin_hypercube", "full_factorial")
 REGULARISATION = 1e-4      # weight of the pull towards `prefer` when many optima fit equally
+LEVEL_TIE = 1.0            # chi2 within which levels count as equally good (the first wins)
 
 
 # ------------------------------------------------------------------------------ the spec
@@ -333,12 +334,33 @@ def level_of(point: dict, spec: Spec) -> tuple:
     return tuple(point[f.keys[0]] for f in spec.factors)
 
 
+def design_seeds(spec: Spec, n_points: int) -> list[list[int]]:
+    """The placement seeds (offsets from the scene's seed) of each design point: ``seeds`` per
+    point, different from one continuous point to the next (a seed shared by every point would
+    shift the whole surface by that one placement's offset; measured on the fly-ash heap: 1.2
+    - 2.6 deg), the same for a continuous point at every level of the factors (the levels compared
+    on the same placements)."""
+    n_levels = max(1, math.prod(len(f.levels) for f in spec.factors))
+    n_cont = max(1, n_points // n_levels)
+    return [[(ci % n_cont) * spec.seeds + k for k in range(spec.seeds)] for ci in range(n_points)]
+
+
+def verification_offset(spec: Spec, n_points: int) -> int:
+    """The first verification seed's offset from the scene's seed: past every design seed, a
+    multiple of 100."""
+    used = max((max(s) for s in design_seeds(spec, n_points)), default=0) + 1
+    return 100 * math.ceil(max(used, 1) / 100)
+
+
 def _plan(spec: Spec, combos: list[dict], seeds: int, threads: int, arch: str,
           seed_offset: int = 0) -> list:
-    """(test index, combo index, RunSpec) for every test x combo x seed. ``seed_offset`` > 0:
-    seeds scene seed + offset + k (fresh placements for the verification)."""
+    """(test index, combo index, RunSpec) for every test x combo x seed: the design's seeds
+    (:func:`design_seeds`) or, with ``seed_offset`` > 0, the scene's seed + offset + k for
+    k < ``seeds`` (fresh placements for the verification)."""
     from . import sweep
     out = []
+    offsets = (design_seeds(spec, len(combos)) if not seed_offset else
+               [[seed_offset + k for k in range(seeds)] for _ in combos])
     for ti, test in enumerate(spec.tests):
         try:
             base_seed = sweep.scene_seed(tomllib.loads(Path(test.scene).read_text(encoding="utf-8-sig")))
@@ -347,13 +369,10 @@ def _plan(spec: Spec, combos: list[dict], seeds: int, threads: int, arch: str,
                                                       f"{test.scene}: {err}") from None
         for ci, combo in enumerate(combos):
             try:
-                if seed_offset:
-                    runs = sweep.plan(test.scene, [{**combo, "simulation.seed": base_seed + seed_offset + k}
-                                                   for k in range(seeds)], 1, duration=test.duration,
-                                      threads=threads, arch=arch)
-                else:
-                    runs = sweep.plan(test.scene, [combo], seeds, duration=test.duration,
-                                      threads=threads, arch=arch)
+                # the scene's own seed is left implicit (the run is the plain sweep's run)
+                runs = sweep.plan(test.scene, [{**combo, "simulation.seed": base_seed + k} if k else combo
+                                               for k in offsets[ci]], 1, duration=test.duration,
+                                  threads=threads, arch=arch)
             except SceneError as err:
                 raise _err(spec.path, _culprit(spec, err, ti),
                            f"the design does not give a valid scene in tests.{ti}'s base scene: "
@@ -615,7 +634,9 @@ def fit_design(spec: Spec, points: list[dict], design_resp: dict) -> tuple[list,
     """The response surfaces and the optimum of each level of the categorical factors, from
     ``design_resp`` ({(test index, point index): [response per seed]}). Returns (per level:
     {level, fits, x (scaled optimum), chi2, reach, predicted}; the best level's entry; the
-    optimum as overrides, continuous values rounded to 3 significant digits)."""
+    optimum as overrides, continuous values rounded to 3 significant digits). The factors'
+    levels are in order of preference: the first level whose chi2 lies within LEVEL_TIE of the
+    lowest is taken."""
     d = len(spec.parameters)
     prefer = np.array([2.0 * (p.prefer - p.low) / (p.high - p.low) - 1.0 for p in spec.parameters])
     per_level = []
@@ -639,13 +660,35 @@ def fit_design(spec: Spec, points: list[dict], design_resp: dict) -> tuple[list,
             reach, pred = [(math.nan, math.nan)] * len(fits), [math.nan] * len(fits)
         per_level.append({"level": lev, "fits": fits, "x": xopt, "chi2": chi2, "reach": reach,
                           "predicted": pred})
-    best = min(per_level, key=lambda r: r["chi2"])
+    lowest = min(r["chi2"] for r in per_level)
+    # levels within one unit of chi2 of the lowest fit the targets equally well (a target sd
+    # apart at most): the first of them in the spec's order is taken
+    best = next(r for r in per_level if r["chi2"] <= lowest + LEVEL_TIE)
     if not math.isfinite(best["chi2"]):
         raise RuntimeError("no level of the design gave responses to fit (did every run fail? "
                            "see the runs' log.txt)")
-    optimum = {k: lv for f, lv in zip(spec.factors, best["level"]) for k in f.keys}
-    optimum.update({k: _round(v, 3) for k, v in unscale(spec, best["x"]).items()})
-    return per_level, best, optimum
+    return per_level, best, optimum_of(spec, best)
+
+
+def optimum_of(spec: Spec, level_entry: dict) -> dict:
+    """A level's optimum as overrides: the factors' keys at the level, the continuous values
+    rounded to 3 significant digits."""
+    optimum = {k: lv for f, lv in zip(spec.factors, level_entry["level"]) for k in f.keys}
+    optimum.update({k: _round(v, 3) for k, v in unscale(spec, level_entry["x"]).items()})
+    return optimum
+
+
+def candidates(per_level: list) -> list:
+    """The levels that fit the targets equally well (chi2 within LEVEL_TIE of the lowest), in
+    the spec's order: verified in turn until one meets every target within its scatter."""
+    lowest = min(r["chi2"] for r in per_level)
+    return [r for r in per_level if math.isfinite(r["chi2"]) and r["chi2"] <= lowest + LEVEL_TIE]
+
+
+def verified_chi2(spec: Spec, vresp: dict) -> float:
+    """sum(((achieved mean - target) / target_sd)^2) of a verification."""
+    return float(sum(((_stats(vresp.get((ti, 0), []))[0] - t.target) / t.target_sd) ** 2
+                     for ti, t in enumerate(spec.tests)))
 
 
 def _sweep(specs, out: Path, state: dict, progress: bool, timeout) -> list[dict]:
@@ -682,19 +725,39 @@ def calibrate(spec: Spec, out_dir: str, *, scheduler=None, workers=None, threads
         records = [recs[s.id] for _, _, s in planned]
         design_resp = _responses(spec, planned, records, out)
         per_level, best, optimum = fit_design(spec, points, design_resp)
-        vplanned = _plan(spec, [optimum], spec.verify_seeds, nthreads, arch, seed_offset=100)
-        if progress:
-            print(f"calibrate: the optimum {_show_point(optimum)} (predicted "
-                  + ", ".join(f"{t.name} {p:.4g} {t.unit}" for t, p in zip(spec.tests, best["predicted"]))
-                  + f"); verifying with {len(_dedupe(vplanned))} runs", file=sys.stderr)
-        vrecs = {r["id"]: r for r in _sweep(_dedupe(vplanned), out, state, progress, spec.timeout)}
-        vrecords = [vrecs[s.id] for _, _, s in vplanned]
-        vresp = _responses(spec, vplanned, vrecords, out)
+        attempts = []
+        todo = candidates(per_level)
+        for n_try, entry in enumerate(todo):
+            optimum = optimum_of(spec, entry)
+            vplanned = _plan(spec, [optimum], spec.verify_seeds, nthreads, arch,
+                             seed_offset=verification_offset(spec, len(points)))
+            if progress:
+                print(f"calibrate: the optimum {_show_point(optimum)} (predicted "
+                      + ", ".join(f"{t.name} {p:.4g} {t.unit}" for t, p in zip(spec.tests, entry["predicted"]))
+                      + f"); verifying with {len(_dedupe(vplanned))} runs", file=sys.stderr)
+            vrecs = {r["id"]: r for r in _sweep(_dedupe(vplanned), out, state, progress, spec.timeout)}
+            vrecords = [vrecs[s.id] for _, _, s in vplanned]
+            vresp = _responses(spec, vplanned, vrecords, out)
+            attempts.append((entry, optimum, vplanned, vrecords, vresp))
+            if all(abs(_stats(vresp.get((ti, 0), []))[0] - t.target) <= t.target_sd
+                   for ti, t in enumerate(spec.tests)):
+                break
+            if progress:
+                print("calibrate: not within the measured scatter"
+                      + ("; verifying the next level that fits equally well" if n_try + 1 < len(todo)
+                         else ""), file=sys.stderr)
     finally:
         if state["client"] is not None:
             sweep.close_client(state["client"])
+    # the first attempt within the scatter (the loop stopped there), else the closest one
+    chosen = attempts[-1] if len(attempts) and all(
+        abs(_stats(attempts[-1][4].get((ti, 0), []))[0] - t.target) <= t.target_sd
+        for ti, t in enumerate(spec.tests)) else min(attempts, key=lambda a: verified_chi2(spec, a[4]))
+    best, optimum, vplanned, vrecords, vresp = chosen
     result = assemble(spec, points, planned, records, design_resp, per_level, best, optimum,
-                      vplanned, vrecords, vresp, command, out)
+                      vplanned, vrecords, vresp, command, out,
+                      attempts=[(a[1], a[4]) for a in attempts],
+                      extra_records=[r for a in attempts if a is not chosen for r in a[3]])
     write_outputs(result, spec, out)
     return result
 
@@ -723,10 +786,12 @@ def _sphere_sizes(spec: Spec) -> list:
 
 
 def assemble(spec, points, planned, records, design_resp, per_level, best, optimum, vplanned,
-             vrecords, vresp, command, out) -> dict:
+             vrecords, vresp, command, out, attempts=None, extra_records=()) -> dict:
     """The result: everything the outputs show (written as ``calibration.json``). ``planned``
     and ``vplanned``: (test index, point index, RunSpec) of the design and the verification;
-    ``records`` / ``vrecords``: their sweep records; ``vresp``: {(test index, 0): [response]}."""
+    ``records`` / ``vrecords``: their sweep records; ``vresp``: {(test index, 0): [response]}.
+    ``attempts``: every verified optimum as (overrides, vresp), the chosen one among them;
+    ``extra_records``: the runs of the attempts not chosen (for the cost)."""
     tests = []
     for ti, t in enumerate(spec.tests):
         achieved = vresp.get((ti, 0), [])
@@ -775,11 +840,20 @@ def assemble(spec, points, planned, records, design_resp, per_level, best, optim
         "factors": [{"name": f.name, "keys": list(f.keys), "levels": list(f.levels),
                      "value": optimum[f.keys[0]]} for f in spec.factors],
         "optimum": optimum, "chi2": best["chi2"], "tests": tests, "levels": levels,
+        "on_edge": [p.key for p in spec.parameters
+                    if min(optimum[p.key] - p.low, p.high - optimum[p.key]) <= 0.01 * (p.high - p.low)],
         "design_rows": design_rows,
         "verification": [{"id": s.id, "test": spec.tests[ti].name, "seed": s.seed,
                           "status": r.get("status")} for (ti, _, s), r in zip(vplanned, vrecords)],
         "within_scatter": all(t["within_scatter"] for t in tests),
-        "cost": {"design": _run_cost(records), "verification": _run_cost(vrecords)},
+        "cost": {"design": _run_cost(records),
+                 "verification": _run_cost(list(vrecords) + list(extra_records))},
+        "attempts": [{"optimum": o, "tests": [
+            {"name": t.name, "achieved": r.get((ti, 0), []),
+             "achieved_mean": _stats(r.get((ti, 0), []))[0],
+             "achieved_sd": _stats(r.get((ti, 0), []))[1]} for ti, t in enumerate(spec.tests)],
+            "chi2": verified_chi2(spec, r), "chosen": o == optimum}
+            for o, r in (attempts or [(optimum, vresp)])],
         "failed": failed, "out": str(out),
     }
 
@@ -868,6 +942,12 @@ def write_material(result: dict, spec: Spec, path: Path) -> None:
                      + ("" if t["target_reachable"] else
                         f"; the target lies outside what the ranges reach "
                         f"({_fmt(t['reachable'][0])} - {_fmt(t['reachable'][1])} {t['unit']})"))
+    if not result["within_scatter"]:
+        lines.insert(1, "# NOT CALIBRATED: the verification runs miss a target by more than its measured "
+                        "scatter (see the tests below and calibration.md).")
+    for key in result.get("on_edge", []):
+        lines.append(f"# The optimum lies on the edge of the range of {key}: the targets may need "
+                     "values beyond it.")
     lines += ["#", "# Paste the [materials] and [[interactions]] blocks below into a scene (the partner",
               "# materials come from the scene). The record at the end is the value of a",
               f"# materials.{spec.material}.calibration key.", ""]
@@ -939,6 +1019,27 @@ def write_report(result: dict, spec: Spec, path: Path, png: Optional[str]) -> No
                  f"{', '.join(_fmt(v) for v in t['achieved'])} | {_pm(t['achieved_mean'], t['achieved_sd'])} | "
                  f"{'yes' if t['within_scatter'] else 'NO'} |")
     L.append("")
+    L.append(("**Calibrated**: every verified value lies within the measured scatter of its target."
+              if result["within_scatter"] else
+              "**Not calibrated**: a verified value misses its target by more than the measured "
+              "scatter."))
+    L.append("")
+    for key in result.get("on_edge", []):
+        L.append(f"- The optimum lies on the edge of the range of `{key}`: the targets may need "
+                 "values beyond it, and the surface is least certain there.")
+    L.append("")
+    if len(result.get("attempts", [])) > 1:
+        L += ["Levels that fit the targets equally well (chi2 within "
+              f"{LEVEL_TIE:g} of the lowest) are verified in the spec's order until one meets "
+              "every target within its scatter; every verified optimum:", "",
+              "| optimum | " + " | ".join(f"{t['name']} achieved" for t in result["tests"])
+              + " | chi2 of the achieved means | chosen |",
+              "|---|" + "---|" * (len(result["tests"]) + 2)]
+        for a in result["attempts"]:
+            L.append(f"| {_show_point(a['optimum'])} | "
+                     + " | ".join(_pm(t["achieved_mean"], t["achieved_sd"]) for t in a["tests"])
+                     + f" | {_fmt(a['chi2'], 3)} | {'yes' if a['chosen'] else ''} |")
+        L.append("")
     for t in result["tests"]:
         if not t["target_reachable"]:
             L.append(f"- **{t['name']}: the target {_fmt(t['target'])} {t['unit']} lies outside what the "
@@ -975,7 +1076,7 @@ def write_plot(result: dict, spec: Spec, path: Path) -> bool:
     import matplotlib.pyplot as plt
     p0 = spec.parameters[0]
     n = len(spec.tests)
-    fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.2), squeeze=False)
+    fig, axes = plt.subplots(1, n, figsize=(max(7.0, 5.2 * n), 5.0), squeeze=False)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     grid = np.linspace(-1, 1, 101)
     for k, (ax, t) in enumerate(zip(axes[0], result["tests"])):
@@ -999,16 +1100,26 @@ def write_plot(result: dict, spec: Spec, path: Path) -> bool:
             s = Surface(fit["model"], np.array(fit["coefficients"]), fit["r2"], fit["residual_sd"], fit["points"])
             ax.plot(p0.low + 0.5 * (grid + 1) * (p0.high - p0.low), s(pts), "-", color=c,
                     label=f"{name}: fit (R$^2$ {_fmt(fit['r2'], 2)})")
-        xv = result["optimum"][p0.key]
-        ax.errorbar([xv], [t["achieved_mean"]], yerr=[t["achieved_sd"] if math.isfinite(t["achieved_sd"]) else 0],
-                    fmt="k*", ms=12, capsize=4, label="verified optimum")
+        level_names = [tuple(lv["level"]) for lv in result["levels"]]
+        for a in result.get("attempts") or [{"optimum": result["optimum"], "chosen": True,
+                                             "tests": result["tests"]}]:
+            at = a["tests"][k]
+            lev = tuple(a["optimum"][f.keys[0]] for f in spec.factors)
+            c = colours[level_names.index(lev) % len(colours)] if lev in level_names else "k"
+            sd = at["achieved_sd"] if math.isfinite(at["achieved_sd"]) else 0.0
+            ax.errorbar([a["optimum"][p0.key]], [at["achieved_mean"]], yerr=[sd], fmt="*", ms=13,
+                        color=c, mec="k", capsize=4,
+                        label=f"{', '.join(map(str, lev)) or 'optimum'}: verified (mean +- sd)"
+                              + (" - chosen" if a["chosen"] else ""))
         ax.set_xlabel(p0.key)
         ax.set_ylabel(f"{t['name']} ({t['unit']})")
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
     others = ", ".join(p.key for p in spec.parameters[1:])
-    fig.suptitle(f"{result['title']}" + (f" (other parameters at each level's optimum: {others})"
-                                         if others else ""), fontsize=9)
+    import textwrap
+    fig.suptitle(textwrap.fill(f"{result['title']}" + (f" (the surfaces with {others} at each "
+                                                       "level's optimum)" if others else ""),
+                               width=int(15 * fig.get_figwidth())), fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -390,3 +390,41 @@ def test_responses_from_synthetic_results(tmp_path):
     h5 = _results(tmp_path / "drum.h5", [(bed, np.full(len(bed), r))] * 2)
     angle = cal.response(_test("dynamic_angle", axis_point=(0, 0, 0), axis_direction=(1, 0, 0)), h5, "grain")
     assert angle == pytest.approx(25.0, abs=1.0)
+
+
+@pytest.mark.parametrize("order", [["epsd", "constant_torque"], ["constant_torque", "epsd"]])
+def test_equally_good_levels_go_to_the_first_listed(tmp_path, order):
+    """Two levels with the same responses meet the targets equally: the level listed first in
+    the spec is taken (the spec orders the levels by preference), whichever it is."""
+    text = SYN_SPEC.replace('levels = ["epsd", "constant_torque"]', f"levels = {json.dumps(order)}")
+    spec = cal.load_spec(str(_write(tmp_path, text)))
+    points = cal.design_points(spec)
+    resp = {}
+    for ci, pt in enumerate(points):
+        vals = _synthetic(pt["interactions.0.rolling_friction"], pt["interactions.1.rolling_friction"],
+                          "constant_torque")
+        for ti, v in enumerate(vals):
+            resp[(ti, ci)] = [v]
+    per_level, best, optimum = cal.fit_design(spec, points, resp)
+    assert best["level"] == (order[0],)
+    assert optimum["interactions.0.model"] == order[0]
+
+
+def test_design_seeds_differ_between_points_and_match_across_levels(tmp_path):
+    """Every continuous design point gets its own placement seeds (a seed shared by all points
+    would shift the whole fitted surface by that one placement's offset), the same at each level
+    of the factors; the verification's seeds lie past every design seed."""
+    text = SYN_SPEC.replace("levels = 4", "levels = 3\nseeds = 2")
+    spec = cal.load_spec(str(_write(tmp_path, text)))
+    points = cal.design_points(spec)
+    planned = cal._plan(spec, points, spec.seeds, 1, "cpu")
+    seeds = {}
+    for ti, ci, run in planned:
+        if ti == 0:
+            seeds.setdefault(ci, []).append(run.seed)
+    n = len(points) // 2                                    # 9 continuous points x 2 levels
+    first = [tuple(seeds[ci]) for ci in range(n)]
+    assert len(set(first)) == n and all(len(set(s)) == 2 for s in first)
+    assert len({x for s in first for x in s}) == 2 * n       # no seed used by two points
+    assert [tuple(seeds[ci + n]) for ci in range(n)] == first
+    assert cal.verification_offset(spec, len(points)) + 1 > max(x for s in first for x in s)
