@@ -107,6 +107,8 @@ def _parser() -> argparse.ArgumentParser:
     from . import export
     ex = sub.add_parser("export", help="a results file's series or one particle frame as CSV")
     export.add_arguments(ex)
+    from . import calibrate
+    calibrate.add_parser(sub)
     p.epilog = "examples:\n  taichi-dem demo pile\n  taichi-dem check my_drum.toml\n" \
                "  taichi-dem run my_drum.toml --out results\n\n" \
                "`taichi-dem COMMAND --help` shows each command's options and examples."
@@ -143,6 +145,8 @@ EXAMPLES = {
     "export": ["taichi-dem export out/pile.h5 --series --out pile_series.csv",
                "taichi-dem export out/pile.h5 --frame -1 --out last_frame.csv",
                "taichi-dem export out/pile.h5 --xdmf   # then open out/pile.xdmf in ParaView"],
+    "calibrate": ["taichi-dem calibrate demos/calibration/fly_ash_seed001.toml --out calibration --workers 2",
+                  "taichi-dem calibrate spec.toml --out cal --scheduler tcp://10.0.0.5:8786"],
 }
 
 
@@ -196,6 +200,9 @@ def _main(argv=None) -> int:
         if args.command == "export":
             from .export import cmd_export
             return cmd_export(args)
+        if args.command == "calibrate":
+            from .calibrate import run as cmd_calibrate
+            return cmd_calibrate(args)
     except SceneError as err:
         return _fail(str(err), 2)
     except KeyboardInterrupt:
