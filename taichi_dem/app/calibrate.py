@@ -11,13 +11,20 @@ design. The command
    finished runs are skipped when the command is started again, a LocalCluster unless
    ``--scheduler`` names one);
 2. reads each bench test's response from each run's results file (:func:`response`);
-3. fits one quadratic response surface per test and per level of the categorical factors
-   (least squares in the continuous parameters scaled to [-1, 1]; R^2 and the residual
-   standard deviation are reported) and finds the parameters that minimise
+3. fits one response surface per test and per level of the categorical factors (weighted
+   least squares in the continuous parameters scaled to [-1, 1], repeated runs at a point
+   entering as their mean weighted by their number; the model - constant, linear or quadratic
+   - no richer than the points support: the one with the smallest leave-one-point-out
+   prediction error, :func:`choose_surface`) and finds the parameters that minimise
    sum(((response - target) / target_sd)^2) inside the ranges (:func:`optimise`); a target
    the surface cannot reach inside the ranges is said so, with the reachable interval;
-4. verifies the optimum with fresh runs (new placement seeds) and reports the achieved values
-   with their scatter against the targets;
+4. verifies the optimum with ``verify_seeds`` fresh runs (new placement seeds) and reports the
+   achieved mean, its scatter and its standard error against the targets. The pass criterion:
+   |achieved mean - target| <= target sd for every test (:func:`passes`). A sequential design:
+   when the verification fails and ``rounds`` allows another round, its runs join the design,
+   an optimum on a range's edge brings ``augment`` new points near it (:func:`augment_points`),
+   the surfaces are refitted and the new optimum verified; the round that passes (else the one
+   whose achieved means come closest, in chi2) is written;
 5. writes ``DIR/calibrated_material.toml`` (the material and interaction blocks, ready to paste
    into a scene, with the calibration record as comments and as a machine-readable table),
    ``DIR/calibration.md`` (design, responses, fits, verification), ``DIR/calibration.json``
@@ -61,6 +68,8 @@ KINDS = {"angle_of_repose": "deg", "discharge_rate": "kg/s", "bulk_density": "kg
 DESIGNS = ("latin_hypercube", "full_factorial")
 REGULARISATION = 1e-4      # weight of the pull towards `prefer` when many optima fit equally
 LEVEL_TIE = 1.0            # chi2 within which levels count as equally good (the first wins)
+EDGE = 0.01                # an optimum this close to a range's end (fraction of the range) is on its edge
+AUGMENT_WIDTH = 0.25       # half-width (scaled units: 1/8 of the range) of the box of edge points
 
 
 # ------------------------------------------------------------------------------ the spec
@@ -116,6 +125,12 @@ class Spec:
     seeds: int = 1
     verify_seeds: int = 3
     timeout: Optional[float] = None
+    rounds: int = 1
+    augment: Optional[int] = None      # points added near an edge optimum (None: parameters + 1)
+
+    @property
+    def augment_points(self) -> int:
+        return len(self.parameters) + 1 if self.augment is None else self.augment
 
 
 def _err(spec: str, key: str, reason: str) -> SceneError:
@@ -176,11 +191,12 @@ def load_spec(path: str) -> Spec:
                  required=("material",))
     design = _table(doc.get("design", {}), "design", path,
                     {"kind": str, "points": int, "levels": int, "seed": int, "seeds": int,
-                     "verify_seeds": int, "timeout": float})
+                     "verify_seeds": int, "timeout": float, "rounds": int, "augment": int})
     kind = design.get("kind", "latin_hypercube")
     if kind not in DESIGNS:
         raise _err(path, "design.kind", f"must be one of {', '.join(DESIGNS)}, got {kind!r}")
-    for k, lo in (("points", 1), ("levels", 2), ("seeds", 1), ("verify_seeds", 1)):
+    for k, lo in (("points", 1), ("levels", 2), ("seeds", 1), ("verify_seeds", 1), ("rounds", 1),
+                  ("augment", 0)):
         if k in design and design[k] < lo:
             raise _err(path, f"design.{k}", f"must be >= {lo}, got {design[k]}")
     if "timeout" in design and design["timeout"] <= 0:
@@ -295,7 +311,8 @@ def load_spec(path: str) -> Spec:
                 parameters=params, factors=factors, tests=tests, design=kind, points=points,
                 levels=design.get("levels", 3), design_seed=design.get("seed", 1),
                 seeds=design.get("seeds", 1), verify_seeds=design.get("verify_seeds", 3),
-                timeout=design.get("timeout"))
+                timeout=design.get("timeout"), rounds=design.get("rounds", 1),
+                augment=design.get("augment"))
 
 
 def _check_key(key: str, where: str, spec: str) -> None:
@@ -353,14 +370,16 @@ def verification_offset(spec: Spec, n_points: int) -> int:
 
 
 def _plan(spec: Spec, combos: list[dict], seeds: int, threads: int, arch: str,
-          seed_offset: int = 0) -> list:
+          seed_offset: int = 0, offsets: Optional[list] = None) -> list:
     """(test index, combo index, RunSpec) for every test x combo x seed: the design's seeds
     (:func:`design_seeds`) or, with ``seed_offset`` > 0, the scene's seed + offset + k for
-    k < ``seeds`` (fresh placements for the verification)."""
+    k < ``seeds`` (fresh placements for the verification), or ``offsets`` (per combo, the
+    seeds' offsets from the scene's seed) when given."""
     from . import sweep
     out = []
-    offsets = (design_seeds(spec, len(combos)) if not seed_offset else
-               [[seed_offset + k for k in range(seeds)] for _ in combos])
+    if offsets is None:
+        offsets = (design_seeds(spec, len(combos)) if not seed_offset else
+                   [[seed_offset + k for k in range(seeds)] for _ in combos])
     for ti, test in enumerate(spec.tests):
         try:
             base_seed = sweep.scene_seed(tomllib.loads(Path(test.scene).read_text(encoding="utf-8-sig")))
@@ -503,46 +522,139 @@ def design_matrix(x: np.ndarray, model: str) -> np.ndarray:
     return np.column_stack(cols)
 
 
+MODELS = ("constant", "linear", "quadratic")   # from the simplest: ties go to the simpler
+
+
 @dataclass
 class Surface:
     """A least-squares response surface in scaled parameters (each range mapped to [-1, 1]).
-    ``r2``: coefficient of determination; ``residual_sd``: sqrt(SS_res / (n - p)) in the
-    response's unit (NaN with no residual degrees of freedom)."""
+    ``r2``: coefficient of determination; ``residual_sd``: sqrt(SS_res / (n - p)) over the
+    individual runs, in the response's unit (NaN with no residual degrees of freedom); ``n``:
+    runs; ``points``: distinct points; ``loo_rmse``: the leave-one-point-out prediction error
+    (weighted by each point's runs; NaN when not computed); ``pure_sd``: the run-to-run scatter
+    at repeated points (NaN without repeats); ``cov``: the coefficients' covariance (None
+    without residual degrees of freedom)."""
     model: str
     coef: np.ndarray
     r2: float
     residual_sd: float
     n: int
+    points: int = 0
+    loo_rmse: float = math.nan
+    pure_sd: float = math.nan
+    cov: Optional[np.ndarray] = None
+    tried: dict = field(default_factory=dict)     # {model: leave-one-out rmse} of the candidates
 
     def __call__(self, x) -> np.ndarray:
         return design_matrix(x, self.model) @ self.coef
 
+    def se(self, x) -> np.ndarray:
+        """The standard error of the surface's value at scaled points ``x`` (the response's
+        unit): sqrt(a^T cov a); NaN without a covariance."""
+        a = design_matrix(x, self.model)
+        if self.cov is None:
+            return np.full(len(a), math.nan)
+        return np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", a, self.cov, a), 0.0))
 
-def fit_surface(x: np.ndarray, y: np.ndarray) -> Surface:
-    """Quadratic least squares when the points leave residual degrees of freedom (n > its
-    coefficients), else linear (n >= d + 1: through two points a line), else the mean. ``x``: (n, d) scaled parameters; ``y``: responses (NaNs left out)."""
-    x = np.atleast_2d(np.asarray(x, float)).reshape(len(y), -1)
-    y = np.asarray(y, float)
+
+def _group(x: np.ndarray, y: np.ndarray):
+    """Repeated runs at one point pooled: (distinct points (m, d), mean response, runs per
+    point, pure-error sum of squares, its degrees of freedom). NaN responses left out."""
     ok = np.isfinite(y)
     x, y = x[ok], y[ok]
+    if len(y) == 0:
+        return x, y, np.zeros(0), 0.0, 0
+    keys = [tuple(np.round(r, 9)) for r in x]
+    order = {}
+    for k in keys:
+        order.setdefault(k, len(order))
+    idx = np.array([order[k] for k in keys])
+    m = len(order)
+    w = np.bincount(idx, minlength=m).astype(float)
+    ybar = np.bincount(idx, weights=y, minlength=m) / w
+    xs = np.zeros((m, x.shape[1]))
+    xs[idx] = x
+    ss_pure = float(np.sum((y - ybar[idx]) ** 2))
+    return xs, ybar, w, ss_pure, int(len(y) - m)
+
+
+def _wls(xs, ybar, w, model):
+    a = design_matrix(xs, model)
+    sw = np.sqrt(w)
+    coef, *_ = np.linalg.lstsq(a * sw[:, None], ybar * sw, rcond=None)
+    return a, coef
+
+
+def loo_rmse(xs: np.ndarray, ybar: np.ndarray, w: np.ndarray, model: str) -> float:
+    """Leave-one-point-out prediction error of ``model``: each distinct point (with all its
+    runs) left out in turn, the weighted surface refitted on the others and its error there;
+    the root of the mean squared error weighted by the points' runs. NaN when the others cannot
+    determine the model (fewer points than coefficients + 1)."""
+    m, d = xs.shape
+    p = _n_coefficients(d, model)
+    if m < p + 1:
+        return math.nan
+    err = np.empty(m)
+    for i in range(m):          # m is a design's size (tens): a refit per point is cheap
+        keep = np.arange(m) != i
+        a, coef = _wls(xs[keep], ybar[keep], w[keep], model)
+        if np.linalg.matrix_rank(a) < p:
+            return math.nan
+        err[i] = ybar[i] - float((design_matrix(xs[i:i + 1], model) @ coef)[0])
+    return float(math.sqrt(np.sum(w * err ** 2) / np.sum(w)))
+
+
+def fit_surface(x: np.ndarray, y: np.ndarray, model: Optional[str] = None) -> Surface:
+    """Weighted least squares of the responses ``y`` at scaled points ``x`` (n, d): repeated
+    runs at a point enter as their mean weighted by their number (the same coefficients as
+    every run on its own). ``model``: "constant", "linear" or "quadratic"; None: the richest
+    the points allow (quadratic when the distinct points leave it residual degrees of freedom,
+    else linear when they determine it, else the mean). NaN responses are left out."""
+    x = np.atleast_2d(np.asarray(x, float)).reshape(len(y), -1)
+    y = np.asarray(y, float)
     d = x.shape[1]
-    n = len(y)
-    if n == 0:
+    xs, ybar, w, ss_pure, df_pure = _group(x, y)
+    m, n = len(ybar), int(np.sum(w))
+    if m == 0:
         return Surface("constant", np.array([math.nan]), math.nan, math.nan, 0)
-    if d > 0 and n > _n_coefficients(d, "quadratic"):
-        model = "quadratic"
-    elif d > 0 and n >= _n_coefficients(d, "linear"):
-        model = "linear"
-    else:
-        model = "constant"
-    a = design_matrix(x, model)
-    coef, *_ = np.linalg.lstsq(a, y, rcond=None)
-    res = y - a @ coef
-    ss_res, ss_tot = float(res @ res), float(np.sum((y - y.mean()) ** 2))
+    if model is None:
+        if d > 0 and m > _n_coefficients(d, "quadratic"):
+            model = "quadratic"
+        elif d > 0 and m >= _n_coefficients(d, "linear"):
+            model = "linear"
+        else:
+            model = "constant"
+    a, coef = _wls(xs, ybar, w, model)
     p = a.shape[1]
+    ss_lack = float(np.sum(w * (ybar - a @ coef) ** 2))
+    ss_res = ss_lack + ss_pure                       # over the individual runs
+    ymean = float(np.sum(w * ybar) / n)
+    ss_tot = float(np.sum(w * (ybar - ymean) ** 2)) + ss_pure
     r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else math.nan
     sd = math.sqrt(ss_res / (n - p)) if n > p else math.nan
-    return Surface(model, coef, r2, sd, n)
+    cov = None
+    if n > p and np.linalg.matrix_rank(a) == p:
+        cov = sd ** 2 * np.linalg.pinv(a.T @ (a * w[:, None]))
+    pure = math.sqrt(ss_pure / df_pure) if df_pure > 0 else math.nan
+    return Surface(model, coef, r2, sd, n, m, loo_rmse(xs, ybar, w, model), pure, cov)
+
+
+def choose_surface(x: np.ndarray, y: np.ndarray) -> Surface:
+    """The surface no richer than the points support: among constant, linear and quadratic
+    (each fitted by :func:`fit_surface`), the one with the smallest leave-one-point-out
+    prediction error (:func:`loo_rmse`), the simpler on a tie; a model the points cannot
+    cross-validate (fewer distinct points than its coefficients + 1) is not a candidate.
+    With too few points for any cross-validation, the richest model they allow."""
+    x = np.atleast_2d(np.asarray(x, float)).reshape(len(y), -1)
+    d = x.shape[1]
+    fits = {m: fit_surface(x, y, m) for m in (MODELS if d > 0 else ("constant",))}
+    scored = {m: s.loo_rmse for m, s in fits.items() if math.isfinite(s.loo_rmse)}
+    if not scored:
+        return fit_surface(x, y)
+    best = min(scored, key=lambda m: (round(scored[m], 12), MODELS.index(m)))
+    out = fits[best]
+    out.tried = scored
+    return out
 
 
 def _starts(d: int, rng_seed: int = 0) -> np.ndarray:
@@ -630,13 +742,16 @@ def _dedupe(planned):
     return uniq
 
 
-def fit_design(spec: Spec, points: list[dict], design_resp: dict) -> tuple[list, dict, dict]:
+def fit_design(spec: Spec, points: list[dict], design_resp: dict,
+               failed: frozenset = frozenset()) -> tuple[list, dict, dict]:
     """The response surfaces and the optimum of each level of the categorical factors, from
     ``design_resp`` ({(test index, point index): [response per seed]}). Returns (per level:
     {level, fits, x (scaled optimum), chi2, reach, predicted}; the best level's entry; the
     optimum as overrides, continuous values rounded to 3 significant digits). The factors'
     levels are in order of preference: the first level whose chi2 lies within LEVEL_TIE of the
-    lowest is taken."""
+    lowest is taken, passing over the levels in ``failed`` (those whose verified optimum
+    already missed a target: the preference is for ties, and a failed verification is evidence
+    against the tie); when every tied level has failed, the lowest chi2 among them."""
     d = len(spec.parameters)
     prefer = np.array([2.0 * (p.prefer - p.low) / (p.high - p.low) - 1.0 for p in spec.parameters])
     per_level = []
@@ -649,21 +764,25 @@ def fit_design(spec: Spec, points: list[dict], design_resp: dict) -> tuple[list,
                 for v in design_resp.get((ti, ci), []):
                     xs.append(scale(spec, points[ci]))
                     ys.append(v)
-            fits.append(fit_surface(np.array(xs).reshape(len(xs), d), np.array(ys)))
+            fits.append(choose_surface(np.array(xs).reshape(len(xs), d), np.array(ys)))
         if all(np.all(np.isfinite(s.coef)) for s in fits):
             xopt, chi2 = optimise(fits, [t.target for t in spec.tests],
                                   [t.target_sd for t in spec.tests], d, prefer)
             reach = [reachable(s, d) for s in fits]
             pred = [float(s(xopt.reshape(1, d))[0]) for s in fits]
+            pred_se = [float(s.se(xopt.reshape(1, d))[0]) for s in fits]
         else:
             xopt, chi2 = np.zeros(d), math.inf
             reach, pred = [(math.nan, math.nan)] * len(fits), [math.nan] * len(fits)
+            pred_se = [math.nan] * len(fits)
         per_level.append({"level": lev, "fits": fits, "x": xopt, "chi2": chi2, "reach": reach,
-                          "predicted": pred})
+                          "predicted": pred, "predicted_se": pred_se})
     lowest = min(r["chi2"] for r in per_level)
     # levels within one unit of chi2 of the lowest fit the targets equally well (a target sd
     # apart at most): the first of them in the spec's order is taken
-    best = next(r for r in per_level if r["chi2"] <= lowest + LEVEL_TIE)
+    tied = [r for r in per_level if r["chi2"] <= lowest + LEVEL_TIE]
+    fresh = [r for r in tied if tuple(r["level"]) not in failed]
+    best = fresh[0] if fresh else min(tied, key=lambda r: r["chi2"])
     if not math.isfinite(best["chi2"]):
         raise RuntimeError("no level of the design gave responses to fit (did every run fail? "
                            "see the runs' log.txt)")
@@ -720,46 +839,141 @@ def calibrate(spec: Spec, out_dir: str, *, scheduler=None, workers=None, threads
               f"seeds = {len(planned)} runs ({len(_dedupe(planned))} distinct), then "
               f"{spec.verify_seeds} verification runs per test, in {out}", file=sys.stderr)
     state = {"client": None, "scheduler": scheduler, "workers": workers}
+    offsets = design_seeds(spec, len(points))
+    sources = ["design"] * len(points)
+    base_offset, stride = verification_offset(spec, len(points)), round_stride(spec)
+    rounds = []                 # per round: (per_level, best, optimum, vplanned, vrecords, vresp)
+    vall_planned, vall_records = [], []
     try:
         recs = {r["id"]: r for r in _sweep(_dedupe(planned), out, state, progress, spec.timeout)}
         records = [recs[s.id] for _, _, s in planned]
         design_resp = _responses(spec, planned, records, out)
-        per_level, best, optimum = fit_design(spec, points, design_resp)
-        attempts = []
-        todo = candidates(per_level)
-        for n_try, entry in enumerate(todo):
-            optimum = optimum_of(spec, entry)
+        for rnd in range(spec.rounds):
+            failed = frozenset(tuple(r[1]["level"]) for r in rounds)   # every earlier round failed
+            per_level, best, optimum = fit_design(spec, points, design_resp, failed)
+            first = base_offset + stride * rnd
             vplanned = _plan(spec, [optimum], spec.verify_seeds, nthreads, arch,
-                             seed_offset=verification_offset(spec, len(points)))
+                             offsets=[[first + k for k in range(spec.verify_seeds)]])
             if progress:
-                print(f"calibrate: the optimum {_show_point(optimum)} (predicted "
-                      + ", ".join(f"{t.name} {p:.4g} {t.unit}" for t, p in zip(spec.tests, entry["predicted"]))
+                print(f"calibrate: round {rnd + 1} of at most {spec.rounds}: the optimum "
+                      f"{_show_point(optimum)} (predicted "
+                      + ", ".join(f"{t.name} {p:.4g} +- {se:.2g} {t.unit}" for t, p, se in
+                                  zip(spec.tests, best["predicted"], best["predicted_se"]))
                       + f"); verifying with {len(_dedupe(vplanned))} runs", file=sys.stderr)
             vrecs = {r["id"]: r for r in _sweep(_dedupe(vplanned), out, state, progress, spec.timeout)}
             vrecords = [vrecs[s.id] for _, _, s in vplanned]
             vresp = _responses(spec, vplanned, vrecords, out)
-            attempts.append((entry, optimum, vplanned, vrecords, vresp))
-            if all(abs(_stats(vresp.get((ti, 0), []))[0] - t.target) <= t.target_sd
-                   for ti, t in enumerate(spec.tests)):
+            vall_planned += vplanned
+            vall_records += vrecords
+            rounds.append((per_level, best, optimum, vplanned, vrecords, vresp))
+            if passes(spec, vresp):
                 break
+            if rnd + 1 == spec.rounds:
+                if progress:
+                    print("calibrate: not within the measured scatter; no rounds left", file=sys.stderr)
+                break
+            # the verification joins the design (its runs weigh by their number in the fit)
+            ci = len(points)
+            points.append(dict(optimum))
+            offsets.append([first + k for k in range(spec.verify_seeds)])
+            sources.append(f"verification {rnd + 1}")
+            for ti in range(len(spec.tests)):
+                design_resp[(ti, ci)] = list(vresp.get((ti, 0), []))
+            # an optimum on a range's edge: new points near it, inside the ranges
+            extra = augment_points(spec, optimum, rnd) if on_edge(spec, optimum) else []
             if progress:
-                print("calibrate: not within the measured scatter"
-                      + ("; verifying the next level that fits equally well" if n_try + 1 < len(todo)
-                         else ""), file=sys.stderr)
+                print("calibrate: not within the measured scatter; the verification joins the "
+                      "design" + (f", with {len(extra)} points near the optimum on the edge of "
+                                  f"{', '.join(on_edge(spec, optimum))}" if extra else ""),
+                      file=sys.stderr)
+            if extra:
+                eoff = [[first + spec.verify_seeds + j * spec.seeds + k for k in range(spec.seeds)]
+                        for j in range(len(extra))]
+                eplanned = _plan(spec, extra, spec.seeds, nthreads, arch, offsets=eoff)
+                erecs = {r["id"]: r for r in _sweep(_dedupe(eplanned), out, state, progress, spec.timeout)}
+                erecords = [erecs[s.id] for _, _, s in eplanned]
+                eresp = _responses(spec, eplanned, erecords, out)
+                for j, pt in enumerate(extra):
+                    for ti in range(len(spec.tests)):
+                        design_resp[(ti, len(points) + j)] = eresp.get((ti, j), [])
+                planned += [(ti, len(points) + cj, r) for ti, cj, r in eplanned]
+                records += erecords
+                points += extra
+                offsets += eoff
+                sources += [f"edge {rnd + 1}"] * len(extra)
     finally:
         if state["client"] is not None:
             sweep.close_client(state["client"])
-    # the first attempt within the scatter (the loop stopped there), else the closest one
-    chosen = attempts[-1] if len(attempts) and all(
-        abs(_stats(attempts[-1][4].get((ti, 0), []))[0] - t.target) <= t.target_sd
-        for ti, t in enumerate(spec.tests)) else min(attempts, key=lambda a: verified_chi2(spec, a[4]))
-    best, optimum, vplanned, vrecords, vresp = chosen
+    # the first round within the scatter (the loop stopped there), else the closest one
+    chosen = rounds[-1] if passes(spec, rounds[-1][5]) else min(
+        rounds, key=lambda r: verified_chi2(spec, r[5]))
+    per_level, best, optimum, vplanned, vrecords, vresp = chosen
     result = assemble(spec, points, planned, records, design_resp, per_level, best, optimum,
                       vplanned, vrecords, vresp, command, out,
-                      attempts=[(a[1], a[4]) for a in attempts],
-                      extra_records=[r for a in attempts if a is not chosen for r in a[3]])
+                      attempts=[(r[2], r[5]) for r in rounds],
+                      extra_records=[x for r in rounds if r is not chosen for x in r[4]],
+                      rounds=[_round_summary(spec, i, r) for i, r in enumerate(rounds)],
+                      sources=sources, seed_offsets=offsets)
     write_outputs(result, spec, out)
     return result
+
+
+def passes(spec: Spec, vresp: dict) -> bool:
+    """The pass criterion: every test's achieved mean (over the verification runs) within one
+    target standard deviation of the target, |mean - target| <= target_sd."""
+    return all(abs(_stats(vresp.get((ti, 0), []))[0] - t.target) <= t.target_sd
+               for ti, t in enumerate(spec.tests))
+
+
+def round_stride(spec: Spec) -> int:
+    """Seed offsets per round: the verification's ``verify_seeds`` and the edge points'
+    ``augment x seeds``, rounded up to a multiple of 100."""
+    return 100 * math.ceil((spec.verify_seeds + spec.augment_points * spec.seeds + 1) / 100)
+
+
+def on_edge(spec: Spec, point: dict) -> list:
+    """The parameters whose value in ``point`` lies within 1 % of its range from an end."""
+    return [p.key for p in spec.parameters
+            if min(point[p.key] - p.low, p.high - point[p.key]) <= EDGE * (p.high - p.low)]
+
+
+def augment_points(spec: Spec, optimum: dict, round_index: int) -> list[dict]:
+    """``augment`` new design points near ``optimum`` at its level: a seeded Latin hypercube
+    in a box of AUGMENT_WIDTH of each range (scaled width 2 x AUGMENT_WIDTH) centred on the
+    optimum and shifted inside the ranges, so that an optimum on an edge gets points between
+    it and the edge's neighbourhood, where a surface fitted to the first design extrapolates.
+    Values rounded to 4 significant digits."""
+    d, n = len(spec.parameters), spec.augment_points
+    if d == 0 or n == 0:
+        return []
+    from scipy.stats import qmc
+    x = scale(spec, optimum)
+    h = AUGMENT_WIDTH
+    lo = np.clip(x - h, -1.0, 1.0 - 2 * h)
+    u = qmc.LatinHypercube(d=d, seed=spec.design_seed + 1000 * (round_index + 1)).random(n)
+    level = {k: optimum[k] for f in spec.factors for k in f.keys}
+    return [{**level, **{k: _round(v) for k, v in unscale(spec, lo + 2 * h * row).items()}}
+            for row in u]
+
+
+def _round_summary(spec: Spec, index: int, rnd) -> dict:
+    per_level, best, optimum, vplanned, vrecords, vresp = rnd
+    tests = []
+    for ti, t in enumerate(spec.tests):
+        v = vresp.get((ti, 0), [])
+        mean, sd = _stats(v)
+        n = int(np.sum(np.isfinite(v))) if len(v) else 0
+        f = best["fits"][ti]
+        tests.append({"name": t.name, "model": f.model, "loo_rmse": f.loo_rmse,
+                      "candidates": dict(f.tried), "residual_sd": f.residual_sd,
+                      "points": f.points, "runs": f.n,
+                      "predicted": best["predicted"][ti], "predicted_se": best["predicted_se"][ti],
+                      "achieved": v, "achieved_mean": mean, "achieved_sd": sd,
+                      "achieved_sem": sd / math.sqrt(n) if n > 1 else math.nan,
+                      "within_scatter": bool(abs(mean - t.target) <= t.target_sd)})
+    return {"round": index + 1, "optimum": optimum, "level": list(best["level"]),
+            "on_edge": on_edge(spec, optimum), "tests": tests, "passed": passes(spec, vresp),
+            "chi2_verified": verified_chi2(spec, vresp)}
 
 
 def _show_point(point: dict) -> str:
@@ -786,16 +1000,21 @@ def _sphere_sizes(spec: Spec) -> list:
 
 
 def assemble(spec, points, planned, records, design_resp, per_level, best, optimum, vplanned,
-             vrecords, vresp, command, out, attempts=None, extra_records=()) -> dict:
+             vrecords, vresp, command, out, attempts=None, extra_records=(), rounds=None,
+             sources=None, seed_offsets=None) -> dict:
     """The result: everything the outputs show (written as ``calibration.json``). ``planned``
     and ``vplanned``: (test index, point index, RunSpec) of the design and the verification;
     ``records`` / ``vrecords``: their sweep records; ``vresp``: {(test index, 0): [response]}.
     ``attempts``: every verified optimum as (overrides, vresp), the chosen one among them;
-    ``extra_records``: the runs of the attempts not chosen (for the cost)."""
+    ``extra_records``: the runs of the attempts not chosen (for the cost); ``rounds``: the
+    sequential design's rounds (:func:`_round_summary`); ``sources``: per design point where it
+    came from ("design", "verification N", "edge N"); ``seed_offsets``: its placement seeds'
+    offsets from the scene's seed."""
     tests = []
     for ti, t in enumerate(spec.tests):
         achieved = vresp.get((ti, 0), [])
         mean, sd = _stats(achieved)
+        n_ok = int(np.sum(np.isfinite(achieved))) if len(achieved) else 0
         fit = best["fits"][ti]
         lo, hi = best["reach"][ti]
         reach_ok = lo - t.target_sd <= t.target <= hi + t.target_sd
@@ -804,9 +1023,12 @@ def assemble(spec, points, planned, records, design_resp, per_level, best, optim
             "scene": _rel(t.scene), "duration": t.duration,
             "measured": list(t.measured), "target": t.target, "target_sd": t.target_sd,
             "predicted": best["predicted"][ti], "achieved": achieved, "achieved_mean": mean,
-            "achieved_sd": sd, "within_scatter": bool(abs(mean - t.target) <= t.target_sd),
+            "achieved_sd": sd, "achieved_sem": sd / math.sqrt(n_ok) if n_ok > 1 else math.nan,
+            "predicted_se": best.get("predicted_se", [math.nan] * len(spec.tests))[ti],
+            "within_scatter": bool(abs(mean - t.target) <= t.target_sd),
             "reachable": [lo, hi], "target_reachable": bool(reach_ok),
-            "fit": {"model": fit.model, "points": fit.n, "r2": fit.r2, "residual_sd": fit.residual_sd},
+            "fit": {"model": fit.model, "points": fit.n, "r2": fit.r2, "residual_sd": fit.residual_sd,
+                    "loo_rmse": fit.loo_rmse},
         })
     levels = []
     for r in per_level:
@@ -814,12 +1036,17 @@ def assemble(spec, points, planned, records, design_resp, per_level, best, optim
             "level": list(r["level"]), "chi2": r["chi2"],
             "optimum": {k: _round(v, 3) for k, v in unscale(spec, r["x"]).items()},
             "fits": [{"test": t.name, "model": s.model, "points": s.n, "r2": s.r2,
-                      "residual_sd": s.residual_sd, "coefficients": [float(c) for c in s.coef]}
+                      "distinct_points": s.points, "residual_sd": s.residual_sd,
+                      "loo_rmse": s.loo_rmse, "candidates": dict(s.tried), "pure_sd": s.pure_sd,
+                      "coefficients": [float(c) for c in s.coef]}
                      for t, s in zip(spec.tests, r["fits"])],
             "reachable": [list(x) for x in r["reach"]], "predicted": r["predicted"]})
     design_rows = []
     for ci, pt in enumerate(points):
-        row = {"point": ci, "overrides": pt}
+        row = {"point": ci, "overrides": pt,
+               "source": sources[ci] if sources else "design"}
+        if seed_offsets:
+            row["seed_offsets"] = list(seed_offsets[ci])
         for ti, t in enumerate(spec.tests):
             row[t.name] = design_resp.get((ti, ci), [])
         design_rows.append(row)
@@ -834,14 +1061,14 @@ def assemble(spec, points, planned, records, design_resp, per_level, best, optim
                    "levels": ([len(p.values) or spec.levels for p in spec.parameters]
                               if spec.design == "full_factorial" else None),
                    "seed": spec.design_seed, "seeds": spec.seeds, "verify_seeds": spec.verify_seeds,
+                   "rounds": spec.rounds, "augment": spec.augment_points,
                    "design_points": len(points)},
         "parameters": [{"key": p.key, "range": [p.low, p.high], "value": optimum[p.key]}
                        for p in spec.parameters],
         "factors": [{"name": f.name, "keys": list(f.keys), "levels": list(f.levels),
                      "value": optimum[f.keys[0]]} for f in spec.factors],
         "optimum": optimum, "chi2": best["chi2"], "tests": tests, "levels": levels,
-        "on_edge": [p.key for p in spec.parameters
-                    if min(optimum[p.key] - p.low, p.high - optimum[p.key]) <= 0.01 * (p.high - p.low)],
+        "on_edge": on_edge(spec, optimum),
         "design_rows": design_rows,
         "verification": [{"id": s.id, "test": spec.tests[ti].name, "seed": s.seed,
                           "status": r.get("status")} for (ti, _, s), r in zip(vplanned, vrecords)],
@@ -854,6 +1081,8 @@ def assemble(spec, points, planned, records, design_resp, per_level, best, optim
              "achieved_sd": _stats(r.get((ti, 0), []))[1]} for ti, t in enumerate(spec.tests)],
             "chi2": verified_chi2(spec, r), "chosen": o == optimum}
             for o, r in (attempts or [(optimum, vresp)])],
+        "rounds": rounds or [],
+        "pass_criterion": "|achieved mean - target| <= target sd, for every test",
         "failed": failed, "out": str(out),
     }
 
@@ -893,14 +1122,18 @@ def calibration_record(result: dict) -> dict:
             return int(v)
         return v
     tests = [{k: t[k] for k in ("name", "kind", "unit", "scene", "duration", "measured", "target",
-                                "target_sd", "achieved", "achieved_mean", "achieved_sd",
+                                "target_sd", "achieved", "achieved_mean", "achieved_sd", "achieved_sem",
                                 "within_scatter", "reachable", "target_reachable", "fit")}
              for t in result["tests"]]
     rec = {"date": result["date"], "command": result["command"], "spec": result["spec"],
            "sphere_radius": result["sphere_radius"], "within_scatter": result["within_scatter"],
            "design": result["design"], "parameters": result["parameters"],
            "factors": [{k: f[k] for k in ("keys", "levels", "value")} for f in result["factors"]],
-           "tests": tests}
+           "tests": tests,
+           "rounds": [{"round": r["round"], "optimum": r["optimum"], "passed": r["passed"],
+                       "achieved_mean": [t["achieved_mean"] for t in r["tests"]],
+                       "achieved_sem": [t["achieved_sem"] for t in r["tests"]]}
+                      for r in result.get("rounds", [])]}
     return clean(rec)
 
 
@@ -927,7 +1160,8 @@ def write_material(result: dict, spec: Spec, path: Path) -> None:
              "calibrated for this size only: another size is another material.",
              f"# Design: {result['design']['kind']}, {result['design']['design_points']} points x "
              f"{result['design']['seeds']} seeds; verified with {result['design']['verify_seeds']} "
-             "fresh seeds at the optimum.",
+             f"fresh seeds at the optimum; {len(result.get('rounds', [])) or 1} round(s) of at most "
+             f"{result['design'].get('rounds', 1)}. Pass: |achieved mean - target| <= target sd.",
              "# Parameters (range -> calibrated value):"]
     for p in result["parameters"]:
         lines.append(f"#   {p['key']}: [{_fmt(p['range'][0])}, {_fmt(p['range'][1])}] -> {_fmt(p['value'])}")
@@ -937,7 +1171,7 @@ def write_material(result: dict, spec: Spec, path: Path) -> None:
     for t in result["tests"]:
         lines.append(f"#   {t['name']} ({t['scene']}): target {_pm(t['target'], t['target_sd'])} "
                      f"{t['unit']}, achieved {_pm(t['achieved_mean'], t['achieved_sd'])} {t['unit']} "
-                     f"({len(t['achieved'])} runs) -> "
+                     f"({len(t['achieved'])} runs, standard error {_fmt(t.get('achieved_sem', math.nan), 2)}) -> "
                      + ("within the measured scatter" if t["within_scatter"] else "NOT within the measured scatter")
                      + ("" if t["target_reachable"] else
                         f"; the target lies outside what the ranges reach "
@@ -988,36 +1222,70 @@ def write_report(result: dict, spec: Spec, path: Path, png: Optional[str]) -> No
           + (f" of {d['points']} points (seed {d['seed']})" if d["kind"] == "latin_hypercube" else
              f" at {' x '.join(map(str, d['levels'] or [])) or 1} levels")
           + (" per level of " + ", ".join(f['name'] for f in result["factors"]) if result["factors"] else "")
-          + f"; {d['seeds']} placement seed(s) per point. Responses per seed.", "",
-          "| # | " + " | ".join(fkeys + keys) + " | " + " | ".join(
+          + f"; {d['seeds']} placement seed(s) per point. Responses per seed. Later rounds add "
+          "points (`source`): a failed verification joins the design with all its runs, and an "
+          f"optimum on a range's edge brings {d.get('augment', 0)} new points near it (`edge`).", "",
+          "| # | source | " + " | ".join(fkeys + keys) + " | " + " | ".join(
               f"{t['name']} ({t['unit']})" for t in result["tests"]) + " |",
-          "|" + "---|" * (1 + len(fkeys) + len(keys) + len(result["tests"]))]
+          "|" + "---|" * (2 + len(fkeys) + len(keys) + len(result["tests"]))]
     for row in result["design_rows"]:
         o = row["overrides"]
-        L.append(f"| {row['point']} | " + " | ".join(_fmt(o[k]) for k in fkeys + keys) + " | "
+        L.append(f"| {row['point']} | {row.get('source', 'design')} | "
+                 + " | ".join(_fmt(o[k]) for k in fkeys + keys) + " | "
                  + " | ".join(", ".join(_fmt(v) for v in row[t["name"]]) for t in result["tests"]) + " |")
-    L += ["", "## Response surfaces", "",
-          "Least squares in the parameters scaled to [-1, 1] (quadratic where the points allow it). "
-          "R^2 and the residual standard deviation (in the response's unit; compare it with the "
+    L += ["", "## Response surfaces (of the round written)", "",
+          "Weighted least squares in the parameters scaled to [-1, 1]: the runs at a point enter as "
+          "their mean weighted by their number. The model (constant, linear or quadratic) is the one "
+          "with the smallest leave-one-point-out prediction error (`LOO`; each candidate's in "
+          "brackets), the simpler on a tie: no richer than the points support. R^2 and the residual "
+          "standard deviation over the runs (in the response's unit; compare it with the "
           "seed-to-seed scatter) per level; `reach`: the lowest and highest value of the surface "
-          "inside the ranges; chi2 = sum(((surface - target) / target_sd)^2) at that level's optimum.", "",
-          "| level | test | model | points | R^2 | residual sd | reach | level's optimum | predicted | chi2 |",
-          "|---|---|---|---|---|---|---|---|---|---|"]
+          "inside the ranges; chi2 = sum(((surface - target) / target_sd)^2) at that level's "
+          "optimum; `predicted` +- the surface's standard error there.", "",
+          "| level | test | model | runs (points) | R^2 | residual sd | LOO | reach | level's optimum | predicted | chi2 |",
+          "|---|---|---|---|---|---|---|---|---|---|---|"]
     for lv in result["levels"]:
         for k, f in enumerate(lv["fits"]):
-            L.append(f"| {', '.join(map(str, lv['level'])) or '-'} | {f['test']} | {f['model']} | {f['points']} | "
+            cands = ", ".join(f"{m} {_fmt(v, 3)}" for m, v in f.get("candidates", {}).items())
+            se = (lv.get("predicted_se") or [math.nan] * len(lv["fits"]))[k]
+            L.append(f"| {', '.join(map(str, lv['level'])) or '-'} | {f['test']} | {f['model']} | "
+                     f"{f['points']} ({f.get('distinct_points', '-')}) | "
                      f"{_fmt(f['r2'], 3)} | {_fmt(f['residual_sd'], 3)} | "
+                     f"{_fmt(f.get('loo_rmse', math.nan), 3)}" + (f" ({cands})" if cands else "") + " | "
                      f"{_fmt(lv['reachable'][k][0])} - {_fmt(lv['reachable'][k][1])} | "
-                     f"{_show_point(lv['optimum']) or '-'} | {_fmt(lv['predicted'][k])} | {_fmt(lv['chi2'], 3)} |")
+                     f"{_show_point(lv['optimum']) or '-'} | {_pm(lv['predicted'][k], se)} | {_fmt(lv['chi2'], 3)} |")
+    if result.get("rounds"):
+        L += ["", "## Rounds", "",
+              "A sequential design: each round fits the surfaces to every run so far, verifies the "
+              "optimum with fresh placements and stops when every test passes: "
+              "|achieved mean - target| <= target sd. A round that fails adds its verification runs "
+              "to the design (and points near an optimum on a range's edge) for the next. `SEM`: "
+              "the standard error of the achieved mean (sd / sqrt(runs)).", "",
+              "| round | optimum | on the edge of | test | model (LOO) | predicted | achieved (each run) | achieved mean +- sd (SEM) | |mean - target| / target sd | passed |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+        targets = {t["name"]: t for t in result["tests"]}
+        for r in result["rounds"]:
+            for t in r["tests"]:
+                tg = targets[t["name"]]
+                L.append(f"| {r['round']} | {_show_point(r['optimum'])} | {', '.join(r['on_edge']) or '-'} | "
+                         f"{t['name']} | {t['model']} ({_fmt(t['loo_rmse'], 3)}) | "
+                         f"{_pm(t['predicted'], t['predicted_se'])} | "
+                         f"{', '.join(_fmt(v) for v in t['achieved'])} | "
+                         f"{_pm(t['achieved_mean'], t['achieved_sd'])} ({_fmt(t['achieved_sem'], 2)}) | "
+                         f"{_fmt(abs(t['achieved_mean'] - tg['target']) / tg['target_sd'], 3)} | "
+                         f"{'yes' if r['passed'] else 'no'} |")
     L += ["", "## Verification at the optimum", "",
           f"The optimum: {_show_point(result['optimum'])}. Fresh runs (placement seeds the design "
           "did not use):", "",
-          "| test | target | predicted | achieved (each run) | achieved mean +- sd | within the measured scatter |",
-          "|---|---|---|---|---|---|"]
+          "| test | target | predicted | achieved (each run) | achieved mean +- sd | SEM | within the measured scatter |",
+          "|---|---|---|---|---|---|---|"]
     for t in result["tests"]:
         L.append(f"| {t['name']} | {_pm(t['target'], t['target_sd'])} {t['unit']} | {_fmt(t['predicted'])} | "
                  f"{', '.join(_fmt(v) for v in t['achieved'])} | {_pm(t['achieved_mean'], t['achieved_sd'])} | "
-                 f"{'yes' if t['within_scatter'] else 'NO'} |")
+                 f"{_fmt(t.get('achieved_sem', math.nan), 2)} | {'yes' if t['within_scatter'] else 'NO'} |")
+    L += ["", "Pass criterion: |achieved mean - target| <= target sd for every test (the achieved "
+          "mean over the verification runs; its standard error, `SEM`, should lie below the target "
+          "sd for the verdict to mean something)."]
     L.append("")
     L.append(("**Calibrated**: every verified value lies within the measured scatter of its target."
               if result["within_scatter"] else
@@ -1028,7 +1296,7 @@ def write_report(result: dict, spec: Spec, path: Path, png: Optional[str]) -> No
         L.append(f"- The optimum lies on the edge of the range of `{key}`: the targets may need "
                  "values beyond it, and the surface is least certain there.")
     L.append("")
-    if len(result.get("attempts", [])) > 1:
+    if len(result.get("attempts", [])) > 1 and not result.get("rounds"):
         L += ["Levels that fit the targets equally well (chi2 within "
               f"{LEVEL_TIE:g} of the lowest) are verified in the spec's order until one meets "
               "every target within its scatter; every verified optimum:", "",
@@ -1186,10 +1454,15 @@ def run(args) -> int:
         return 1
     for t in result["tests"]:
         print(f"{t['name']}: target {_pm(t['target'], t['target_sd'])} {t['unit']}, achieved "
-              f"{_pm(t['achieved_mean'], t['achieved_sd'])} ({len(t['achieved'])} runs): "
+              f"{_pm(t['achieved_mean'], t['achieved_sd'])} ({len(t['achieved'])} runs, standard error "
+              f"{_fmt(t.get('achieved_sem', math.nan), 2)}): "
               + ("within the measured scatter" if t["within_scatter"] else "NOT within the measured scatter")
               + ("" if t["target_reachable"] else " (the target is out of the ranges' reach)"))
-    print(f"calibrated: {_show_point(result['optimum'])}")
+    if result.get("rounds"):
+        print(f"rounds: {len(result['rounds'])} of at most {result['design']['rounds']}; pass criterion: "
+              f"{result['pass_criterion']}")
+    print(f"{'calibrated' if result['within_scatter'] else 'NOT calibrated; the closest verified'}: "
+          f"{_show_point(result['optimum'])}")
     print(f"results: {Path(args.out) / 'calibrated_material.toml'}, {Path(args.out) / 'calibration.md'}")
     return 0
 
