@@ -1040,7 +1040,8 @@ def assemble(spec, points, planned, records, design_resp, per_level, best, optim
                       "loo_rmse": s.loo_rmse, "candidates": dict(s.tried), "pure_sd": s.pure_sd,
                       "coefficients": [float(c) for c in s.coef]}
                      for t, s in zip(spec.tests, r["fits"])],
-            "reachable": [list(x) for x in r["reach"]], "predicted": r["predicted"]})
+            "reachable": [list(x) for x in r["reach"]], "predicted": r["predicted"],
+            "predicted_se": r.get("predicted_se", [math.nan] * len(spec.tests))})
     design_rows = []
     for ci, pt in enumerate(points):
         row = {"point": ci, "overrides": pt,
@@ -1261,7 +1262,7 @@ def write_report(result: dict, spec: Spec, path: Path, png: Optional[str]) -> No
               "|achieved mean - target| <= target sd. A round that fails adds its verification runs "
               "to the design (and points near an optimum on a range's edge) for the next. `SEM`: "
               "the standard error of the achieved mean (sd / sqrt(runs)).", "",
-              "| round | optimum | on the edge of | test | model (LOO) | predicted | achieved (each run) | achieved mean +- sd (SEM) | |mean - target| / target sd | passed |",
+              "| round | optimum | on the edge of | test | model (LOO) | predicted | achieved (each run) | achieved mean +- sd (SEM) | distance from the target / target sd | passed |",
               "|---|---|---|---|---|---|---|---|---|---|"]
         targets = {t["name"]: t for t in result["tests"]}
         for r in result["rounds"]:
@@ -1369,15 +1370,17 @@ def write_plot(result: dict, spec: Spec, path: Path) -> bool:
             ax.plot(p0.low + 0.5 * (grid + 1) * (p0.high - p0.low), s(pts), "-", color=c,
                     label=f"{name}: fit (R$^2$ {_fmt(fit['r2'], 2)})")
         level_names = [tuple(lv["level"]) for lv in result["levels"]]
-        for a in result.get("attempts") or [{"optimum": result["optimum"], "chosen": True,
-                                             "tests": result["tests"]}]:
+        attempts = result.get("attempts") or [{"optimum": result["optimum"], "chosen": True,
+                                               "tests": result["tests"]}]
+        for ai, a in enumerate(attempts):
             at = a["tests"][k]
             lev = tuple(a["optimum"][f.keys[0]] for f in spec.factors)
             c = colours[level_names.index(lev) % len(colours)] if lev in level_names else "k"
             sd = at["achieved_sd"] if math.isfinite(at["achieved_sd"]) else 0.0
             ax.errorbar([a["optimum"][p0.key]], [at["achieved_mean"]], yerr=[sd], fmt="*", ms=13,
                         color=c, mec="k", capsize=4,
-                        label=f"{', '.join(map(str, lev)) or 'optimum'}: verified (mean +- sd)"
+                        label=(f"round {ai + 1}, " if len(attempts) > 1 else "")
+                        + f"{', '.join(map(str, lev)) or 'optimum'}: verified (mean +- sd)"
                               + (" - chosen" if a["chosen"] else ""))
         ax.set_xlabel(p0.key)
         ax.set_ylabel(f"{t['name']} ({t['unit']})")
