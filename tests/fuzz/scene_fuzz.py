@@ -1552,7 +1552,12 @@ def schema_mutations(rng, node: dict, value, path) -> list:
     if "enum" in node or "const" in node:
         words = [w for w in node.get("enum", [node.get("const")]) if isinstance(w, str)]
         if words:
-            put_value("bad_enum", _typo(rng, rng.choice(words)))
+            # a typo can leave a word as it was (swapping the two s of "mass") or make another
+            # valid one: only a word outside the choices is a bad choice
+            typo = next((t for t in (_typo(rng, rng.choice(words)) for _ in range(20))
+                         if t not in words), None)
+            if typo is not None:
+                put_value("bad_enum", typo)
         put_value("wrong_type", 3)
     if types and "boolean" not in types:
         put_value("wrong_type", True)
