@@ -30,6 +30,7 @@ from ..sensors import Now, build_sensors
 from ..sensors.particles import mass_inside
 from ..sensors.pooling import amounts, pool, should_pool
 from ..setup.pair_tables import build_pair_tables
+from ..setup.memory import factory_capacity as _factory_capacity
 from ..setup.placement import place_fills
 from ..setup.timestep import choose_step_and_skin
 
@@ -120,24 +121,6 @@ def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
                 print(f"taichi-dem: note: {msg}")
             skin = allowed
     return skin
-
-
-def _factory_capacity(scene: Scene) -> int:
-    """Slots for factory particles: what the schedules insert until end_time plus 10 %, but
-    no more than the domain could hold at random close packing (0.64); or max_particles."""
-    if not scene.factories:
-        return 0
-    if scene.simulation.max_particles is not None:
-        return max(scene.simulation.max_particles - scene.expected_particle_count, 0)
-    total = 0.0
-    smallest = math.inf
-    for f in scene.factories:
-        mass = f.mass_rate.mass_until(scene.simulation.end_time)
-        total += mass / (scene.materials[f.material].density * f.mean_particle_volume())
-        smallest = min(smallest, 4.0 / 3.0 * math.pi * f.smallest_radius ** 3)
-    span = np.asarray(scene.domain.max) - np.asarray(scene.domain.min)
-    packing = 0.64 * float(np.prod(span)) / smallest
-    return int(min(1.1 * total + 64, packing))
 
 
 # overlap (fraction of the radius) with a body beyond which particles are reported as pinched

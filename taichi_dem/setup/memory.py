@@ -6,10 +6,13 @@ Plain Python and numpy: ``check`` uses it without starting the Taichi runtime.
 """
 from __future__ import annotations
 
+import math
 import os
 import shutil
 import subprocess
 from typing import Optional
+
+import numpy as np
 
 # particle slots are indexed with 32-bit integers, so the estimate below never needs more
 LIST_ENTRIES_PER_PARTICLE = 8      # neighbour entries per particle the lists start with
@@ -54,11 +57,28 @@ def estimated_device_bytes(slots: int, precision: str) -> int:
             + CELLS_PER_PARTICLE * slots * 2 * 4)
 
 
+def factory_capacity(scene) -> int:
+    """Slots for factory particles: what the schedules insert until end_time plus 10 %, but
+    no more than the domain could hold at random close packing (0.64); or max_particles."""
+    if not scene.factories:
+        return 0
+    if scene.simulation.max_particles is not None:
+        return max(scene.simulation.max_particles - scene.expected_particle_count, 0)
+    total = 0.0
+    smallest = math.inf
+    for f in scene.factories:
+        mass = f.mass_rate.mass_until(scene.simulation.end_time)
+        total += mass / (scene.materials[f.material].density * f.mean_particle_volume())
+        smallest = min(smallest, 4.0 / 3.0 * math.pi * f.smallest_radius ** 3)
+    span = np.asarray(scene.domain.max) - np.asarray(scene.domain.min)
+    packing = 0.64 * float(np.prod(span)) / smallest
+    return int(min(1.1 * total + 64, packing))
+
+
 def particle_slots(scene) -> int:
     """Slots the engine allocates: the fills' particles plus the factories' capacity
-    (run/simulation.py ``_factory_capacity``, which honours max_particles)."""
-    from ..run.simulation import _factory_capacity
-    return scene.expected_particle_count + _factory_capacity(scene)
+    (``factory_capacity``, which honours max_particles)."""
+    return scene.expected_particle_count + factory_capacity(scene)
 
 
 def _blamed_key(scene) -> str:
