@@ -56,20 +56,6 @@ REGION_FILL = ('radius = 0.004\ncount = 20\n'
                'region = { box = { min = [-0.05, -0.05, 0.01], max = [0.05, 0.05, 0.2] } }')
 
 
-class RuntimeStarted(BaseException):
-    """``check`` (or a scene refused on load) must not initialise Taichi."""
-
-
-@pytest.fixture
-def no_taichi_runtime(monkeypatch):
-    """As in test_fuzz_scenes.py: starting the Taichi runtime raises."""
-    from taichi_dem.engine import backend
-
-    def refuse(*args, **kwargs):
-        raise RuntimeStarted("the Taichi runtime was started (ti.init): kernels would compile")
-    monkeypatch.setattr(backend, "acquire", refuse)
-
-
 def cli(*argv) -> tuple:
     """``taichi-dem ARGV`` in-process: (exit status, stderr + stdout). Any exception escaping
     main() is what a user would see as a traceback, and fails the test."""

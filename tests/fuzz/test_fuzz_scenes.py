@@ -32,19 +32,6 @@ RUN_CASES = [c for cat in sf.CATEGORIES
              for c in [x for x in CORPUS if x.category == cat][:RUN_PER_CATEGORY]]
 
 
-class RuntimeStarted(BaseException):
-    """``check`` (or a scene refused on load) must not initialise Taichi."""
-
-
-@pytest.fixture
-def no_taichi_runtime(monkeypatch):
-    from taichi_dem.engine import backend
-
-    def refuse(*args, **kwargs):
-        raise RuntimeStarted("the Taichi runtime was started (ti.init): kernels would compile")
-    monkeypatch.setattr(backend, "acquire", refuse)
-
-
 def _report(case, outcome) -> str:
     return (f"{case.ident}: {'; '.join(outcome.problems)}\n"
             f"expected key: {' or '.join(case.expect_keys) or '-'}; fragments: "

@@ -72,20 +72,6 @@ def pile(simulation="", density="2500.0", youngs="5.0e7", materials="", radius='
                        interval=interval, output=output)
 
 
-class RuntimeStarted(AssertionError):
-    pass
-
-
-@pytest.fixture
-def no_taichi_runtime(monkeypatch):
-    """`check` must not start the Taichi runtime (as in test_fuzz_scenes.py)."""
-    from taichi_dem.engine import backend
-
-    def refuse(*args, **kwargs):
-        raise RuntimeStarted("the Taichi runtime was started (ti.init): kernels would compile")
-    monkeypatch.setattr(backend, "acquire", refuse)
-
-
 def write(folder, text, name="scene.toml"):
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / name
