@@ -292,3 +292,17 @@ def _forget_last_exception() -> None:
     for name in ("last_type", "last_value", "last_traceback", "last_exc"):
         if hasattr(sys, name):
             delattr(sys, name)
+
+
+class RuntimeStarted(BaseException):
+    """``check`` (or a scene refused on load) must not initialise Taichi."""
+
+
+@pytest.fixture
+def no_taichi_runtime(monkeypatch):
+    """Starting the Taichi runtime (engine/backend.py ``acquire``) raises RuntimeStarted."""
+    from taichi_dem.engine import backend
+
+    def refuse(*args, **kwargs):
+        raise RuntimeStarted("the Taichi runtime was started (ti.init): kernels would compile")
+    monkeypatch.setattr(backend, "acquire", refuse)
