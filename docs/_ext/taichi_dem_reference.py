@@ -104,6 +104,18 @@ def _walk(section, path: str, sections, level: int, out: list[str], rows: list[l
             later.append((nested, kpath, key))
             continue
         rows.append(_key_row(key, kpath))
+        items = (key.schema or {}).get("items")
+        if nested is None and isinstance(items, dict) and "properties" in items:
+            # an array of tables with declared entries (a calibration record's tests): a
+            # row for each entry key
+            for name, node in items["properties"].items():
+                kind = node.get("type", "")
+                kind = " or ".join(kind) if isinstance(kind, list) else kind
+                rows.append([code(f"{kpath}[].{name}"), kind, "",
+                             "required" if name in items.get("required", ()) else "none", "",
+                             md(node.get("description", ""))])
+                paths.append(f"{kpath}[].{name}")
+            continue
         paths.append(kpath)
         if nested is not None:     # a value or that table: its keys as rows under it
             for sub in nested.keys:

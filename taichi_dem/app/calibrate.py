@@ -1109,9 +1109,38 @@ def material_blocks(scene_path: str, material: str, optimum: dict) -> dict:
                              if material in i.get("pair", [])]}
 
 
-def calibration_record(result: dict) -> dict:
+def _interaction_key(doc: dict, key: str) -> dict:
+    """{"pair": [a, b], "field": name} for a spec key ``interactions.N.name`` of the base
+    scene ``doc`` ({} for any other key): what the key sets, in terms a scene with other
+    interactions (another order, other partners) can be compared with."""
+    parts = key.split(".")
+    if len(parts) == 3 and parts[0] == "interactions" and parts[1].isdigit():
+        items = doc.get("interactions", [])
+        i = int(parts[1])
+        if i < len(items) and isinstance(items[i].get("pair"), list):
+            return {"pair": list(items[i]["pair"]), "field": parts[2]}
+    return {}
+
+
+def calibration_record(result: dict, base_scene: Optional[str] = None) -> dict:
     """The machine-readable record (TOML-ready: no None, no tuples): what a scene's
-    ``materials.<name>.calibration`` table would hold."""
+    ``materials.<name>.calibration`` table would hold. ``base_scene``: the first test's
+    scene, to name the interaction pair each calibrated key sets (scene/sections/
+    calibration.py compares them with the scene that claims the material)."""
+    doc = {}
+    if base_scene:
+        try:
+            doc = tomllib.loads(Path(base_scene).read_text(encoding="utf-8-sig"))
+        except (OSError, tomllib.TOMLDecodeError):
+            doc = {}
+    parameters = [{**p, **_interaction_key(doc, p["key"])} for p in result["parameters"]]
+    factors = []
+    for f in result["factors"]:
+        entry = {k: f[k] for k in ("keys", "levels", "value")}
+        named = [_interaction_key(doc, k) for k in f["keys"]]
+        if named and all(named) and len({n["field"] for n in named}) == 1:
+            entry.update(pairs=[n["pair"] for n in named], field=named[0]["field"])
+        factors.append(entry)
     def clean(v):
         if isinstance(v, dict):
             return {k: clean(x) for k, x in v.items() if x is not None}
@@ -1128,8 +1157,7 @@ def calibration_record(result: dict) -> dict:
              for t in result["tests"]]
     rec = {"date": result["date"], "command": result["command"], "spec": result["spec"],
            "sphere_radius": result["sphere_radius"], "within_scatter": result["within_scatter"],
-           "design": result["design"], "parameters": result["parameters"],
-           "factors": [{k: f[k] for k in ("keys", "levels", "value")} for f in result["factors"]],
+           "design": result["design"], "parameters": parameters, "factors": factors,
            "tests": tests,
            "rounds": [{"round": r["round"], "optimum": r["optimum"], "passed": r["passed"],
                        "achieved_mean": [t["achieved_mean"] for t in r["tests"]],
@@ -1188,7 +1216,7 @@ def write_material(result: dict, spec: Spec, path: Path) -> None:
               f"# materials.{spec.material}.calibration key.", ""]
     body = tomli_w.dumps({"materials": blocks["materials"]}) + "\n"
     body += tomli_w.dumps({"interactions": blocks["interactions"]}) + "\n"
-    rec = tomli_w.dumps({"materials": {spec.material: {"calibration": calibration_record(result)}}})
+    rec = tomli_w.dumps({"materials": {spec.material: {"calibration": calibration_record(result, spec.tests[0].scene)}}})
     # tomli-w writes the record as [materials.ash.calibration] and its sub-tables; drop the
     # empty [materials] / [materials.ash] headers it may repeat
     rec_lines = [l for l in rec.splitlines() if l.strip() not in ("[materials]", f"[materials.{spec.material}]")]

@@ -295,6 +295,8 @@ def describe_scene(scene) -> str:
                         "used: a scene without factories allocates exactly the particles its "
                         f"fills place ({n_initial:,})")
     lines += [f"note: {note}" for note in ts.notes]
+    from ..scene.sections.calibration import describe_calibration
+    lines += describe_calibration(scene)
     return "\n".join(lines)
 
 
@@ -408,9 +410,11 @@ def _window_problem(args):
 
 
 def _note_ignored(source, scene) -> None:
-    """A note on stderr for each key the scene gives that nothing will read."""
+    """A note on stderr for each key the scene gives that nothing will read, and for each
+    way it departs from a material's calibration record."""
+    from ..scene.sections.calibration import calibration_notes
     from ..scene.sections.consistency import ignored_keys
-    for key, reason in ignored_keys(scene):
+    for key, reason in ignored_keys(scene) + calibration_notes(scene):
         print(f"note: {source}: {key}: {reason}", file=sys.stderr)
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 
@@ -52,6 +52,48 @@ class CoarseGraining:
 
 
 @dataclass(frozen=True)
+class CalibrationTest:
+    """One bench test of a calibration record: its target (the measured mean and scatter) and
+    what the calibrated material achieved over ``runs`` fresh runs, in ``unit``."""
+    name: str
+    unit: str = ""
+    scene: str = ""
+    target: Optional[float] = None
+    target_sd: Optional[float] = None
+    achieved_mean: Optional[float] = None
+    achieved_sd: Optional[float] = None
+    achieved_sem: Optional[float] = None
+    runs: int = 0
+    within_scatter: Optional[bool] = None
+
+
+@dataclass(frozen=True)
+class CalibratedValue:
+    """A calibrated parameter or choice: the spec's ``key``, its ``value`` and, when the record
+    says so, the interaction ``pair`` and its ``field`` it sets."""
+    key: str
+    value: Any
+    pair: Optional[tuple[str, str]] = None
+    field: str = ""
+    material: str = ""
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """[materials.NAME.calibration]: what the material was calibrated against (the record of
+    ``taichi-dem calibrate``; ``source``: the file it was read from)."""
+    source: str
+    against: str = ""
+    date: str = ""
+    command: str = ""
+    spec: str = ""
+    sphere_radius: tuple[float, ...] = ()       # m: the sizes it holds for
+    within_scatter: Optional[bool] = None
+    tests: tuple[CalibrationTest, ...] = ()
+    values: tuple[CalibratedValue, ...] = ()
+
+
+@dataclass(frozen=True)
 class Material:
     name: str
     density: float                       # kg/m^3
@@ -65,6 +107,7 @@ class Material:
     surface_roughness: float = 0.0                 # m, Schlünder's delta (the gas gap's widening)
     surface_slope: Optional[float] = None          # RMS asperity slope (rough contact spots)
     microhardness: Optional[float] = None          # Pa (rough contact spots)
+    calibration: Optional[Calibration] = None      # what it was calibrated against
 
     @property
     def shear_modulus(self) -> float:

@@ -258,7 +258,9 @@ def _rules() -> dict[str, list[dict]]:
                         "then": {"propertyNames": {"enum": list(allowed)},
                                  "required": ["name", *need]}})
     sensors.append({"not": _given("radius", "box")})
+    from taichi_dem.scene.sections.calibration import SCHEMA_RULES as calibration_rules
     return {
+        "materials.*.calibration": calibration_rules,
         "particles[]": [
             {"if": _given("file"), "then": _none_of(*fill_keys),
              "else": {"required": list(fill_keys), **_none_of("frame")}},

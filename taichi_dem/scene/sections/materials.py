@@ -1,4 +1,4 @@
-"""[materials.NAME] (with coarse_grained) and [[interactions]]: their keys and checks."""
+"""[materials.NAME] (with coarse_grained and calibration) and [[interactions]]: their keys and checks."""
 from __future__ import annotations
 
 import math
@@ -7,6 +7,7 @@ from typing import Any
 from ..keys import REQUIRED, Key, Section, register
 from ..keys import type_name as _type_name
 from ..model import CoarseGraining, Interaction, Material
+from .calibration import CALIBRATION, CalibrationSection
 
 ROLLING_MODELS = ("constant_torque", "epsd")
 _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
@@ -51,7 +52,10 @@ MATERIAL = register(Section("materials.*", "A material, [materials.NAME]", (
     Key("coarse_grained", "table", "these particles stand for a finer bed (its heat law to "
         "walls): { represented_diameter, bed_porosity, surface_coverage, roughness }",
         default=None),
-), owner=__name__, nested={"coarse_grained": COARSE_GRAINED}))
+    Key("calibration", "table", "what the material was calibrated against: the record "
+        "`taichi-dem calibrate` writes, or its file ([materials.NAME.calibration])",
+        default=None),
+), owner=__name__, nested={"coarse_grained": COARSE_GRAINED, "calibration": CALIBRATION}))
 
 INTERACTION = register(Section("interactions[]", "The contact parameters of a pair of "
                                "materials, [[interactions]]", (
@@ -71,7 +75,7 @@ INTERACTION = register(Section("interactions[]", "The contact parameters of a pa
 ), owner=__name__))
 
 
-class MaterialSections:
+class MaterialSections(CalibrationSection):
     """Read by the loader's parser (scene/loader.py), which mixes this in with the reading
     helpers of common.Reader."""
 
@@ -96,6 +100,9 @@ class MaterialSections:
             if "coarse_grained" in m:
                 kw["coarse_grained"] = self.parse_coarse_grained(m["coarse_grained"],
                                                                  f"{key}.coarse_grained")
+            if "calibration" in m:
+                kw["calibration"] = self.parse_calibration(m["calibration"],
+                                                           f"{key}.calibration", name)
             out[name] = Material(name=name, **kw)
         return out
 
