@@ -526,6 +526,10 @@ def add_arguments(p) -> None:
                    help="a scene key changed for every slice (one value; repeatable), e.g. "
                         "simulation.precision=f64 or particles.0.radius=0.012: the map of a "
                         "modelling choice, to set beside the scene's own")
+    p.add_argument("--stagger", type=float, default=None, metavar="DEG",
+                   help="paddle rows turned DEG each from the one before: the slice (one row) "
+                        "is made the repeating unit of rows (45 deg with 4 paddles: 2 rows, "
+                        "30: 3; app/stagger.py); default: the scene's own rows")
     p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"],
                    help="where the kernels run: cpu, or a GPU backend (gpu picks one; default cpu)")
     p.add_argument("--dask", action="store_true",
@@ -542,7 +546,7 @@ def _print_result(result: SliceResult) -> None:
     torque = {k: v for k, v in result.figures.items() if k.endswith("/torque_per_metre")}
     print(f"incline {result.incline:.3g} deg, hold-up {result.holdup:.4g} kg/m "
           f"({result.particles} particles): axial mass flow "
-          f"{result.figures['axial_mass_flow']} kg/s, "
+          f"{result.figures.get('axial_mass_flow', 'n/a')} kg/s, "
           + ", ".join(f"{k.split('/')[0]} torque {v} N m/m" for k, v in torque.items()),
           flush=True)
 
@@ -562,7 +566,8 @@ def _rows_to_add_to(out: Path, scene_name: str, info: dict) -> list[dict]:
         raise SceneError(str(js), "scene", f"--add: the map is of {doc.get('scene')!r}, not "
                          f"{scene_name!r}")
     theirs = doc.get("machine", {})
-    for key in ("scene_changes", "particle_diameter", "shell_radius", "period", "axis"):
+    for key in ("scene_changes", "particle_diameter", "shell_radius", "period", "axis",
+                "stagger_deg"):
         a, b = theirs.get(key), info.get(key)
         same = (a == b if not isinstance(a, float) or not isinstance(b, float)
                 else math.isclose(a, b, rel_tol=1e-9))
@@ -601,6 +606,18 @@ def cmd_map(args) -> int:
     from ..scene.loader import parse_scene
     scene = parse_scene(text, source=str(path), base_dir=path.parent)
     geometry = slice_geometry(scene)
+    stagger_rows = None
+    if getattr(args, "stagger", None) is not None:
+        # the repeating unit of rows turned by the stagger (app/stagger.py)
+        from .overrides import to_text
+        from .stagger import staggered_doc
+        doc, stagger_rows = staggered_doc(tomllib.loads(text), args.stagger, str(path),
+                                          geometry.axis, geometry.length)
+        text = to_text(doc)
+        scene = parse_scene(text, source=str(path), base_dir=path.parent)
+        geometry = slice_geometry(scene)
+        print(f"stagger {args.stagger:g} deg: a slice of {stagger_rows} row(s), "
+              f"{geometry.length:.4g} m", file=sys.stderr)
     if not 0 <= args.fill < len(scene.fills):
         raise SceneError(str(path), "particles", f"--fill {args.fill}: the scene has "
                          f"{len(scene.fills)} fill(s)")
@@ -609,12 +626,20 @@ def cmd_map(args) -> int:
         print(f"note: {path}: thermal.time_scale = {scale:g}: the conductance per metre is "
               "lowered where heat outruns the mixing (-71 % at 10 on a cooler slice); map "
               "the heat at 1 for the march's outlet temperature", file=sys.stderr)
+    interval = scene.output.interval
+    if interval and args.time < 4.0 * interval:
+        raise SceneError("--time", "", f"{args.time:g} s holds fewer than 4 samples of "
+                         f"output.interval = {interval:g} s: the steady means need more "
+                         "(a map wants several seconds of steady flow)")
     for h in holdups:       # refuse every impossible hold-up before running any
         holdup_count(scene, geometry, h, args.fill)
     out = Path(args.out) if args.out else path.with_name(path.stem + "_map")
     info = machine_info(scene, geometry, args.fill)
     if changes:
         info["scene_changes"] = changes          # what --set changed: the modelling choice
+    if stagger_rows is not None:
+        info["stagger_deg"] = float(args.stagger)
+        info["rows_per_slice"] = stagger_rows
     old_rows = _rows_to_add_to(out, path.name, info) if args.add else []
     jobs = [(i, h) for i in (args.incline or [None]) for h in holdups]
     if args.dask or args.scheduler:
