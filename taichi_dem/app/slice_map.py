@@ -368,10 +368,10 @@ def machine_info(scene, geometry: SliceGeometry, fill_index: int = 0) -> dict:
 
 def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float,
               fill_index: int = 0, base_dir=None, arch: str = "cpu",
-              incline: float | None = None) -> SliceResult:
+              incline: float | None = None, threads: int | None = None) -> SliceResult:
     """Build the slice of scene ``text`` at ``holdup`` (and ``incline`` deg, the +axis end
     raised; None: the scene's gravity), run it ``duration`` s, and reduce each sampled figure
-    to its steady mean."""
+    to its steady mean. ``threads``: CPU threads (None: all cores)."""
     from ..run.simulation import Simulation
     from ..scene.loader import parse_scene
     from .overrides import apply, to_text
@@ -385,7 +385,7 @@ def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float
     doc = apply(tomllib.loads(text), changes, source)
     sliced = parse_scene(to_text(doc), source=source, base_dir=base_dir)
     angle, slope = incline_of(sliced.simulation.gravity, geometry)
-    with Simulation(sliced, arch=arch, h5="") as sim:
+    with Simulation(sliced, arch=arch, h5="", threads=threads) as sim:
         observer = SliceObserver(sim, geometry)
         sim.add_observer(observer, now=False)
         sim.run(sim.time + duration)
@@ -532,6 +532,9 @@ def add_arguments(p) -> None:
                         "30: 3; app/stagger.py); default: the scene's own rows")
     p.add_argument("--arch", default="cpu", choices=["cpu", "gpu", "cuda", "vulkan", "metal"],
                    help="where the kernels run: cpu, or a GPU backend (gpu picks one; default cpu)")
+    p.add_argument("--threads", type=int, default=None, metavar="N",
+                   help="CPU threads per slice (default: all cores); 1 for maps run side by "
+                        "side, or with --dask workers")
     p.add_argument("--dask", action="store_true",
                    help="run the slices as tasks on Dask workers (a LocalCluster here, or "
                         "--scheduler) instead of one after another in this process")
@@ -601,6 +604,8 @@ def cmd_map(args) -> int:
             holdups.append(parse_holdup(value))
         except ValueError as err:
             raise SceneError("--holdup", "", str(err)) from None
+    if args.threads is not None and args.threads < 1:
+        raise SceneError("--threads", "", f"must be at least 1, got {args.threads}")
     if not args.time > 0.0:
         raise SceneError("--time", "", f"must be > 0 s, got {args.time}")
     from ..scene.loader import parse_scene
@@ -648,7 +653,8 @@ def cmd_map(args) -> int:
         client = make_client(args.scheduler, args.workers)
         try:
             futures = [client.submit(run_slice, text, str(path), h, args.time, args.fill,
-                                     base_dir=path.parent, arch=args.arch, incline=i, pure=False)
+                                     base_dir=path.parent, arch=args.arch, incline=i,
+                                     threads=args.threads, pure=False)
                        for i, h in jobs]
             results = client.gather(futures)
         finally:
@@ -659,7 +665,7 @@ def cmd_map(args) -> int:
         results = []
         for incline, h in jobs:
             result = run_slice(text, str(path), h, args.time, args.fill, base_dir=path.parent,
-                               arch=args.arch, incline=incline)
+                               arch=args.arch, incline=incline, threads=args.threads)
             results.append(result)
             _print_result(result)
     new_keys = {(round(r.holdup, 6), round(r.incline, 6)) for r in results}
