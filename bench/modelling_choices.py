@@ -33,6 +33,11 @@ f32 against f64 over a longer window at the operating hold-up (20 s at 60 kg/m, 
     (the same with f64 into long_f64)
     python bench/modelling_choices.py --compare docs/machine/seed_cooler/modelling_choices/long_f32 \
         docs/machine/seed_cooler/modelling_choices/long_f64 --out docs/machine/seed_cooler/modelling_choices/precision_long.md
+
+The presets' slices now hold the calibrated ash (issue 44); the choices published so far
+were mapped on the free-rolling ash (rolling friction 0.05, EPSD) against its own maps, and
+lie with them in docs/machine/seed_cooler/free_rolling/ (modelling_choices*/). A run now maps
+the choices on the calibrated ash against docs/machine/seed_cooler/original and optimised.
 """
 import argparse
 import json

@@ -148,8 +148,9 @@ def cap_text(out: dict) -> str:
     return fmt(out["capacity"], out["capacity_error"], 3.6) + " t/h"
 
 
-def table(results: dict, walls: dict | None) -> str:
-    rows = [("quantity", "seed 001 (EDEM, 15 mm spheres)", "taichi_dem (slices at 15 mm, march)")]
+def _rows(results: dict) -> list:
+    """(quantity, the seed's value, ours) for each answer of ``results``."""
+    rows = []
     for design, seed in (("original", {
             "capacity": "about 6 t/h; 4.6 t/h already at its limit",
             "speed": "0.02 m/s, 300 s over 6 m (at 6.5 t/h fed to the pair; 4.6 t/h in cooler 1)",
@@ -212,43 +213,128 @@ def table(results: dict, walls: dict | None) -> str:
                   fmt(drive, drive_e) + " N m"),
                  (f"{label}: outlet temperature at 6.5 t/h (C)", "(not simulated)",
                   fmt(a.outlet_temperature - 273.15, e.get("outlet_temperature")))]
-    lines = ["| " + " | ".join(rows[0]) + " |", "|---|---|---|"]
-    lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]
+    return rows
+
+
+def table(columns: list, walls: dict | None) -> str:
+    """The seed's table with a column of ours for each (title, results) of ``columns``: the
+    calibrated ash's, then the free-rolling ash's (issue 44)."""
+    header = ["quantity", "seed 001 (EDEM, 15 mm spheres)"] + [c for c, _ in columns]
+    by_column = [{q: (s, o) for q, s, o in _rows(r)} for _, r in columns]
+    order = []
+    for rows in by_column:
+        order += [q for q in rows if q not in order]
+    lines = ["| " + " | ".join(header) + " |", "|---" * len(header) + "|"]
+    for q in order:
+        seed = next((rows[q][0] for rows in by_column if q in rows and rows[q][0]), "")
+        cells = [rows[q][1] if q in rows else "" for rows in by_column]
+        lines.append("| " + " | ".join([q, seed] + cells) + " |")
     if walls:
         lines += ["", "map wall times on this machine: " + ", ".join(
             f"{d} {w / 60:.1f} min" for d, w in walls.items())]
-    lines += ["", "Errors: one standard deviation from the maps' noise (re-marches). What the "
-              "precision, the particle size, the thermal time scale and the one-row slice's "
-              "stagger of 0 (against two rows staggered 45 deg) move the answers by is in the "
+    lines += ["", "Errors: one standard deviation from the maps' noise (re-marches). "
+              "Calibrated ash: seed 001's fly ash fitted by `taichi-dem calibrate` to its eight "
+              "heaps (Table 2, 38.0 +- 0.8 deg; constant torque, rolling friction 1.38 ash-ash "
+              "and 1.5 ash-steel, docs/calibration/). Free-rolling ash: the first maps' rolling "
+              "friction 0.05 (EPSD), whose heap stands at ~20 deg. What the precision, the "
+              "particle size, the thermal time scale and the one-row slice's stagger of 0 "
+              "(against two rows staggered 45 deg) moved the free-rolling answers by is in the "
               "tables below."]
     return "\n".join(lines)
+
+
+SLICE_FIGURES = (("axial speed (mm/s)", "axial_speed", 1e3),
+                 ("shaft torque (N m per m)", "shaft/torque_per_metre", -1.0),
+                 ("shell torque (N m per m)", "shell/torque_per_metre", 1.0),
+                 ("dynamic angle (deg)", "dynamic_angle", 1.0),
+                 ("bed solid fraction", "bed_solid_fraction", 1.0),
+                 ("shell conductance per metre (W/(m K))", "shell/conductance_per_metre", 1.0))
+
+
+def slice_comparison(out: Path, free: Path, holdup: float = 60.0) -> str:
+    """Each design's slice at ``holdup`` kg/m and its incline, calibrated against
+    free-rolling ash: the figures the issue set side by side (no march: the maps' rows)."""
+    lines = []
+    for design, (_, incline) in DESIGNS.items():
+        pair = []
+        for folder in (out / design, free / design):
+            try:
+                rows = json.loads((folder / "map.json").read_text())["rows"]
+            except OSError:
+                break
+            row = [r for r in rows if abs(r["holdup_kg_per_m"] - holdup) < 1e-6
+                   and abs(r["incline_deg"] - incline) < 1e-6]
+            if not row:
+                break
+            pair.append(row[0])
+        if len(pair) != 2:
+            continue
+        if not lines:
+            lines = [f"The slices themselves at {holdup:g} kg/m and each design's incline "
+                     "(the maps' rows, steady means +- standard error; shaft torque as the "
+                     "drive's, positive):", "",
+                     "| design | figure | calibrated ash | free-rolling ash | change |",
+                     "|---|---|---|---|---|"]
+        for label, key, scale in SLICE_FIGURES:
+            cells = []
+            for r in pair:
+                v, e = r.get(key), r.get(f"{key}_standard_error")
+                if v is None:
+                    cells.append("n/a")
+                    continue
+                text = f"{v * scale:.3g}" + (f" +- {abs(e * scale):.2g}" if e is not None else "")
+                if r.get(f"{key}_steady") is False:
+                    text += " (not steady)"
+                cells.append(text)
+            a, b = pair[0].get(key), pair[1].get(key)
+            change = f"{100 * (a / b - 1):+.0f} %" if a is not None and b else ""
+            lines.append(f"| {design}, {incline:g} deg | {label} | {cells[0]} | {cells[1]} | "
+                         f"{change} |")
+    return "\n".join(lines)
+
+
+def design_results(out: Path) -> dict:
+    """The marched answers of each design whose map is in ``out`` (and the optimised design
+    with the inlet screw's map, when there is one)."""
+    results = {}
+    for design, (_, incline) in DESIGNS.items():
+        folder = out / design
+        if (folder / "map.json").exists():
+            results[design] = answers(folder, incline)
+        else:
+            print(f"no map for {design} in {folder}", file=sys.stderr)
+    if "optimised" in results and (out / SCREW[1] / "map.json").exists():
+        screw = mc.MachineMap.load(out / SCREW[1])
+        results["optimised_with_screw"] = answers(out / "optimised", DESIGNS["optimised"][1],
+                                                  [(screw, SCREW_LENGTH)], feeds_t_h=(6.5, 13.0))
+    return results
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--run", action="store_true", help="run the maps first")
     p.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "seed_cooler")
+    p.add_argument("--free-rolling", type=Path, default=None,
+                   help="the maps on the free-rolling ash (default OUT/free_rolling): their "
+                        "column beside the calibrated ash's, and the modelling choices")
     p.add_argument("--holdups", type=float, nargs="+", default=[30, 60, 90, 120])
     p.add_argument("--time", type=float, default=10.0, help="simulated s per slice")
     a = p.parse_args(argv)
     walls = run_maps(a.out, a.holdups, a.time) if a.run else None
-    results = {}
-    for design, (_, incline) in DESIGNS.items():
-        folder = a.out / design
-        if (folder / "map.json").exists():
-            results[design] = answers(folder, incline)
-        else:
-            print(f"no map for {design} in {folder}", file=sys.stderr)
-    if "optimised" in results and (a.out / SCREW[1] / "map.json").exists():
-        screw = mc.MachineMap.load(a.out / SCREW[1])
-        results["optimised_with_screw"] = answers(a.out / "optimised", DESIGNS["optimised"][1],
-                                                  [(screw, SCREW_LENGTH)], feeds_t_h=(6.5, 13.0))
-    text = table(results, walls)
+    free = a.free_rolling or a.out / "free_rolling"
+    columns = [("taichi_dem, calibrated ash (slices at 15 mm, march)", design_results(a.out))]
+    free_results = design_results(free) if (free / "original" / "map.json").exists() else {}
+    if free_results:
+        columns.append(("taichi_dem, free-rolling ash (rolling friction 0.05)", free_results))
+    text = table(columns, walls)
+    compared = slice_comparison(a.out, free)
+    if compared:
+        text += "\n\n" + compared
     for design in CHOICE_FOLDERS:
-        if design in results:
-            extra = choices_table(a.out, results[design], design)
+        if design in free_results:
+            extra = choices_table(free, free_results[design], design)
             if extra:
-                text += "\n\n" + extra
+                text += "\n\n" + extra.replace(", at 6.5 t/h:", ", free-rolling ash, at 6.5 t/h:", 1)
     print(text)
     a.out.mkdir(parents=True, exist_ok=True)
     (a.out / "seed_table.md").write_text(text + "\n")

@@ -37,14 +37,15 @@ root_doc = "index"
 # stubs in reference/), the machine's headingless tables (included by machine/tables.md), the
 # build output
 exclude_patterns = ["_build", "reference/_generated", "machine/seed_cooler/seed_table.md",
+                    "machine/seed_cooler/free_rolling/seed_table.md",
                     "machine/direct_check/comparison_6rows.md",
                     "machine/modelling_choices/choices.md",
                     # the seed's modelling-choice maps: summed up by their choices.md and
                     # precision_long.md, which machine/tables.md includes
-                    "machine/seed_cooler/modelling_choices/*/map.md",
-                    "machine/seed_cooler/modelling_choices/*.md",
-                    "machine/seed_cooler/modelling_choices_optimised/*/map.md",
-                    "machine/seed_cooler/modelling_choices_optimised/*.md"]
+                    "machine/seed_cooler/free_rolling/modelling_choices/*/map.md",
+                    "machine/seed_cooler/free_rolling/modelling_choices/*.md",
+                    "machine/seed_cooler/free_rolling/modelling_choices_optimised/*/map.md",
+                    "machine/seed_cooler/free_rolling/modelling_choices_optimised/*.md"]
 
 myst_enable_extensions = ["colon_fence", "deflist"]
 # `## Heading` gets an anchor, so [text](page.md#heading) links resolve
