@@ -368,10 +368,12 @@ def machine_info(scene, geometry: SliceGeometry, fill_index: int = 0) -> dict:
 
 def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float,
               fill_index: int = 0, base_dir=None, arch: str = "cpu",
-              incline: float | None = None, threads: int | None = None) -> SliceResult:
+              incline: float | None = None, threads: int | None = None,
+              picture: str | None = None) -> SliceResult:
     """Build the slice of scene ``text`` at ``holdup`` (and ``incline`` deg, the +axis end
     raised; None: the scene's gravity), run it ``duration`` s, and reduce each sampled figure
-    to its steady mean. ``threads``: CPU threads (None: all cores)."""
+    to its steady mean. ``threads``: CPU threads (None: all cores); ``picture``: a PNG of the
+    bed's cross-section at the end (slice_picture.py)."""
     from ..run.simulation import Simulation
     from ..scene.loader import parse_scene
     from .overrides import apply, to_text
@@ -390,6 +392,11 @@ def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float
         sim.add_observer(observer, now=False)
         sim.run(sim.time + duration)
         series = observer.series
+        if picture:
+            from .slice_picture import draw_bed
+            draw_bed(sim, geometry, observer.up, observer.horizontal, Path(picture),
+                     f"{Path(source).name}: {kg_per_m:.4g} kg/m ({100 * fraction:.0f} % "
+                     f"full), {angle:.3g} deg, t = {sim.time:.3g} s")
     # (a figure undefined at some samples - a slip ratio with nothing on the shell - is
     # reduced over the samples where it is defined)
     figures = {}
@@ -535,6 +542,10 @@ def add_arguments(p) -> None:
     p.add_argument("--threads", type=int, default=None, metavar="N",
                    help="CPU threads per slice (default: all cores); 1 for maps run side by "
                         "side, or with --dask workers")
+    p.add_argument("--pictures", action="store_true",
+                   help="a picture of each slice's bed at the end of its run: "
+                        "OUT/bed_<hold-up>kgm_<incline>deg.png, the cross-section along the axis "
+                        "coloured by axial speed")
     p.add_argument("--dask", action="store_true",
                    help="run the slices as tasks on Dask workers (a LocalCluster here, or "
                         "--scheduler) instead of one after another in this process")
@@ -578,6 +589,17 @@ def _rows_to_add_to(out: Path, scene_name: str, info: dict) -> list[dict]:
             raise SceneError(str(js), f"machine.{key}", f"--add: the map has {a!r}, these "
                              f"slices {b!r}: not the same slice")
     return list(doc.get("rows", []))
+
+
+def _picture(args, out: Path, holdup, incline) -> str | None:
+    """Where --pictures puts the bed of the slice at ``holdup`` (parse_holdup's) and
+    ``incline`` (deg, None: the scene's)."""
+    if not getattr(args, "pictures", False):
+        return None
+    kind, value = holdup
+    h = f"{value:g}kgm" if kind == "kg/m" else f"{100 * value:g}pct"
+    tilt = "scene" if incline is None else f"{incline:g}deg"
+    return str(out / f"bed_{h}_{tilt}.png")
 
 
 def cmd_map(args) -> int:
@@ -654,7 +676,8 @@ def cmd_map(args) -> int:
         try:
             futures = [client.submit(run_slice, text, str(path), h, args.time, args.fill,
                                      base_dir=path.parent, arch=args.arch, incline=i,
-                                     threads=args.threads, pure=False)
+                                     threads=args.threads, picture=_picture(args, out, h, i),
+                                     pure=False)
                        for i, h in jobs]
             results = client.gather(futures)
         finally:
@@ -665,7 +688,8 @@ def cmd_map(args) -> int:
         results = []
         for incline, h in jobs:
             result = run_slice(text, str(path), h, args.time, args.fill, base_dir=path.parent,
-                               arch=args.arch, incline=incline, threads=args.threads)
+                               arch=args.arch, incline=incline, threads=args.threads,
+                               picture=_picture(args, out, h, incline))
             results.append(result)
             _print_result(result)
     new_keys = {(round(r.holdup, 6), round(r.incline, 6)) for r in results}
