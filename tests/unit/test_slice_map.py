@@ -186,8 +186,11 @@ def test_slices_added_to_a_map(tmp_path, capsys):
     from taichi_dem.app.cli import main
     import json
     out = tmp_path / "map"
-    assert main(["map", str(SCENE), "--holdup", "20 %", "--time", "0.2", "--out", str(out)]) == 0
+    assert main(["map", str(SCENE), "--holdup", "20 %", "--time", "0.2", "--out", str(out),
+                 "--threads", "1", "--pictures"]) == 0
     first = json.loads((out / "map.json").read_text())["rows"][0]
+    # --pictures: the bed at the end of the slice's run, named by hold-up and incline
+    assert (out / "bed_20pct_scene.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["map", str(SCENE), "--holdup", "10 %", "--time", "0.2", "--out", str(out),
                  "--add"]) == 0
     rows = json.loads((out / "map.json").read_text())["rows"]
@@ -203,3 +206,10 @@ def test_slices_added_to_a_map(tmp_path, capsys):
     assert main(["map", str(SCENE), "--holdup", "30 %", "--time", "0.2",
                  "--out", str(tmp_path / "none"), "--add"]) == 2
     assert "cannot read the map to add to" in capsys.readouterr().err
+    # a --time too short for steady means, and no threads: refused before any slice runs
+    assert main(["map", str(SCENE), "--holdup", "30 %", "--time", "0.01",
+                 "--out", str(tmp_path / "short")]) == 2
+    assert "fewer than 4 samples" in capsys.readouterr().err
+    assert main(["map", str(SCENE), "--holdup", "30 %", "--time", "0.2", "--threads", "0",
+                 "--out", str(tmp_path / "short")]) == 2
+    assert "--threads" in capsys.readouterr().err
