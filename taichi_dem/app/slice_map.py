@@ -20,6 +20,8 @@ dynamic_angle        deg    the slope of the bed's free surface across the secti
                             gravity's component in it
 surface_chord        m      the length of that surface across the shell (Saeman's c), through
                             the top layer's centres
+axial_dispersion     m^2/s  D_ax: half the growth rate of the variance of the particles' unwrapped
+                            axial displacements (app/dispersion.py), from the flow's steady start
 
 ``map_slices`` runs a scene at each hold-up (kg/m, or a fill fraction of the free section at
 a bulk solid fraction of BULK_SOLID_FRACTION) and reduces each series to its steady mean and
@@ -166,6 +168,9 @@ class SliceObserver:
         self.up = -across / np.linalg.norm(across) if np.linalg.norm(across) > 0 else np.array([0, 0, 1.0])
         self.horizontal = np.cross(self.up, a)
         self.series: dict[str, list] = {}
+        # each particle's unwrapped axial displacement: the axial dispersion (dispersion.py)
+        from .dispersion import AxialDisplacements
+        self.displacements = AxialDisplacements(geometry.length)
 
     def _add(self, name: str, value: float):
         self.series.setdefault(name, []).append(float(value))
@@ -176,6 +181,7 @@ class SliceObserver:
         moving = ~p["fixed"]
         x, v, m, r = p["position"][moving], p["velocity"][moving], p["mass"][moving], p["radius"][moving]
         self._add("time", values.get("time", sim.time))
+        self.displacements.add(values.get("time", sim.time), x @ g.axis_direction)
         axial = v @ g.axis_direction
         self._add("axial_mass_flow", float(np.sum(m * axial)) / g.length)
         self._add("axial_speed", float(np.sum(m * axial) / np.sum(m)) if len(m) else math.nan)
@@ -309,7 +315,8 @@ class SliceResult:
 # the figures a map reports (units), in table order; bodies' figures follow
 FIGURES = {"axial_mass_flow": "kg/s", "axial_speed": "m/s", "slip_ratio": "-",
            "shell_layer_axial_speed": "m/s", "surface_chord": "m", "bed_solid_fraction": "-",
-           "dynamic_angle": "deg", "saeman_flow": "kg/s", "saeman_ratio": "-"}
+           "dynamic_angle": "deg", "saeman_flow": "kg/s", "saeman_ratio": "-",
+           "axial_dispersion": "m^2/s"}
 BODY_FIGURES = {"torque_per_metre": "N m/m", "power_per_metre": "W/m",
                 "covered_area_per_metre": "m^2/m", "heat_transfer_coefficient": "W/(m^2 K)",
                 "conductance_per_metre": "W/(m K)"}
@@ -405,7 +412,26 @@ def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float
         finite = finite[np.isfinite(finite)]
         if name != "time" and len(finite) >= 2:
             figures[name] = steady_mean(finite)
+    dispersion = _axial_dispersion(observer.displacements, figures.get("axial_mass_flow"))
+    if dispersion is not None:
+        figures["axial_dispersion"] = dispersion
     return SliceResult(kg_per_m, fraction, count, figures, angle, slope)
+
+
+def _axial_dispersion(record, flow):
+    """D_ax (m^2/s) as a SteadyMean: the variance growth of the axial displacements from the
+    flow's steady start on (dispersion.dispersion_coefficient); None when too short."""
+    from .dispersion import dispersion_coefficient
+    from .steady_state import SteadyMean
+    start = flow.start if flow is not None else len(record.times) // 2
+    times, variances = record.times[start:], record.variances[start:]
+    if len(times) < 12:
+        return None
+    value, error = dispersion_coefficient(times, variances)
+    if not math.isfinite(value):
+        return None
+    return SteadyMean(value, error, start, len(times), max(len(times) // 4, 1), 4, True,
+                      bool(flow.steady) if flow is not None else False)
 
 
 def write_map(results: list[SliceResult], out_dir: Path, scene_name: str,

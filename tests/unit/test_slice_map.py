@@ -124,6 +124,8 @@ def test_the_map_of_a_drum_slice(tmp_path):
         assert r["axial_mass_flow"] < 0.0 and r["axial_speed"] < 0.0       # downhill, -x
         assert 10.0 < r["dynamic_angle"] < 60.0
         assert r["shell/power_per_metre"] > 0.0                              # the drive works
+        # the bed spreads along the axis: D_ax > 0 with its error (app/dispersion.py)
+        assert r["axial_dispersion"] > 0.0 and math.isfinite(r["axial_dispersion_standard_error"])
     low, high = (abs(r["shell/torque_per_metre"]) for r in rows)
     assert high > 1.5 * low
     table = (out / "map.md").read_text()
