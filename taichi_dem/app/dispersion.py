@@ -157,3 +157,97 @@ def residence_time_distribution(x: np.ndarray, holdup: np.ndarray, dispersion: n
 def closed_vessel_variance(tau: float, peclet: float) -> float:
     """The variance (s^2) of the closed vessel's E(t): tau^2 (2/Pe - 2/Pe^2 (1 - e^-Pe))."""
     return tau * tau * (2.0 / peclet - 2.0 / peclet ** 2 * (1.0 - math.exp(-peclet)))
+
+
+def dispersion_law(machine, axial_slope: float):
+    """(hold-ups kg/m, D_ax m^2/s) of a map with the axial_dispersion figure, at the design
+    slope (interpolated between the mapped inclines as every figure); None without it. Below
+    the lowest mapped hold-up D_ax is held at its value there (not drawn to 0: an empty
+    machine has no bed to disperse, but the last metre before a free discharge has one)."""
+    from .machine import _interpolate_figure
+    holdups, values = _interpolate_figure(machine, "axial_dispersion", axial_slope)
+    holdups, values = holdups[1:], values[1:]          # without the (0, 0) anchor
+    keep = np.isfinite(values) & (values > 0.0)
+    if not np.any(keep):
+        return None
+    return holdups[keep], values[keep]
+
+
+def machine_rtd(machine, answer, axial_slope: float,
+                inlet_temperature: float | None = None) -> dict | None:
+    """The residence-time distribution of a marched machine (``answer``: app/machine.py's, its
+    hold-up profile) with the map's D_ax: E(t), its mean, variance and 10/50/90 % times; with
+    ``inlet_temperature`` (K) and an outlet temperature from the march, the distribution of
+    the outlet temperatures: a parcel that stays t cools as the bed does over the fraction
+    t / tau of the machine's NTU (T = T_wall + (T_in - T_wall) exp(-NTU t / tau)), so the
+    mixed outlet (the E-weighted mean) is warmer than the plug's. None without D_ax."""
+    law = dispersion_law(machine, axial_slope)
+    if law is None:
+        return None
+    prof = answer.profile
+    d = np.interp(prof.holdup, *law)
+    rtd = residence_time_distribution(prof.x, prof.holdup, d, answer.feed)
+    out = {"rtd": rtd, "dispersion": d}
+    walls = list(machine.wall_temperatures.values())
+    if inlet_temperature is not None and answer.outlet_temperature is not None and walls:
+        wall = walls[0]
+        ntu = math.log((inlet_temperature - wall) / (answer.outlet_temperature - wall))
+        tau = answer.residence_time
+        temps = wall + (inlet_temperature - wall) * np.exp(-ntu * rtd.time / tau)
+        weights = rtd.density * np.gradient(rtd.time)
+        weights = weights / weights.sum()
+        order = np.argsort(temps)
+        cumulative = np.cumsum(weights[order])
+        out["outlet_temperature_mixed"] = float(np.sum(weights * temps))
+        out["outlet_temperature_quantiles"] = {
+            q: float(np.interp(q, cumulative, temps[order])) for q in (0.1, 0.5, 0.9)}
+    return out
+
+
+def rtd_report(machine, out: dict, axial_slope: float, inlet_temperature=None,
+               plot=None) -> tuple[str, list]:
+    """A Markdown table of each feed's RTD (and outlet temperatures) for ``taichi-dem machine``
+    and the JSON rows; ``plot``: a path for E(t) of every feed. ("", []) without D_ax."""
+    rows, lines = [], []
+    curves = []
+    for ans in out["feeds"]:
+        got = machine_rtd(machine, ans, axial_slope, inlet_temperature)
+        if got is None:
+            return "", []
+        r = got["rtd"]
+        row = {"feed_kg_per_s": ans.feed, "mean_s": r.mean, "variance_s2": r.variance,
+               "t10_s": r.t10, "t50_s": r.t50, "t90_s": r.t90,
+               "axial_dispersion_m2_per_s": [float(got["dispersion"].min()),
+                                             float(got["dispersion"].max())]}
+        cell_t = ""
+        if "outlet_temperature_mixed" in got:
+            qs = got["outlet_temperature_quantiles"]
+            row["outlet_temperature_mixed_K"] = got["outlet_temperature_mixed"]
+            row["outlet_temperature_K_quantiles"] = {str(k): v for k, v in qs.items()}
+            cell_t = (f" | {got['outlet_temperature_mixed'] - 273.15:.4g} | "
+                      f"{qs[0.1] - 273.15:.4g} / {qs[0.5] - 273.15:.4g} / {qs[0.9] - 273.15:.4g}")
+        rows.append(row)
+        curves.append((ans.feed, r))
+        lines.append(f"| {ans.feed * 3.6:.4g} | {r.mean:.4g} | {math.sqrt(r.variance):.3g} | "
+                     f"{r.t10:.4g} / {r.t50:.4g} / {r.t90:.4g} | "
+                     f"{got['dispersion'].min():.2g} - {got['dispersion'].max():.2g}{cell_t} |")
+    temp_head = (" | mixed outlet (C) | outlet 10/50/90 % (C)" if "outlet_temperature_mixed_K"
+                 in rows[0] else "")
+    head = ["## Residence-time distributions (axial dispersion model, D_ax from the map)", "",
+            "| feed (t/h) | mean (s) | standard deviation (s) | 10 / 50 / 90 % out by (s) | "
+            f"D_ax along the machine (m^2/s){temp_head} |",
+            "|---" * (5 + (2 if temp_head else 0)) + "|"]
+    if plot is not None:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(7, 4))
+        for feed, r in curves:
+            ax.plot(r.time, r.density, label=f"{feed * 3.6:.3g} t/h")
+        ax.set_xlabel("residence time (s)")
+        ax.set_ylabel("E(t) (1/s)")
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(plot, dpi=100)
+        plt.close(fig)
+    return "\n".join(head + lines), rows

@@ -791,9 +791,15 @@ def cmd_machine(args) -> int:
         report["text"] += "\n\n" + choices_report(differences)
         report["json"]["choices"] = {label: {"map": str(path), **differences[label]}
                                      for label, path in args.choice}
-    print(report["text"])
     folder = Path(args.out) if args.out else (map_path if map_path.is_dir() else map_path.parent)
     folder.mkdir(parents=True, exist_ok=True)
+    if not inlet:       # the RTD where the map has D_ax (app/dispersion.py; one map only)
+        from .dispersion import rtd_report
+        text, rtd_rows = rtd_report(m, out, slope, t_in, plot=folder / "rtd.png")
+        if text:
+            report["text"] += "\n\n" + text
+            report["json"]["residence_time_distributions"] = rtd_rows
+    print(report["text"])
     (folder / "machine.md").write_text(report["text"] + "\n")
     (folder / "machine.json").write_text(json.dumps(report["json"], indent=1, default=float))
     _plot_profiles(out, folder / "profile.png")

@@ -146,6 +146,12 @@ def test_the_map_of_a_drum_slice(tmp_path):
     assert feed["residence_time_s"] == pytest.approx(feed["holdup_kg"] / feed["feed_kg_per_s"])
     assert feed["shell/torque_N_m"] < 0.0 and answer["capacity_kg_per_s"] > 15 / 3600
     assert (tmp_path / "machine" / "profile.png").stat().st_size > 0
+    # the map's D_ax gives the residence-time distribution: its mean is the march's residence
+    # (the dispersion model conserves the tracer: mean = hold-up / feed), spread about it
+    rtd = answer["residence_time_distributions"][0]
+    assert rtd["mean_s"] == pytest.approx(feed["residence_time_s"], rel=5e-3)
+    assert rtd["t10_s"] < rtd["t50_s"] < rtd["t90_s"] and rtd["variance_s2"] > 0.0
+    assert (tmp_path / "machine" / "rtd.png").stat().st_size > 0
 
 
 def test_the_map_on_dask_workers(tmp_path):
