@@ -185,6 +185,21 @@ def _rows(results: dict) -> list:
                  (f"{label}: shaft drive torque at 6.5 t/h", seed["torque"], shaft),
                  (f"{label}: outlet temperature at 6.5 t/h (C, fed at 450 C)",
                   "(not simulated)", temp)]
+        from taichi_dem.app.dispersion import machine_rtd
+        got = machine_rtd(r_map, a, -math.tan(math.radians(DESIGNS[design][1])),
+                          INLET_C + 273.15)
+        if got is not None:         # the map measured D_ax: the residence-time distribution
+            d = got["rtd"]
+            text = (f"10 / 50 / 90 % out by {d.t10:.3g} / {d.t50:.3g} / {d.t90:.3g} s "
+                    f"(sd {math.sqrt(d.variance):.3g} s; D_ax {got['dispersion'].min():.2g} - "
+                    f"{got['dispersion'].max():.2g} m^2/s)")
+            if "outlet_temperature_quantiles" in got:
+                q = got["outlet_temperature_quantiles"]
+                text += (f"; outlet mixed {got['outlet_temperature_mixed'] - 273.15:.4g} C, "
+                         f"10 / 50 / 90 % {q[0.1] - 273.15:.4g} / {q[0.5] - 273.15:.4g} / "
+                         f"{q[0.9] - 273.15:.4g} C")
+            rows.append((f"{label}: residence-time distribution at 6.5 t/h (axial dispersion "
+                         "model)", "(only the mean)", text))
         a46, e46 = by_feed[4.6]
         rows.append((f"{label}: at 4.6 t/h: residence (s), shaft drive torque (N m)", "",
                      f"{fmt(a46.residence_time, e46.get('residence_time'))}; "
