@@ -96,10 +96,10 @@ def _parser() -> argparse.ArgumentParser:
     mp = sub.add_parser("map", help="a periodic slice at several hold-ups: its steady transport, "
                                     "torque and heat per metre (the machine's map)")
     slice_map.add_arguments(mp)
-    from . import machine
+    from . import machine_command
     mc = sub.add_parser("machine", help="the whole machine from its map: hold-up profile, "
                                         "residence, torque, outlet temperature and capacity")
-    machine.add_arguments(mc)
+    machine_command.add_arguments(mc)
     from . import plots
     pl = sub.add_parser("plot", help="PNG plots of a results file (torque, residence time, "
                                      "mass flows, temperatures, heat flows)")
@@ -195,7 +195,7 @@ def _main(argv=None) -> int:
             from .slice_map import cmd_map
             return cmd_map(args)
         if args.command == "machine":
-            from .machine import cmd_machine
+            from .machine_command import cmd_machine
             return cmd_machine(args)
         if args.command == "export":
             from .export import cmd_export
