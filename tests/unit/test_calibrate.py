@@ -1,4 +1,4 @@
-"""`taichi-dem calibrate` (taichi_dem/app/calibrate.py): the spec's validation (exit 2 naming
+"""`taichi-dem calibrate` (taichi_dem/app/calibrate/): the spec's validation (exit 2 naming
 the spec file and the dotted key), the response-surface fit and the optimiser on synthetic
 responses with a known optimum, the record writer, and one tiny end-to-end calibration (a heap
 of 200 spheres from a lifted tube, 2 design points + 1 verification run on a LocalCluster of 2
@@ -539,8 +539,9 @@ def _fake_runs(monkeypatch, noise_sd, steel_gain=5.0):
             noise = np.random.default_rng(zlib.crc32(s.id.encode())).normal(0, noise_sd) if noise_sd else 0.0
             res.setdefault((ti, ci), []).append(_true_angle(s.overrides, steel_gain) + noise)
         return res
-    monkeypatch.setattr(cal, "_sweep", sweep)
-    monkeypatch.setattr(cal, "_responses", responses)
+    # (the rounds' module runs them: taichi_dem/app/calibrate/rounds.py)
+    monkeypatch.setattr(cal.rounds, "_sweep", sweep)
+    monkeypatch.setattr(cal.rounds, "_responses", responses)
 
 
 def test_sequential_design_reaches_a_known_optimum_through_noise(tmp_path, monkeypatch):
