@@ -48,6 +48,8 @@ def main(argv=None) -> int:
     p.add_argument("--holdup", type=float, default=60.0)
     p.add_argument("--incline", type=float, default=5.0)
     p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--note", action="append", default=[],
+                   help="a line added under the verdict (what a map's log warned of)")
     a = p.parse_args(argv)
     maps = [(0.0, a.base)] + [(float(s.split("=")[0]), Path(s.split("=", 1)[1]))
                               for s in a.stagger]
@@ -89,7 +91,7 @@ def main(argv=None) -> int:
                    f"closest to 20 mm/s is {min(inside, key=lambda s: s[1])[2]:g} deg.")
     else:
         verdict = f"The seed's speed picks a stagger of {best[2]:g} deg."
-    lines += ["", verdict]
+    lines += ["", verdict] + (["", *[f"- {n}" for n in a.note]] if a.note else [])
     a.out.mkdir(parents=True, exist_ok=True)
     (a.out / "stagger.md").write_text("\n".join(lines) + "\n")
     (a.out / "stagger.json").write_text(json.dumps({"holdup_kg_per_m": a.holdup,

@@ -454,8 +454,15 @@ def write_map(results: list[SliceResult], out_dir: Path, scene_name: str,
             R = machine["shell_radius"]
             if math.isfinite(chord) and 0.0 < chord < 2.0 * R:
                 from .machine import Section
-                depth = R - math.sqrt(R * R - 0.25 * chord * chord)
-                area = float(Section(R, machine.get("shaft_radius", 0.0), 1.0).area(depth))
+                section = Section(R, machine.get("shaft_radius", 0.0), 1.0)
+                # a chord lies at two depths, below the axis and above it: the one whose
+                # section holds the hold-up nearer the bulk density (a bed over half full
+                # stands above the axis)
+                half = math.sqrt(R * R - 0.25 * chord * chord)
+                needed = row["holdup_kg_per_m"] / machine["bulk_density"]
+                depth = min((R - half, R + half),
+                            key=lambda d: abs(float(section.area(d)) - needed))
+                area = float(section.area(depth))
                 density = machine["bulk_density"] / BULK_SOLID_FRACTION
                 # the bed's solid fraction under its measured surface
                 row["bed_solid_fraction"] = row["holdup_kg_per_m"] / (density * area)

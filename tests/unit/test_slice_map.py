@@ -221,3 +221,23 @@ def test_slices_added_to_a_map(tmp_path, capsys):
     assert main(["map", str(SCENE), "--holdup", "30 %", "--time", "0.2", "--threads", "0",
                  "--out", str(tmp_path / "short")]) == 2
     assert "--threads" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("depth", [0.25, 0.62])
+def test_the_bed_solid_fraction_of_a_bed_below_and_above_the_axis(tmp_path, depth):
+    """The bed's surface chord lies at two depths; a bed over half full stands above the axis
+    (at 200 kg/m the seed's slice read 3.7, the section below the axis taken)."""
+    import json
+    from taichi_dem.app.machine import Section
+    R, shaft, bulk = 0.433, 0.04, 522.0
+    chord = 2.0 * math.sqrt(R * R - (depth - R) ** 2)
+    area = float(Section(R, shaft, 1.0).area(depth))
+    holdup = 0.9 * bulk * area              # 0.9 of the bulk density: solid fraction 0.54
+    row = {"holdup_kg_per_m": holdup, "fill_fraction": 0.5, "particles": 1, "incline_deg": 5.0,
+           "axial_slope": -0.0875, "slips": False, "surface_chord": chord,
+           "dynamic_angle": 30.0, "axial_mass_flow": 1.0}
+    machine = {"shell_radius": R, "shaft_radius": shaft, "bulk_density": bulk,
+               "particle_diameter": 0.015, "angular_speeds": {"shell": 0.0}, "shell": "shell"}
+    sm.write_map([row], tmp_path, "slice.toml", machine)
+    got = json.loads((tmp_path / "map.json").read_text())["rows"][0]["bed_solid_fraction"]
+    assert got == pytest.approx(0.9 * sm.BULK_SOLID_FRACTION, rel=1e-6)
