@@ -27,8 +27,9 @@ from pathlib import Path
 import numpy as np
 
 LENGTH = 6.0
-SEED_TORQUES = {"original, fully loaded": 6000.0, "optimised, fully loaded": 1000.0}
+SEED_TORQUES = {"original": 6000.0, "optimised": 1000.0}      # N m, "fully loaded"
 INCLINE = 5.0
+OPTIMISED_INCLINE = 2.0
 
 
 def rows_at(maps, incline: float = INCLINE) -> tuple[list, dict]:
@@ -58,6 +59,9 @@ def crossing(x, y, level: float):
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--maps", nargs="+", required=True, help="map folders (their 5 deg rows)")
+    p.add_argument("--optimised", nargs="*", default=[],
+                   help="the optimised design's map folders (their 2 deg rows): where the "
+                        "seed's 1 kN m falls on its own curve")
     p.add_argument("--out", type=Path, required=True)
     a = p.parse_args(argv)
     rows, machine = rows_at(a.maps)
@@ -85,30 +89,40 @@ def main(argv=None) -> int:
                      f"{shell[i]:.0f} | {power[i]:.0f} | {flow[i]:.2f} +- {flow_e[i]:.2f} | "
                      f"{'yes' if steady[i] else 'no'} |")
     lines.append("")
+    curves = {"original": (h, drive, fill, INCLINE)}
+    if a.optimised:
+        o_rows, _ = rows_at(a.optimised, OPTIMISED_INCLINE)
+        curves["optimised"] = (np.array([r["holdup_kg_per_m"] for r in o_rows]),
+                               np.array([-r["shaft/torque_per_metre"] for r in o_rows]) * LENGTH,
+                               np.array([r["fill_fraction"] for r in o_rows]), OPTIMISED_INCLINE)
     for name, torque in SEED_TORQUES.items():
-        at = crossing(h, drive, torque)
+        if name not in curves:
+            continue
+        ch, cd, cf, incline = curves[name]
+        at = crossing(ch, cd, torque)
+        what = f"The seed's {torque / 1e3:g} kN m ({name} design, fully loaded; our {name} slice at {incline:g} deg)"
         if at is None:
-            below = torque > drive.max()
-            lines.append(f"- The seed's {torque / 1e3:g} kN m ({name}): "
-                         + (f"not reached: the full-shell slice at {h[-1]:.0f} kg/m "
-                            f"({100 * fill[-1]:.0f} % full) needs {drive[-1]:.0f} N m over "
-                            f"{LENGTH:g} m, {torque / drive[-1]:.1f} times less."
-                            if below else f"below our lightest hold-up ({drive[0]:.0f} N m at "
-                            f"{h[0]:.0f} kg/m)."))
+            lines.append(f"- {what}: not reached up to {ch[-1]:.0f} kg/m "
+                         f"({100 * cf[-1]:.0f} % full): {cd[-1]:.0f} N m there."
+                         if torque > cd.max() else
+                         f"- {what}: below our lightest hold-up ({cd[0]:.0f} N m at {ch[0]:.0f} kg/m).")
         else:
-            k = int(np.searchsorted(h, at))
-            lines.append(f"- The seed's {torque / 1e3:g} kN m ({name}): reached at "
-                         f"{at:.0f} kg/m ({100 * at / full:.0f} % full), between the slices at "
-                         f"{h[k - 1]:.0f} and {h[k]:.0f} kg/m.")
+            k = int(np.searchsorted(ch, at))
+            lines.append(f"- {what}: reached at {at:.0f} kg/m ({100 * at / full:.0f} % full), "
+                         f"between the slices at {ch[k - 1]:.0f} and {ch[k]:.0f} kg/m.")
     (a.out).mkdir(parents=True, exist_ok=True)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    axes[0].errorbar(h, drive / 1e3, yerr=drive_e / 1e3, fmt="o-", label="drive torque, 6 m")
+    axes[0].errorbar(h, drive / 1e3, yerr=drive_e / 1e3, fmt="o-",
+                     label=f"original, {INCLINE:g} deg: drive torque, 6 m")
+    if "optimised" in curves:
+        ch, cd, _, incline = curves["optimised"]
+        axes[0].plot(ch, cd / 1e3, "s-", label=f"optimised, {incline:g} deg")
     for name, torque in SEED_TORQUES.items():
         axes[0].axhline(torque / 1e3, ls="--", color="0.5")
-        axes[0].text(h[0], torque / 1e3, f" seed: {name}", va="bottom", fontsize=8)
+        axes[0].text(h[0], torque / 1e3, f" seed, {name}, fully loaded", va="bottom", fontsize=8)
     axes[0].set_xlabel("hold-up (kg/m)")
     axes[0].set_ylabel("torque (kN m)")
     axes[0].legend()
@@ -119,6 +133,14 @@ def main(argv=None) -> int:
     fig.tight_layout()
     fig.savefig(a.out / "full_shell.png", dpi=110)
     lines += ["", "![torque and flow against hold-up](full_shell.png)"]
+    # the beds at the end of their runs (map --pictures), those inside OUT linked
+    for folder in a.maps:
+        for png in sorted(Path(folder).glob("bed_*.png")):
+            try:
+                rel = png.resolve().relative_to(a.out.resolve())
+            except ValueError:
+                continue
+            lines += ["", f"![the bed: {png.stem}]({rel.as_posix()})"]
     text = "\n".join(lines) + "\n"
     (a.out / "full_shell.md").write_text(text)
     print(text)

@@ -494,6 +494,11 @@ def write_map(results: list[SliceResult], out_dir: Path, scene_name: str,
                 cells.append(f"{mean:.4g} +- {se:.2g}{flag}")
         cells.append("yes" if row["slips"] else "no")
         lines.append("| " + " | ".join(cells) + " |")
+    beds = sorted(out_dir.glob("bed_*.png"))         # map --pictures: the beds at the end
+    if beds:
+        lines += ["", "The beds at the end of their runs (`--pictures`), seen along the axis, "
+                  "coloured by axial speed:", ""]
+        lines += [f"![{png.stem}]({png.name})" for png in beds]
     md.write_text("\n".join(lines) + "\n")
     js = out_dir / "map.json"
     js.write_text(json.dumps({"scene": scene_name, "units": {n: _unit(n) for n in figures},

@@ -205,7 +205,9 @@ def test_slices_added_to_a_map(tmp_path, capsys):
     assert [r["fill_fraction"] for r in rows] == pytest.approx([0.10, 0.20])
     assert rows[1] == first                                   # kept as it was
     assert "| 5 | " in (out / "map.md").read_text()           # the table has both rows
-    assert len((out / "map.md").read_text().splitlines()) == 6     # title, blank, head, rule, 2
+    table = [l for l in (out / "map.md").read_text().splitlines() if l.startswith("|")]
+    assert len(table) == 4                                    # head, rule, 2 rows
+    assert "![bed_20pct_scene](bed_20pct_scene.png)" in (out / "map.md").read_text()
     capsys.readouterr()
     assert main(["map", str(SCENE), "--holdup", "30 %", "--time", "0.2", "--out", str(out),
                  "--add", "--set", "interactions.0.friction=0.4"]) == 2
