@@ -293,13 +293,16 @@ def _pm(mean: Optional[float], sd: Optional[float], unit: str) -> str:
     return f"{mean:.4g}" + (f" +- {sd:.2g}" if sd is not None else "") + (f" {unit}" if unit else "")
 
 
+def _calibrated(scene) -> list:
+    """(name, Calibration) of each material of ``scene`` with a calibration record."""
+    return [(name, m.calibration) for name, m in scene.materials.items()
+            if m.calibration is not None]
+
+
 def describe_calibration(scene) -> list[str]:
     """The lines ``taichi-dem check`` prints for each material with a calibration record."""
     lines = []
-    for name, m in scene.materials.items():
-        c = m.calibration
-        if c is None:
-            continue
+    for name, c in _calibrated(scene):
         head = f"material {name}: calibrated"
         if c.date:
             head += f" {c.date}"
@@ -330,10 +333,7 @@ def calibration_notes(scene) -> list[tuple[str, str]]:
     """(key, reason) for each way the scene departs from a material's calibration record:
     a record that missed its targets, spheres of another size, a calibrated value changed."""
     notes = []
-    for name, m in scene.materials.items():
-        c = m.calibration
-        if c is None:
-            continue
+    for name, c in _calibrated(scene):
         key = f"materials.{name}.calibration"
         if c.within_scatter is False:
             notes.append((key, "the record says the calibration missed a target by more than "
