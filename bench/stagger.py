@@ -48,13 +48,22 @@ def main(argv=None) -> int:
     p.add_argument("--holdup", type=float, default=60.0)
     p.add_argument("--incline", type=float, default=5.0)
     p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--design", default="original", help="the design's name in the title")
+    p.add_argument("--seed-speed", type=float, default=SEED_SPEED * 1e3,
+                   help="the seed's axial speed there (mm/s; default the original's 20)")
+    p.add_argument("--seed-half-width", type=float, default=SEED_SPEED_HALF_WIDTH * 1e3,
+                   help="half the range the seed's figure stands for (mm/s; default 5)")
+    p.add_argument("--seed-where", default="cooler 1: 4.6 t/h, 64 kg/m",
+                   help="where the seed gives that speed, in words")
+    p.add_argument("--name", default="stagger", help="the output's stem (NAME.md, NAME.json)")
     p.add_argument("--note", action="append", default=[],
                    help="a line added under the verdict (what a map's log warned of)")
     a = p.parse_args(argv)
     maps = [(0.0, a.base)] + [(float(s.split("=")[0]), Path(s.split("=", 1)[1]))
                               for s in a.stagger]
     rows = [(deg, row_of(folder, a.holdup, a.incline)) for deg, folder in maps]
-    lines = [f"# The paddle stagger of the original cooler ({a.holdup:g} kg/m, {a.incline:g} deg, "
+    speed, half = a.seed_speed / 1e3, a.seed_half_width / 1e3
+    lines = [f"# The paddle stagger of the {a.design} cooler ({a.holdup:g} kg/m, {a.incline:g} deg, "
              "calibrated ash, 15 mm)", "",
              "Each stagger's slice holds the rows that repeat (`taichi-dem map --stagger`); "
              "steady means +- standard error.", "",
@@ -71,15 +80,14 @@ def main(argv=None) -> int:
             cells.append(text + ("" if r.get(f"{key}_steady", True) else " (not steady)"))
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     # the evidence: the seed's axial speed at its operating point
-    lines += ["", f"Against the seed's {SEED_SPEED * 1e3:g} mm/s (cooler 1: 4.6 t/h, 64 kg/m, "
-              f"{a.incline:g} deg; one significant figure, so {1e3 * (SEED_SPEED - SEED_SPEED_HALF_WIDTH):g}"
-              f" - {1e3 * (SEED_SPEED + SEED_SPEED_HALF_WIDTH):g} mm/s):", ""]
+    lines += ["", f"Against the seed's {speed * 1e3:g} mm/s ({a.seed_where}, {a.incline:g} deg; "
+              f"read as {1e3 * (speed - half):g} - {1e3 * (speed + half):g} mm/s):", ""]
     scores = []
     for deg, r in rows:
         v, e = r["axial_speed"], r["axial_speed_standard_error"]
-        miss = max(abs(v - SEED_SPEED) - SEED_SPEED_HALF_WIDTH, 0.0)
+        miss = max(abs(v - speed) - half, 0.0)
         z = miss / e if e > 0 else math.inf
-        scores.append((z, abs(v - SEED_SPEED), deg))
+        scores.append((z, abs(v - speed), deg))
         lines.append(f"- stagger {deg:g} deg: {v * 1e3:.3g} +- {e * 1e3:.2g} mm/s, "
                      + ("within the seed's range" if miss == 0 else
                         f"{miss * 1e3:.2g} mm/s outside it ({z:.1f} standard errors)"))
@@ -88,13 +96,14 @@ def main(argv=None) -> int:
     if len(inside) > 1:
         verdict = (f"{len(inside)} staggers ({', '.join(f'{s[2]:g}' for s in inside)} deg) give "
                    "speeds within the seed's range: its speed does not choose between them; the "
-                   f"closest to 20 mm/s is {min(inside, key=lambda s: s[1])[2]:g} deg.")
+                   f"closest to {speed * 1e3:g} mm/s is {min(inside, key=lambda s: s[1])[2]:g} deg.")
     else:
-        verdict = f"The seed's speed picks a stagger of {best[2]:g} deg."
+        verdict = (f"The seed's speed picks a stagger of {best[2]:g} deg"
+                   + ("." if best[0] == 0 else f", the nearest to it (none lies within its range)."))
     lines += ["", verdict] + (["", *[f"- {n}" for n in a.note]] if a.note else [])
     a.out.mkdir(parents=True, exist_ok=True)
-    (a.out / "stagger.md").write_text("\n".join(lines) + "\n")
-    (a.out / "stagger.json").write_text(json.dumps({"holdup_kg_per_m": a.holdup,
+    (a.out / f"{a.name}.md").write_text("\n".join(lines) + "\n")
+    (a.out / f"{a.name}.json").write_text(json.dumps({"holdup_kg_per_m": a.holdup,
                                                      "incline_deg": a.incline,
                                                      "rows": {f"{d:g}": r for d, r in rows}},
                                                     indent=1, default=float))

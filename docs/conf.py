@@ -48,7 +48,7 @@ exclude_patterns = ["_build", "reference/_generated", "machine/seed_cooler/seed_
                     "machine/seed_cooler/free_rolling/modelling_choices_optimised/*.md",
                     # the maps behind the full-shell and stagger pages, which sum them up
                     "machine/seed_cooler/full_shell/map_*/map.md",
-                    "machine/seed_cooler/stagger/stagger_*/map.md"]
+                    "machine/seed_cooler/stagger/*/map.md"]
 
 myst_enable_extensions = ["colon_fence", "deflist"]
 # `## Heading` gets an anchor, so [text](page.md#heading) links resolve
