@@ -148,3 +148,23 @@ def test_a_record_file_without_the_material(tmp_path):
     with pytest.raises(SceneError) as e:
         load_scene(str(path))
     assert e.value.file == str(other) and e.value.key == "materials.ash.calibration.tests[0].target"
+
+
+def test_the_demos_inline_record_is_the_published_one():
+    """The 15 mm scenes carry the record inline (a wheel's demos have no docs/ beside them):
+    it must say what docs/calibration/calibrated_material.toml says, to its 4 digits."""
+    full = tomllib.loads(RECORD.read_text())["materials"]["ash"]["calibration"]
+    for name in ("cooler_slice", "cooler_slice_optimised", "cooler_slice_screw",
+                 "paddle_cooler_full"):
+        short = tomllib.loads((ROOT / "demos" / f"{name}.toml").read_text())[
+            "materials"]["ash"]["calibration"]
+        for key in ("date", "command", "spec", "sphere_radius", "within_scatter"):
+            assert short[key] == full[key], (name, key)
+        for a, b in zip(short["tests"], full["tests"]):
+            for key in ("target", "target_sd", "achieved_mean", "achieved_sd", "achieved_sem"):
+                assert a[key] == pytest.approx(b[key], rel=5e-4), (name, key)
+            assert a["achieved"] == pytest.approx(b["achieved"], abs=5e-3)
+        assert [(p["pair"], p["field"], p["value"]) for p in short["parameters"]] == \
+            [(p["pair"], p["field"], p["value"]) for p in full["parameters"]]
+        assert [(f["pairs"], f["value"]) for f in short["factors"]] == \
+            [(f["pairs"], f["value"]) for f in full["factors"]]
