@@ -92,6 +92,36 @@ def _key_row(key, path: str) -> list[str]:
 _KEY_HEADER = ["key", "type", "unit (SI)", "default", "range / choices", "description"]
 
 
+def _schema_rows(node: dict, path: str, rows: list, paths: list) -> bool:
+    """Rows for the entries a key's own schema declares (``properties`` of a table, or of the
+    items of an array of tables), as ``schema.every_key`` walks them; False when it declares
+    none."""
+    if node.get("type") == "array" and isinstance(node.get("items"), dict) \
+            and "properties" in node["items"]:
+        return _schema_rows(node["items"], path + "[]", rows, paths)
+    if isinstance(node.get("additionalProperties"), dict) and "properties" not in node:
+        # a table of entries named by the user (a round's optimum, by spec key)
+        sub = node["additionalProperties"]
+        rows.append([code(f"{path}.NAME"), " or ".join(o.get("type", "") for o in
+                                                       sub.get("anyOf", [sub])), "", "none", "",
+                     md(node.get("description", ""))])
+        paths.append(f"{path}.NAME")
+        return True
+    props = node.get("properties")
+    if props is None:
+        return False
+    for name, sub in props.items():
+        sub_path = f"{path}.{name}"
+        if _schema_rows(sub, sub_path, rows, paths):
+            continue
+        kind = sub.get("type") or " or ".join(o.get("type", "") for o in sub.get("anyOf", []))
+        rows.append([code(sub_path), kind, "",
+                     "required" if name in node.get("required", ()) else "none", "",
+                     md(sub.get("description", ""))])
+        paths.append(sub_path)
+    return True
+
+
 def _walk(section, path: str, sections, level: int, out: list[str], rows: list[list[str]],
           paths: list[str]) -> None:
     """The rows of ``section`` (scene path ``path``) into ``rows``; its nested tables one
@@ -104,17 +134,9 @@ def _walk(section, path: str, sections, level: int, out: list[str], rows: list[l
             later.append((nested, kpath, key))
             continue
         rows.append(_key_row(key, kpath))
-        items = (key.schema or {}).get("items")
-        if nested is None and isinstance(items, dict) and "properties" in items:
-            # an array of tables with declared entries (a calibration record's tests): a
-            # row for each entry key
-            for name, node in items["properties"].items():
-                kind = node.get("type", "")
-                kind = " or ".join(kind) if isinstance(kind, list) else kind
-                rows.append([code(f"{kpath}[].{name}"), kind, "",
-                             "required" if name in items.get("required", ()) else "none", "",
-                             md(node.get("description", ""))])
-                paths.append(f"{kpath}[].{name}")
+        if nested is None and _schema_rows(key.schema or {}, kpath, rows, paths):
+            # a table or an array of tables whose entries the key's schema declares (a
+            # calibration record's design, tests, ...): a row for each entry key
             continue
         paths.append(kpath)
         if nested is not None:     # a value or that table: its keys as rows under it

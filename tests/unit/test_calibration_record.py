@@ -122,7 +122,11 @@ def test_calibrated_against_in_words(tmp_path):
      "materials.ash.calibration.tests[0].target", "expected a finite number"),
     ('[materials.ash.calibration]\nagainst = "x"\nparameters = [{ key = "k", value = 1, '
      'pair = ["ash"] }]', "materials.ash.calibration.parameters[0].pair",
-     "expected two material names"),
+     "expected 2 items, got 1"),
+    ('[materials.ash.calibration]\nagainst = "x"\nparameters = [{ key = "k", value = 1, '
+     'colour = 2 }]', "materials.ash.calibration.parameters[0].colour", "unknown key"),
+    ('[materials.ash.calibration]\nagainst = "x"\ndesign = { points = 2.5 }',
+     "materials.ash.calibration.design.points", "expected an integer"),
     ('[materials.ash.calibration]\nagainst = "x"\nspin = 1', "materials.ash.calibration.spin",
      "unknown key"),
 ])

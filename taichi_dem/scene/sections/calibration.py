@@ -15,20 +15,36 @@ import tomllib
 from pathlib import Path
 from typing import Any, Optional
 
+from ...errors import SceneError
 from ..keys import Key, Section, register
+from ..keys import suggest as _suggest
 from ..keys import type_name as _type_name
+from .common import control_character
 from ..model import CalibratedValue, Calibration, CalibrationTest
 
 def _number(what: str) -> dict:
     return {"type": "number", "description": what}
 
 
+def _integer(what: str) -> dict:
+    return {"type": "integer", "description": what}
+
+
 def _text(what: str) -> dict:
     return {"type": "string", "description": what}
 
 
+def _flag(what: str) -> dict:
+    return {"type": "boolean", "description": what}
+
+
+def _numbers(what: str) -> dict:
+    return {"type": "array", "items": {"type": "number"}, "description": what}
+
+
 def _value(what: str) -> dict:
-    return {"type": ["number", "string", "boolean"], "description": what}
+    return {"anyOf": [{"type": "number"}, {"type": "string", "minLength": 1},
+                      {"type": "boolean"}], "description": what}
 
 
 def _pair(what: str) -> dict:
@@ -36,40 +52,89 @@ def _pair(what: str) -> dict:
             "maxItems": 2, "description": what}
 
 
-# the schemas of a record's entries (scene/schema.py: each property described; built afresh
-# each time, as the schema's builder adds to what it is given)
+def _strict(properties: dict, required=(), what: str = "") -> dict:
+    out = {"type": "object", "properties": properties, "additionalProperties": False}
+    if required:
+        out["required"] = list(required)
+    if what:
+        out["description"] = what
+    return out
+
+
+# the schemas of a record's parts, as `taichi-dem calibrate` writes them (scene/schema.py:
+# each property described; built afresh each time, as the schema's builder adds to what it is
+# given). The loader checks a record against these same schemas (``_conform``).
 def _test_item() -> dict:
-    return {"type": "object", "required": ["name"], "properties": {
+    return _strict({
         "name": {**_text("the test's name"), "minLength": 1},
+        "kind": _text("the bench test (angle_of_repose, ...)"),
         "unit": _text("the unit of its targets"),
         "scene": _text("its base scene"),
+        "duration": _number("s simulated per run"),
+        "measured": _numbers("the measured values"),
         "target": _number("the measured mean"),
         "target_sd": _number("the measured scatter (standard deviation)"),
+        "achieved": _numbers("each verification run's value"),
         "achieved_mean": _number("the calibrated material's mean over fresh runs"),
         "achieved_sd": _number("their standard deviation"),
         "achieved_sem": _number("their mean's standard error"),
-        "within_scatter": {"type": "boolean", "description": "the mean within the scatter"},
-        "achieved": {"type": "array", "items": {"type": "number"},
-                     "description": "each run's value"}}}
+        "within_scatter": _flag("the mean within the measured scatter"),
+        "reachable": _numbers("the response's reach inside the ranges"),
+        "target_reachable": _flag("the target inside that reach"),
+        "fit": _strict({"model": _text("constant, linear or quadratic"),
+                        "points": _integer("design points fitted"),
+                        "r2": _number("R^2"), "residual_sd": _number("the residuals' sd"),
+                        "loo_rmse": _number("leave-one-out prediction error")},
+                       what="the response surface fitted"),
+    }, required=("name",))
 
 
 def _parameter_item() -> dict:
-    return {"type": "object", "required": ["key", "value"], "properties": {
+    return _strict({
         "key": {**_text("the spec's scene key"), "minLength": 1},
+        "range": _numbers("the range searched"),
         "value": _value("the calibrated value"),
+        "prefer": _number("the value preferred among equal optima"),
         "pair": _pair("the interaction's pair of materials it sets"),
         "field": _text("the interaction's key it sets"),
-        "material": _text("the material it sets")}}
+        "material": _text("the material it sets"),
+    }, required=("key", "value"))
 
 
 def _factor_item() -> dict:
-    return {"type": "object", "required": ["keys", "value"], "properties": {
+    return _strict({
+        "name": _text("the factor's name"),
         "keys": {"type": "array", "items": {"type": "string", "minLength": 1}, "minItems": 1,
                  "description": "the spec's scene keys set together"},
+        "levels": {"type": "array", "items": _value("a level"), "description": "its levels"},
         "value": _value("the chosen level"),
         "pairs": {"type": "array", "items": _pair("a pair"),
                   "description": "the interactions' pairs of materials they set"},
-        "field": _text("the interactions' key they set")}}
+        "field": _text("the interactions' key they set"),
+    }, required=("keys", "value"))
+
+
+def _round_item() -> dict:
+    return _strict({
+        "round": _integer("the round's number"),
+        "optimum": {"type": "object", "additionalProperties": _value("a value"),
+                    "description": "the round's optimum, by spec key"},
+        "passed": _flag("its verification passed"),
+        "achieved_mean": _numbers("each test's achieved mean"),
+        "achieved_sem": _numbers("their standard errors"),
+    })
+
+
+def _design() -> dict:
+    return _strict({k: _integer(w) for k, w in (
+        ("points", "Latin-hypercube points per level"), ("seed", "the hypercube's seed"),
+        ("seeds", "placement seeds per point"), ("verify_seeds", "fresh seeds at the optimum"),
+        ("rounds", "rounds at most"), ("augment", "points added at an edge"),
+        ("design_points", "points run"))} | {
+        "kind": _text("latin_hypercube or full_factorial"),
+        "levels": {"type": "array", "items": {"type": "integer"},
+                   "description": "full factorial: levels per parameter"},
+        "timeout": _number("s per run")}, what="the design of experiments")
 
 
 # the keys of a record as ``taichi-dem calibrate`` writes it
@@ -94,15 +159,16 @@ CALIBRATION = register(Section("materials.*.calibration", "What the material was
             "type": "number", "exclusiveMinimum": 0}}),
     Key("within_scatter", "boolean", "every test's achieved mean within the measured scatter",
         default=None),
-    Key("design", "table", "the design of experiments it ran", default=None),
-    Key("parameters", "tables", "the calibrated parameters: { key, value, range, pair, field }",
+    Key("design", "table", "the design of experiments it ran", default=None, schema=_design()),
+    Key("parameters", "tables", "the calibrated parameters: { key, value, range, pair, field, ... }",
         default=None, schema={"type": "array", "items": _parameter_item()}),
-    Key("factors", "tables", "the calibrated choices: { keys, levels, value, pairs, field }",
+    Key("factors", "tables", "the calibrated choices: { keys, levels, value, pairs, field, ... }",
         default=None, schema={"type": "array", "items": _factor_item()}),
     Key("tests", "tables", "the bench tests: { name, unit, target, target_sd, achieved_mean, "
         "achieved_sd, achieved_sem, within_scatter, ... }", default=None,
         schema={"type": "array", "items": _test_item()}),
-    Key("rounds", "tables", "the rounds of the sequential design", default=None),
+    Key("rounds", "tables", "the rounds of the sequential design", default=None,
+        schema={"type": "array", "items": _round_item()}),
 ), owner=__name__))
 
 # the schema's rule for the table (scene/schema.py _rules): it says what it was calibrated
@@ -181,105 +247,96 @@ class CalibrationSection:
             if not isinstance(v, list) or not v:
                 raise self.err(f"{key}.sphere_radius", f"expected an array of radii (m), got "
                                                        f"{_type_name(v)}")
-            radii = tuple(self._number(x, f"{key}.sphere_radius[{i}]", positive=True)
+            radii = tuple(self._positive_number(x, f"{key}.sphere_radius[{i}]")
                           for i, x in enumerate(v))
-        for k in ("design",):
-            if k in t:
-                self.table(t[k], f"{key}.{k}")
-        for k in ("rounds",):
-            if k in t:
-                self._tables(t[k], f"{key}.{k}")
-        tests = tuple(self._test(x, f"{key}.tests[{i}]")
-                      for i, x in enumerate(self._tables(t.get("tests", []), f"{key}.tests")))
-        values = [self._parameter(x, f"{key}.parameters[{i}]")
-                  for i, x in enumerate(self._tables(t.get("parameters", []), f"{key}.parameters"))]
-        for i, x in enumerate(self._tables(t.get("factors", []), f"{key}.factors")):
-            values += self._factor(x, f"{key}.factors[{i}]")
+        # the structured parts against the schemas the scene schema publishes for them
+        for name in ("design", "parameters", "factors", "tests", "rounds"):
+            if name in t:
+                self._conform(t[name], CALIBRATION[name].schema, f"{key}.{name}")
+        tests = tuple(CalibrationTest(
+            name=x["name"], unit=x.get("unit", ""), scene=x.get("scene", ""),
+            runs=len(x.get("achieved", [])), within_scatter=x.get("within_scatter"),
+            **{k: float(x[k]) for k in ("target", "target_sd", "achieved_mean", "achieved_sd",
+                                        "achieved_sem") if k in x})
+            for x in t.get("tests", []))
+        values = [CalibratedValue(key=x["key"], value=x["value"],
+                                  pair=tuple(x["pair"]) if "pair" in x else None,
+                                  field=x.get("field", ""), material=x.get("material", ""))
+                  for x in t.get("parameters", [])]
+        for x in t.get("factors", []):
+            pairs = [tuple(q) for q in x.get("pairs", [])]
+            pairs = (pairs + [None] * len(x["keys"]))[:len(x["keys"])]
+            values += [CalibratedValue(key=k, value=x["value"], pair=q,
+                                       field=x.get("field", "") if q else "")
+                       for k, q in zip(x["keys"], pairs)]
         return Calibration(source=source, against=against, date=t.get("date", ""),
                            command=t.get("command", ""), spec=t.get("spec", ""),
                            sphere_radius=radii, within_scatter=t.get("within_scatter"),
                            tests=tests, values=tuple(values))
 
-    # -- the record's parts ----------------------------------------------------------------
-    def _tables(self, v: Any, key: str) -> list:
-        if not isinstance(v, list) or not all(isinstance(x, dict) for x in v):
-            raise self.err(key, f"expected an array of tables, got {_type_name(v)}")
-        return v
-
-    def _number(self, v: Any, key: str, positive: bool = False) -> float:
+    def _positive_number(self, v: Any, key: str) -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise self.err(key, f"expected a finite number, got {_type_name(v)}")
-        if positive and not v > 0:
+        if not v > 0:
             raise self.err(key, f"must be > 0, got {v:g}")
         return float(v)
 
-    def _string(self, t: dict, k: str, key: str, required: bool = False) -> str:
-        if k not in t:
-            if required:
-                raise self.err(f"{key}.{k}", "required key is missing")
-            return ""
-        if not isinstance(t[k], str) or (required and not t[k]):
-            raise self.err(f"{key}.{k}", f"expected a string, got {_type_name(t[k])}")
-        return t[k]
+    def _conform(self, v: Any, schema: dict, key: str) -> None:
+        """``v`` as ``schema`` (the subset of JSON Schema the record's parts use: type, anyOf,
+        items, minItems, maxItems, minLength, properties, required, additionalProperties)
+        allows it, or a SceneError naming ``key`` and the reason: the loader and the published
+        schema agree by construction."""
+        if "anyOf" in schema:
+            for option in schema["anyOf"]:
+                try:
+                    self._conform(v, option, key)
+                    return
+                except SceneError:
+                    continue
+            kinds = " or ".join(_WORDS[o.get("type", "")] for o in schema["anyOf"])
+            raise self.err(key, f"expected {kinds}, got {_type_name(v)}")
+        kind = schema.get("type")
+        ok = {"number": lambda x: (not isinstance(x, bool) and isinstance(x, (int, float))
+                                   and math.isfinite(x)),
+              "integer": lambda x: isinstance(x, int) and not isinstance(x, bool),
+              "string": lambda x: isinstance(x, str), "boolean": lambda x: isinstance(x, bool),
+              "object": lambda x: isinstance(x, dict), "array": lambda x: isinstance(x, list)}
+        if kind is not None and not ok[kind](v):
+            word = ("an array of tables" if kind == "array" and
+                    schema.get("items", {}).get("type") == "object" else _WORDS[kind])
+            raise self.err(key, f"expected {word}, got {_type_name(v)}")
+        if kind == "string":
+            if len(v) < schema.get("minLength", 0):
+                raise self.err(key, "must not be empty")
+            char = control_character(v)
+            if char:
+                raise self.err(key, f"contains the control character {char}")
+        if kind == "array":
+            if not schema.get("minItems", 0) <= len(v) <= schema.get("maxItems", len(v)):
+                raise self.err(key, f"expected {schema.get('minItems', 0)}"
+                               + (f" to {schema['maxItems']}" if "maxItems" in schema and
+                                  schema["maxItems"] != schema.get("minItems") else "")
+                               + f" items, got {len(v)}")
+            for i, x in enumerate(v):
+                self._conform(x, schema.get("items", {}), f"{key}[{i}]")
+        if kind == "object":
+            props = schema.get("properties", {})
+            extra = schema.get("additionalProperties", True)
+            for k, x in v.items():
+                if k in props:
+                    self._conform(x, props[k], f"{key}.{k}")
+                elif extra is False:
+                    raise self.err(f"{key}.{k}", f"unknown key '{k}'; {_suggest(k, props)}"
+                                                 f"allowed keys here: {', '.join(props)}")
+                elif isinstance(extra, dict):
+                    self._conform(x, extra, f"{key}.{k}")
+            for k in schema.get("required", ()):
+                if k not in v:
+                    raise self.err(f"{key}.{k}", "required key is missing")
 
-    def _value(self, v: Any, key: str):
-        if isinstance(v, (bool, str)):
-            return v
-        return self._number(v, key)
 
-    def _pair(self, v: Any, key: str) -> tuple[str, str]:
-        if (not isinstance(v, list) or len(v) != 2
-                or not all(isinstance(x, str) and x for x in v)):
-            raise self.err(key, f"expected two material names, got {_type_name(v)}")
-        return (v[0], v[1])
-
-    def _test(self, t: dict, key: str) -> CalibrationTest:
-        name = self._string(t, "name", key, required=True)
-        nums = {k: self._number(t[k], f"{key}.{k}") for k in
-                ("target", "target_sd", "achieved_mean", "achieved_sd", "achieved_sem") if k in t}
-        runs = 0
-        if "achieved" in t:
-            if not isinstance(t["achieved"], list):
-                raise self.err(f"{key}.achieved", f"expected an array of numbers, got "
-                                                  f"{_type_name(t['achieved'])}")
-            runs = len([self._number(x, f"{key}.achieved[{i}]")
-                        for i, x in enumerate(t["achieved"])])
-        within = t.get("within_scatter")
-        if within is not None and not isinstance(within, bool):
-            raise self.err(f"{key}.within_scatter", f"expected true or false, got "
-                                                    f"{_type_name(within)}")
-        return CalibrationTest(name=name, unit=self._string(t, "unit", key),
-                               scene=self._string(t, "scene", key), runs=runs,
-                               within_scatter=within, **nums)
-
-    def _parameter(self, t: dict, key: str) -> CalibratedValue:
-        k = self._string(t, "key", key, required=True)
-        if "value" not in t:
-            raise self.err(f"{key}.value", "required key is missing")
-        pair = self._pair(t["pair"], f"{key}.pair") if "pair" in t else None
-        return CalibratedValue(key=k, value=self._value(t["value"], f"{key}.value"), pair=pair,
-                               field=self._string(t, "field", key),
-                               material=self._string(t, "material", key))
-
-    def _factor(self, t: dict, key: str) -> list[CalibratedValue]:
-        keys = t.get("keys")
-        if (not isinstance(keys, list) or not keys
-                or not all(isinstance(x, str) and x for x in keys)):
-            raise self.err(f"{key}.keys", f"expected an array of scene keys, got "
-                                          f"{_type_name(keys)}")
-        if "value" not in t:
-            raise self.err(f"{key}.value", "required key is missing")
-        pairs: list[Optional[tuple]] = [None] * len(keys)
-        if "pairs" in t:
-            if not isinstance(t["pairs"], list):
-                raise self.err(f"{key}.pairs", f"expected an array of pairs, got "
-                                               f"{_type_name(t['pairs'])}")
-            got = [self._pair(p, f"{key}.pairs[{i}]") for i, p in enumerate(t["pairs"])]
-            pairs = (got + pairs)[:len(keys)]
-        field_ = self._string(t, "field", key)
-        value = self._value(t["value"], f"{key}.value")
-        return [CalibratedValue(key=k, value=value, pair=p, field=field_ if p else "")
-                for k, p in zip(keys, pairs)]
+_WORDS = {"number": "a finite number", "integer": "an integer", "string": "a string",
+          "boolean": "true or false", "object": "a table", "array": "an array", "": "a value"}
 
 
 # -------------------------------------------------------------------------------- reports
