@@ -198,7 +198,7 @@ def _rows(results: dict) -> list:
             d = got["rtd"]
             text = (f"10 / 50 / 90 % out by {d.t10:.3g} / {d.t50:.3g} / {d.t90:.3g} s "
                     f"(sd {math.sqrt(d.variance):.3g} s; D_ax {got['dispersion'].min():.2g} - "
-                    f"{got['dispersion'].max():.2g} m^2/s)")
+                    f"{got['dispersion'].max():.2g} m^2/s; its error not carried into these)")
             if "outlet_temperature_quantiles" in got:
                 q = got["outlet_temperature_quantiles"]
                 text += (f"; outlet mixed {got['outlet_temperature_mixed'] - 273.15:.4g} C, "

@@ -190,18 +190,27 @@ def machine_rtd(machine, answer, axial_slope: float,
     out = {"rtd": rtd, "dispersion": d}
     walls = list(machine.wall_temperatures.values())
     if inlet_temperature is not None and answer.outlet_temperature is not None and walls:
-        wall = walls[0]
-        ntu = math.log((inlet_temperature - wall) / (answer.outlet_temperature - wall))
-        tau = answer.residence_time
-        temps = wall + (inlet_temperature - wall) * np.exp(-ntu * rtd.time / tau)
-        weights = rtd.density * np.gradient(rtd.time)
-        weights = weights / weights.sum()
-        order = np.argsort(temps)
-        cumulative = np.cumsum(weights[order])
-        out["outlet_temperature_mixed"] = float(np.sum(weights * temps))
-        out["outlet_temperature_quantiles"] = {
-            q: float(np.interp(q, cumulative, temps[order])) for q in (0.1, 0.5, 0.9)}
+        mixed, quantiles = outlet_temperatures(rtd, answer.residence_time, inlet_temperature,
+                                               walls[0], answer.outlet_temperature)
+        out["outlet_temperature_mixed"] = mixed
+        out["outlet_temperature_quantiles"] = quantiles
     return out
+
+
+def outlet_temperatures(rtd: ResidenceTimes, tau: float, inlet: float, wall: float,
+                        plug_outlet: float) -> tuple[float, dict]:
+    """(the mixed outlet temperature, {0.1, 0.5, 0.9: the parcels' temperature quantiles}), K,
+    of parcels leaving by ``rtd``: a parcel that stays t cools over the fraction t / ``tau``
+    (s) of the machine's NTU, ln((T_in - T_wall) / (T_plug - T_wall)), ``plug_outlet`` being
+    the march's outlet at the mean residence."""
+    ntu = math.log((inlet - wall) / (plug_outlet - wall))
+    temps = wall + (inlet - wall) * np.exp(-ntu * rtd.time / tau)
+    weights = rtd.density * np.gradient(rtd.time)
+    weights = weights / weights.sum()
+    order = np.argsort(temps)
+    cumulative = np.cumsum(weights[order])
+    quantiles = {q: float(np.interp(q, cumulative, temps[order])) for q in (0.1, 0.5, 0.9)}
+    return float(np.sum(weights * temps)), quantiles
 
 
 def rtd_report(machine, out: dict, axial_slope: float, inlet_temperature=None,
@@ -234,6 +243,7 @@ def rtd_report(machine, out: dict, axial_slope: float, inlet_temperature=None,
     temp_head = (" | mixed outlet (C) | outlet 10/50/90 % (C)" if "outlet_temperature_mixed_K"
                  in rows[0] else "")
     head = ["## Residence-time distributions (axial dispersion model, D_ax from the map)", "",
+            "(the maps' noise in D_ax is not carried into these figures)", "",
             "| feed (t/h) | mean (s) | standard deviation (s) | 10 / 50 / 90 % out by (s) | "
             f"D_ax along the machine (m^2/s){temp_head} |",
             "|---" * (5 + (2 if temp_head else 0)) + "|"]

@@ -64,3 +64,26 @@ def test_a_machine_of_two_hold_ups_keeps_its_mean_residence():
         assert rtd.mean == pytest.approx(tau, rel=2e-3)
     assert narrow.variance < 0.3 * wide.variance
     assert narrow.t90 - narrow.t10 < wide.t90 - wide.t10
+
+
+def test_outlet_temperatures_of_the_parcels():
+    """Each parcel cools as exp(-NTU t / tau): the median parcel (t50 just below tau for a
+    closed vessel) leaves near the plug's outlet; by Jensen's inequality (exp is convex) the
+    mixed outlet is warmer than the plug's; and a narrow distribution (Pe 400) gives the plug's
+    outlet back within 0.5 K, where a wide one (Pe 5) does not."""
+    from taichi_dem.app.dispersion import outlet_temperatures
+    length, holdup, feed = 6.0, 60.0, 1.8
+    tau = length * holdup / feed
+    t_in, wall, plug = 723.15, 303.15, 600.0
+    got = {}
+    for pe in (5.0, 400.0):
+        d = feed / holdup * length / pe
+        rtd = residence_time_distribution(np.array([0.0, length]), np.array([holdup, holdup]),
+                                          np.array([d, d]), feed)
+        mixed, q = outlet_temperatures(rtd, tau, t_in, wall, plug)
+        assert mixed > plug
+        assert q[0.1] < q[0.5] < q[0.9]
+        got[pe] = (mixed, q)
+    assert got[400.0][0] == pytest.approx(plug, abs=0.5)
+    assert got[5.0][0] - plug > 2.0
+    assert got[5.0][1][0.9] - got[5.0][1][0.1] > 5 * (got[400.0][1][0.9] - got[400.0][1][0.1])
