@@ -48,6 +48,7 @@ exclude_patterns = ["_build", "reference/_generated", "machine/seed_cooler/seed_
                     "machine/seed_cooler/free_rolling/modelling_choices_optimised/*.md",
                     # the maps behind the full-shell and stagger pages, which sum them up
                     "machine/seed_cooler/full_shell/map_*/map.md",
+                    "machine/seed_cooler/size/*/map.md",
                     "machine/seed_cooler/stagger/*/map.md"]
 
 myst_enable_extensions = ["colon_fence", "deflist"]
