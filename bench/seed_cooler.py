@@ -237,6 +237,29 @@ def _rows(results: dict) -> list:
     return rows
 
 
+def size_paragraph(out: Path, holdup: int = 60) -> str:
+    """The size study's verdict at ``holdup`` kg/m (bench/size_convergence.py, OUT/size): how
+    each slice answer behind the table moves from 15 to 10 mm, each size calibrated at its
+    size. Empty when the study has not been made."""
+    path = out / "size" / "size_convergence.json"
+    if not path.is_file():
+        return ""
+    doc = json.loads(path.read_text())
+    if 10 not in doc["sizes_mm"] or str(holdup) not in next(iter(doc["answers"].values())):
+        return ""
+    parts = []
+    labels = {"axial_speed": "axial speed", "shaft/torque_per_metre": "shaft torque",
+              "shell/conductance_per_metre": "shell conductance", "axial_dispersion": "D_ax"}
+    for key, label in labels.items():
+        v = doc["answers"][key][str(holdup)]
+        parts.append(f"{label} {100 * v['step_15_10_relative']:+.0f} % ({v['step_sigmas']:.1f} "
+                     f"standard errors: {'converged' if v['converged'] else 'not converged'})")
+    return (f"Sphere size (the original design's slice at {holdup} kg/m, 5 deg, each size on the "
+            f"ash calibrated at its size; size/size_convergence.md): from 15 to 10 mm, "
+            + "; ".join(parts) + ". The machine's residence scales with 1 / axial speed, its "
+            "torque with the shaft torque and its cooling with the shell conductance.")
+
+
 def table(columns: list, walls: dict | None) -> str:
     """The seed's table with a column of ours for each (title, results) of ``columns``: the
     calibrated ash's, then the free-rolling ash's (issue 44)."""
@@ -351,6 +374,9 @@ def main(argv=None) -> int:
     compared = slice_comparison(a.out, free)
     if compared:
         text += "\n\n" + compared
+    sized = size_paragraph(a.out)
+    if sized:
+        text += "\n\n" + sized
     for design in CHOICE_FOLDERS:
         if design in free_results:
             extra = choices_table(free, free_results[design], design)

@@ -62,10 +62,21 @@ def test_the_verdict():
     assert v["converged"] and v["value"] == 11.0 and v["error"] == pytest.approx(1.0)
     assert v["step_20_15_relative"] == pytest.approx(0.25)
     v = sc.verdict({15: (10.0, 0.3), 10: (11.2, 0.4)})
-    assert not v["converged"] and "value" not in v
+    assert not v["converged"] and "value" not in v and "extrapolated" not in v
     assert v["step_15_10_relative"] == pytest.approx(0.12)
     # a noisy 10 mm value that sits on the 15 mm one: converged, its own noise is the error
     v = sc.verdict({15: (10.0, 0.3), 10: (10.1, 0.8)})
     assert v["converged"] and v["error"] == pytest.approx(0.8)
+    # steps of one sign that shrink: 8 -> 10 -> 10.8 (2.8 standard errors), r = 0.4: the rest
+    # 0.8 * 0.4 / 0.6
+    v = sc.verdict({20: (8.0, 0.2), 15: (10.0, 0.2), 10: (10.8, 0.2)})
+    assert not v["converged"]
+    assert v["extrapolated"] == pytest.approx(10.8 + 0.8 * 0.4 / 0.6)
+    assert v["extrapolated_error"] == pytest.approx(0.8 * 0.4 / 0.6)
+    # a series shrinking slower than by half (r = 0.6) extrapolates noise: none
+    assert "extrapolated" not in sc.verdict({20: (8.0, 0.3), 15: (10.0, 0.3), 10: (11.2, 0.4)})
+    # a step that grows, or turns back, is no series to sum
+    assert "extrapolated" not in sc.verdict({20: (9.5, 0.1), 15: (10.0, 0.1), 10: (11.2, 0.1)})
+    assert "extrapolated" not in sc.verdict({20: (12.0, 0.1), 15: (10.0, 0.1), 10: (11.2, 0.1)})
     assert "step_sigmas" not in sc.verdict({20: (1.0, 0.1), 15: (1.0, 0.1)})
     assert math.isnan(sc.value({}, "axial_speed", 1.0)[0])
