@@ -188,7 +188,9 @@ def table(out: Path) -> dict:
          "rest of a geometric series of steps), its correction as its error; the 20 mm ash "
          "missed its heap by 1.9 measured sd, so that step holds a material difference too. "
          "Made by `python bench/size_convergence.py table`.", ""]
-    L += ["| answer | hold-up (kg/m) | " + " | ".join(f"{mm} mm" for mm in sorted(found, reverse=True))
+    def heading(mm: int) -> str:
+        return f"{mm} mm" + ("" if calibration_json(mm)["within_scatter"] else " (not calibrated)")
+    L += ["| answer | hold-up (kg/m) | " + " | ".join(heading(mm) for mm in sorted(found, reverse=True))
           + " | 20 -> 15 mm | 15 -> 10 mm (standard errors) | converged value |",
           "|---|---|" + "---|" * len(found) + "---|---|---|"]
     for key, label, unit, scale in ANSWERS:
