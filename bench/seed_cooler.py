@@ -253,7 +253,7 @@ def size_paragraph(out: Path, holdup: int = 60) -> str:
     for key, label in labels.items():
         v = doc["answers"][key][str(holdup)]
         parts.append(f"{label} {100 * v['step_15_10_relative']:+.0f} % ({v['step_sigmas']:.1f} "
-                     f"standard errors: {'converged' if v['converged'] else 'not converged'})")
+                     f"standard errors: {v['status']})")
     return (f"Sphere size (the original design's slice at {holdup} kg/m, 5 deg, each size on the "
             f"ash calibrated at its size; size/size_convergence.md): from 15 to 10 mm, "
             + "; ".join(parts) + ". The machine's residence scales with 1 / axial speed, its "

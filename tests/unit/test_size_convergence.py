@@ -55,22 +55,29 @@ def test_the_scene_loads_and_its_record_is_for_its_size(mm):
 
 
 def test_the_verdict():
-    # 15 -> 10 mm moves 1.0 against a combined noise of 0.5: not converged (2 sigma is 1.0, and
-    # 1.0 / 0.5 = 2.0 is on the line: converged); 1.2 is beyond
+    # 15 -> 10 mm moves 1.0 against a combined noise of 0.5: 2.0 standard errors, on the line:
+    # within the noise; the value's error is the step, 1.0 of 11.0 (9 %): converged
     v = sc.verdict({20: (8.0, 0.3), 15: (10.0, 0.3), 10: (11.0, 0.4)})
     assert v["step_sigmas"] == pytest.approx(2.0)
-    assert v["converged"] and v["value"] == 11.0 and v["error"] == pytest.approx(1.0)
+    assert v["status"] == "converged" and v["converged"]
+    assert v["value"] == 11.0 and v["error"] == pytest.approx(1.0)
     assert v["step_20_15_relative"] == pytest.approx(0.25)
+    # beyond two standard errors: not converged, no value
     v = sc.verdict({15: (10.0, 0.3), 10: (11.2, 0.4)})
-    assert not v["converged"] and "value" not in v and "extrapolated" not in v
+    assert v["status"] == "not converged" and not v["converged"]
+    assert "value" not in v and "extrapolated" not in v
     assert v["step_15_10_relative"] == pytest.approx(0.12)
-    # a noisy 10 mm value that sits on the 15 mm one: converged, its own noise is the error
+    # a noisy 10 mm value on the 15 mm one: its own noise is the error, 8 % of it: converged
     v = sc.verdict({15: (10.0, 0.3), 10: (10.1, 0.8)})
     assert v["converged"] and v["error"] == pytest.approx(0.8)
+    # the same step under twice the noise (16 %): it shows nothing either way
+    v = sc.verdict({15: (10.0, 0.6), 10: (10.1, 1.6)})
+    assert v["status"] == "within the noise" and not v["converged"]
+    assert v["value"] == 10.1 and v["error"] == pytest.approx(1.6)
     # steps of one sign that shrink: 8 -> 10 -> 10.8 (2.8 standard errors), r = 0.4: the rest
     # 0.8 * 0.4 / 0.6
     v = sc.verdict({20: (8.0, 0.2), 15: (10.0, 0.2), 10: (10.8, 0.2)})
-    assert not v["converged"]
+    assert v["status"] == "not converged"
     assert v["extrapolated"] == pytest.approx(10.8 + 0.8 * 0.4 / 0.6)
     assert v["extrapolated_error"] == pytest.approx(0.8 * 0.4 / 0.6)
     # a series shrinking slower than by half (r = 0.6) extrapolates noise: none
