@@ -154,6 +154,39 @@ def residence_time_distribution(x: np.ndarray, holdup: np.ndarray, dispersion: n
     return rtd
 
 
+def kaplan_meier(stay, left):
+    """A direct run's residence-time distribution (bench/direct_rtd.py), the survival function S(t) (the fraction still inside after t s) from each particle's
+    time ``stay`` (s): its residence time where ``left``, else the time it had stayed when the
+    run ended (censored). Returns (the distinct residence times, S just after each)."""
+    stay, left = np.asarray(stay, float), np.asarray(left, bool)
+    order = np.argsort(stay, kind="stable")
+    stay, left = stay[order], left[order]
+    times, index = np.unique(stay, return_index=True)
+    at_risk = len(stay) - index
+    events = np.add.reduceat(left.astype(float), index)
+    keep = events > 0
+    survival = np.cumprod(1.0 - events[keep] / at_risk[keep])
+    return times[keep], survival
+
+
+def rtd_figures(stay, left) -> dict:
+    """Mean (s), standard deviation (s), 10/50/90 % times (s) and the fraction not seen to leave
+    (the tail beyond the longest observed stay) of the Kaplan-Meier survival function."""
+    t, s = kaplan_meier(stay, left)
+    grid_t = np.concatenate([[0.0], t])
+    grid_s = np.concatenate([[1.0], s])
+    widths = np.diff(grid_t)
+    mean = float(np.sum(grid_s[:-1] * widths))                   # integral of S
+    second = float(np.sum(grid_s[:-1] * (grid_t[1:] ** 2 - grid_t[:-1] ** 2)))  # 2 int t S
+    out = {"mean": mean, "standard_deviation": math.sqrt(max(second - mean * mean, 0.0)),
+           "unseen_tail": float(grid_s[-1])}
+    for q in (0.1, 0.5, 0.9):
+        # the first time S falls to 1 - q; not seen when the tail left unseen is larger
+        k = int(np.searchsorted(-grid_s, -(1.0 - q) - 1e-12, side="left"))
+        out[f"t{int(q * 100)}"] = float(grid_t[k]) if k < len(grid_t) else math.nan
+    return out
+
+
 def closed_vessel_variance(tau: float, peclet: float) -> float:
     """The variance (s^2) of the closed vessel's E(t): tau^2 (2/Pe - 2/Pe^2 (1 - e^-Pe))."""
     return tau * tau * (2.0 / peclet - 2.0 / peclet ** 2 * (1.0 - math.exp(-peclet)))
