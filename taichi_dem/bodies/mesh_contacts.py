@@ -34,6 +34,7 @@ from ..effects.mesh_contact import closest_point_on_triangle
 from ..engine.tuning import LIST_GROWTH
 from ..engine.broadphase import exclusive_scan, previous_entry
 from ..engine import transfer
+from ..setup.memory import bucket
 from ..engine.state import fit_rows, grown_capacity
 from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
 
@@ -55,7 +56,8 @@ def make_triangle_image(grid, reach: float):
     periodic, span = grid.periodic, grid.span
     minimum_image = grid.make_minimum_image()
     any_periodic = any(periodic)
-    span_v = ti.Vector([s if p else 1.0 for s, p in zip(span, periodic)])
+    span_of = grid.layout_funcs()[2]
+    reach_of = _read_scalar(grid, "triangle_reach", reach)
 
     @ti.func
     def triangle_image(x, a, b, c):
@@ -68,6 +70,11 @@ def make_triangle_image(grid, reach: float):
             best = base
             # images on each side worth testing: those within half the extent + reach of mid
             n_side = ti.Vector([0, 0, 0])
+            span_v = span_of()
+            for k in ti.static(range(3)):
+                if ti.static(not periodic[k]):
+                    span_v[k] = 1.0
+            reach = reach_of()
             for k in ti.static(range(3)):
                 if ti.static(periodic[k]):
                     n_side[k] = ti.max(ti.cast(ti.ceil((0.5 * (hi_t[k] - lo_t[k]) + reach)
@@ -87,6 +94,31 @@ def make_triangle_image(grid, reach: float):
                                     best_sq = d_sq
         return best
     return triangle_image
+
+
+def _read_scalar(grid, name, value):
+    """A ti.func () -> ``value``: read at run time when the grid is bound to runtime values
+    (engine/values.py), else compiled in."""
+    if grid.values is not None:
+        return grid.values.scalar(name, value)
+    value = float(value)
+
+    @ti.func
+    def read():
+        return value
+    return read
+
+
+def _read_vector(grid, name, value):
+    """As _read_scalar, for a 3-vector."""
+    if grid.values is not None:
+        return grid.values.vector(name, value)
+    constant = ti.Vector([float(v) for v in value])
+
+    @ti.func
+    def read():
+        return constant
+    return read
 
 
 @ti.data_oriented
@@ -110,7 +142,7 @@ class MeshContacts:
         self.triangle_owner = np.asarray(owner, np.int64)
         self.n_bodies = len(bodies)
         t = self.tree = engine.new_tree()
-        nt, nb, ncell = max(self.n_triangles, 1), max(self.n_bodies, 1), engine.grid.n_cells
+        nt, nb, ncell = max(self.n_triangles, 1), max(self.n_bodies, 1), engine.grid.cell_capacity
         self.tri_a = t.add("tri_a", real, nt, vector=True)
         self.tri_b = t.add("tri_b", real, nt, vector=True)
         self.tri_c = t.add("tri_c", real, nt, vector=True)
@@ -176,9 +208,9 @@ class MeshContacts:
         self.items_tree = None
         self.entries_tree = None
         self.scratch_tree = None
-        self._alloc_items(max(4 * self.n_triangles, 1024))
+        self._alloc_items(bucket(max(4 * self.n_triangles, 1024)))
         self._alloc_scratch(16)
-        self._alloc_entries(max(2 * s.capacity // 8, 1024))
+        self._alloc_entries(bucket(max(2 * s.capacity // 8, 1024)))
         # gas-gap conduction reaches a fluid lens beyond the contact (thermal/gas_gap.py)
         self.lens = margin_fraction(engine.contact_effects, "surface")
         self.expand = engine.max_radius * (1.0 + self.lens) + engine.skin
@@ -342,19 +374,19 @@ class MeshContacts:
     def _compile_binning(self):
         m = self
         g = self.e.grid
-        lo = ti.Vector(list(g.lo))
-        inv_cell = ti.Vector([1.0 / c for c in g.cell_size])
-        cell = ti.Vector(list(g.cell_size))
-        dims = ti.Vector(list(g.dims))
-        n_cells = g.n_cells
+        lo_of, _, _, inv_cell_of, dims_of, n_cells_of = g.layout_funcs()
+        cell_of_size = _read_vector(g, "cell_size", g.cell_size)
         nt = self.n_triangles
-        expand = self.expand
-        half_diagonal = 0.5 * float(np.linalg.norm(g.cell_size))
+        expand_of = _read_scalar(g, "triangle_reach", self.expand)
+        half_diagonal_of = _read_scalar(g, "half_cell_diagonal",
+                                        0.5 * float(np.linalg.norm(g.cell_size)))
         items = self.tri_cell_items
 
         @ti.func
         def visit_cells(t, fill: ti.template()):
             a, b, c = m.world_triangle(t)
+            lo, inv_cell, cell, dims = lo_of(), inv_cell_of(), cell_of_size(), dims_of()
+            expand, half_diagonal = expand_of(), half_diagonal_of()
             normal = (b - a).cross(c - a).normalized()
             lo_c = ti.cast(ti.floor((ti.min(a, b, c) - expand - lo) * inv_cell), ti.i32)
             hi_c = ti.cast(ti.floor((ti.max(a, b, c) + expand - lo) * inv_cell), ti.i32)
@@ -387,12 +419,13 @@ class MeshContacts:
         @ti.func
         def count_bins_body(serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
-            for c in range(n_cells):
+            for c in range(n_cells_of()):
                 m.tri_cell_count[c] = 0
                 m.tri_cell_fill[c] = 0
             ti.loop_config(serialize=serial_loops)
             for t in range(nt):
                 visit_cells(t, False)
+            n_cells = n_cells_of()
             exclusive_scan(m.tri_cell_count, m.tri_cell_start, n_cells)
             return m.tri_cell_start[n_cells]
 
@@ -419,7 +452,7 @@ class MeshContacts:
         m = self
         s = self.e.state
         carried = [(self.history[n], self.old_history_by_name[n]) for n in self.history]
-        skin = self.e.skin
+        skin_of = self.e.skin_of
         lens = self.lens
         width = self.scratch_width
         scratch = self.scratch
@@ -447,7 +480,7 @@ class MeshContacts:
             for i in range(n):
                 c = s.cell[i]
                 xi = s.position[i]
-                reach = s.radius[i] * ti.static(1.0 + lens) + skin
+                reach = s.radius[i] * ti.static(1.0 + lens) + skin_of()
                 count = 0
                 for slot in range(m.tri_cell_start[c], m.tri_cell_start[c + 1]):
                     t = m.tri_cell_items[slot]
@@ -737,18 +770,18 @@ class MeshContacts:
         self._update_frames(time)
         items = int(self._count_bins())
         if items > self.items_capacity:
-            self._alloc_items(int(items * LIST_GROWTH) + 16)
+            self._alloc_items(bucket(int(items * LIST_GROWTH) + 16))
             self._compile_binning()
         self._fill_bins()
         longest = int(self._find_candidates(n))
         if longest > self.scratch_width:
-            self._alloc_scratch(int(longest * LIST_GROWTH) + 1)
+            self._alloc_scratch(bucket(int(longest * LIST_GROWTH) + 1, floor=16))
             self._compile_rows()
             self._find_candidates(n)
         entries = int(self.mesh_start[n])
         grown = False
         if entries > self.entries_capacity:
-            self._alloc_entries(grown_capacity(entries, n, self.e.state.capacity) + 16)
+            self._alloc_entries(grown_capacity(entries, n, self.e.state.capacity + 16))
             self._compile_rows()
             grown = True
         self._compact_and_carry(n)

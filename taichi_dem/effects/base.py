@@ -37,7 +37,7 @@ from __future__ import annotations
 
 class EffectContext:
     """What an effect sees of the simulation it runs in: the model (``real`` precision,
-    ``dt`` s, ``grid``, the material-pair device ``table`` by name, ``material_names`` in
+    ``dt`` s, ``grid``, ``values`` (scene values read at run time: engine/values.py), the material-pair device ``table`` by name, ``material_names`` in
     table order, ``species`` (kinds of particle), ``max_radius`` m) and the state
     (``state``: the particle fields, its declared ones among them; ``broadphase`` and
     ``mesh``: the neighbour cells and the mesh contacts, once built), the loop mode
@@ -47,7 +47,7 @@ class EffectContext:
     scene settings from its own constructor's arguments (effects/registry.py), and never the
     engine or the raw scene (tests/unit/test_effect_boundary.py)."""
 
-    VISIBLE = frozenset(("real", "dt", "grid", "table", "material_names", "species",
+    VISIBLE = frozenset(("real", "dt", "grid", "values", "table", "material_names", "species",
                          "max_radius", "state", "broadphase", "mesh", "serial",
                          "serial_switch"))
     __slots__ = ("_engine",)

@@ -13,11 +13,12 @@ class Gravity(Effect):
         self.gravity = tuple(float(g) for g in gravity)
 
     def particle_func(self, ctx):
-        g = ti.Vector(list(self.gravity))
+        # read at run time (engine/values.py): a scene with another gravity compiles nothing
+        g = ctx.values.vector("gravity", self.gravity)
 
         @ti.func
         def gravity(i, load):
-            load.acceleration += g
+            load.acceleration += g()
             return load
 
         return gravity

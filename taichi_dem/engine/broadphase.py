@@ -20,6 +20,7 @@ on the CPU, rebuild_on_workers).
 import taichi as ti
 
 from .grid import GridSpec  # noqa: F401 (re-exported)
+from ..setup.memory import bucket
 from .state import PairState, grown_capacity
 from .tuning import FUSED_AFTER_QUIET_REBUILDS, LIST_GROWTH, SETTLED_ENTRIES_PER_PARTICLE
 from .workers import WORKER_TASK, make_barrier, worker_range
@@ -83,9 +84,10 @@ class Broadphase:
         self.e = engine
         self.grid = engine.grid
         t = self.tree = engine.new_tree()
-        self.cell_count = t.add("cell_count", ti.i32, self.grid.n_cells)
-        self.cell_start = t.add("cell_start", ti.i32, self.grid.n_cells + 1)
-        self.cell_fill = t.add("cell_fill", ti.i32, self.grid.n_cells)
+        # (a bucket of cells: the count itself is read at run time, engine/values.py)
+        self.cell_count = t.add("cell_count", ti.i32, self.grid.cell_capacity)
+        self.cell_start = t.add("cell_start", ti.i32, self.grid.cell_capacity + 1)
+        self.cell_fill = t.add("cell_fill", ti.i32, self.grid.cell_capacity)
         # [pair entries, alive particles, the longest row (rebuild_on_workers)]
         self.total = t.add("total", ti.i32, 3)
         t.finalize()
@@ -110,7 +112,7 @@ class Broadphase:
     def _compile_particle_kernels(self):
         s = self.e.state
         g = self.grid
-        n_cells = g.n_cells
+        n_cells_of = g.layout_funcs()[5]
         cell_count, cell_start, cell_fill, total = self.cell_count, self.cell_start, self.cell_fill, self.total
         vec_fields, real_fields, int_fields, wall_fields, f64_fields = s.reorder_groups()
         n_walls = s.n_walls
@@ -141,7 +143,7 @@ class Broadphase:
         def bin_particle(i):
             """Particle i's cell, counted (an atomic add: particles of a cell bin at once)."""
             # dead particles (left the domain) sort to the end and are dropped
-            c = n_cells
+            c = n_cells_of()
             if s.alive[i] != 0:
                 c = cell_of(s.position[i])
                 cell_count[c] += 1
@@ -152,6 +154,7 @@ class Broadphase:
             """The cells' starts, the alive count and each particle's new slot ``order``;
             serial, so that the order within a cell - and so every result - is the same on
             any number of threads. Call it at a kernel's top level or on one worker."""
+            n_cells = n_cells_of()
             exclusive_scan(cell_count, cell_start, n_cells)
             total[1] = cell_start[n_cells]
             ti.loop_config(serialize=True)
@@ -165,7 +168,7 @@ class Broadphase:
         @ti.func
         def sort_by_cell_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
-            for c in range(n_cells):
+            for c in range(n_cells_of()):
                 clear_cell(c)
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
@@ -238,8 +241,8 @@ class Broadphase:
         t.finalize()
         s = self.e.state
         g = self.grid
-        dims = ti.Vector(list(g.dims))
-        skin = self.e.skin
+        dims_of = g.layout_funcs()[4]
+        skin_of = self.e.skin_of
         cell_start = self.cell_start
         total = self.total
         # two fixed particles are listed only when a pair effect conducts heat between them
@@ -262,7 +265,7 @@ class Broadphase:
             # listed only when they conduct heat
             d = minimum_image(xi - s.position[j])
             rj = s.radius[j]
-            cutoff = ri + rj + skin
+            cutoff = ri + rj + skin_of()
             if ti.static(margin > 0.0):
                 cutoff += ti.static(margin) * ti.max(ri, rj)
             listed = (d.dot(d) < cutoff * cutoff) & (j != i)
@@ -281,6 +284,7 @@ class Broadphase:
         def neighbour_cell(k: ti.template(), coordinate, step):
             """The stencil's cell coordinate along axis k, wrapped on a periodic axis, and
             whether it is searched."""
+            dims = dims_of()
             nb = coordinate + step
             inside = True
             if ti.static(g.periodic[k]):
@@ -310,6 +314,7 @@ class Broadphase:
             # the cell's coordinates from the position, as the sort found them (the same
             # arithmetic on the same position), rather than by dividing its number
             cell = cell_coordinates(xi)
+            dims = dims_of()
             cx, cy, cz = cell[0], cell[1], cell[2]
             count = 0
             # the stencil unrolled, x outer and y inner (the order of the rows): each
@@ -588,7 +593,7 @@ class Broadphase:
         workers = e.workers
         arrivals = e.worker_pool.arrivals
         barrier = make_barrier(arrivals, workers)
-        n_cells = self.grid.n_cells
+        n_cells_of = self.grid.layout_funcs()[5]
         total = self.total
         width, pair_capacity = self.scratch_width, e.pairs.capacity
         stall_spins = self.REBUILD_STALL_SPINS
@@ -615,7 +620,7 @@ class Broadphase:
                     # (1) the particles sorted by cell (while worker 0 places them in cell
                     # order, the others save the old rows by particle id, with their pairs'
                     # state: both read the arrays before they move)
-                    cells_first, cells_last = worker_range(n_cells, w, workers)
+                    cells_first, cells_last = worker_range(n_cells_of(), w, workers)
                     for c in range(cells_first, cells_last):
                         clear_cell(c)
                     arrived = meet(arrived)
@@ -730,14 +735,18 @@ class Broadphase:
         e = self.e
         longest = int(self._find_candidates(alive))
         if longest > self.scratch_width:
-            self._compile_search(int(longest * LIST_GROWTH) + 1)
+            self._compile_search(bucket(int(longest * LIST_GROWTH) + 1, floor=16))
             if e.pairs is not None:
                 self._compact = self._make_compact(e.pairs)
             longest = int(self._find_candidates(alive))
         entries = int(self.total[0])
         if e.pairs is None or entries > e.pairs.capacity:
+            # the first list has room for every slot settled (the count of the fill does not
+            # set its size, so a scene with a few particles more or less shares its kernels)
+            settled_for = e.state.capacity if e.pairs is None else alive
             e.grow_pairs(grown_capacity(entries, alive, e.state.capacity, 1024,
-                                        settled_per_particle=SETTLED_ENTRIES_PER_PARTICLE))
+                                        settled_per_particle=SETTLED_ENTRIES_PER_PARTICLE
+                                        * settled_for / max(alive, 1)))
         self._compact(alive)
         self._link_and_carry(alive)
         if e.mesh is not None and e.mesh.rebuild_rows(alive, e.time):

@@ -20,6 +20,7 @@ class GridSpec:
         span = self.hi - self.lo
         self.periodic = tuple(int(a in periodic) for a in "xyz")
         size = cutoff
+        coarsened = False
         while True:
             dims = []
             for k in range(3):
@@ -28,11 +29,50 @@ class GridSpec:
             if np.prod(dims, dtype=np.int64) <= max(MIN_CELLS, MAX_CELLS_PER_PARTICLE * capacity):
                 break
             size *= 1.25           # a huge, sparse domain: coarser cells, still correct
+            coarsened = True
         self.dims = tuple(dims)
         self.cell_size = tuple(float(span[k] / dims[k]) if self.periodic[k] else size
                                for k in range(3))
         self.span = tuple(float(s) for s in span)
         self.n_cells = int(np.prod(self.dims))
+        # the cell arrays' length: a bucket (engine/values.py), so that domains of a few cells
+        # more or less share their kernels
+        from .values import bucket
+        self.cell_capacity = bucket(self.n_cells)
+        if coarsened:
+            # the count itself set the cells: room for what any count of its bucket could set
+            self.cell_capacity = max(self.cell_capacity, bucket(
+                max(MIN_CELLS, MAX_CELLS_PER_PARTICLE * bucket(capacity))))
+        self.values = None
+
+    def bind(self, values) -> None:
+        """Read the layout at run time from ``values`` (engine/values.py RuntimeValues): the
+        ti.funcs made from here on close over slots, not numbers (what stays compiled in: the
+        periodic axes). Unbound, they compile the numbers in."""
+        self.values = values
+
+    def _read(self, name: str, value, integer: bool = False):
+        """A ti.func () -> ``value`` (a 3-vector, or a scalar integer ``n_cells``)."""
+        if self.values is None:
+            constant = ti.Vector(list(value)) if isinstance(value, tuple) else value
+
+            @ti.func
+            def read():
+                return constant
+            return read
+        if isinstance(value, tuple):
+            return (self.values.integers if integer else self.values.vector)("grid_" + name, value)
+        return self.values.integer("grid_" + name, value)
+
+    def layout_funcs(self):
+        """ti.funcs () -> lo, hi, span (m), the inverse cell size (1/m), the cells per axis
+        and the cell count, read at run time once bound (``bind``)."""
+        return (self._read("lo", tuple(float(x) for x in self.lo)),
+                self._read("hi", tuple(float(x) for x in self.hi)),
+                self._read("span", self.span),
+                self._read("inverse_cell", tuple(1.0 / c for c in self.cell_size)),
+                self._read("dims", tuple(int(d) for d in self.dims), integer=True),
+                self._read("n_cells", int(self.n_cells)))
 
     def make_cell_arithmetic(self, dims=None):
         """The one place cells are numbered (z fastest) and stepped across periodic faces:
@@ -42,19 +82,29 @@ class GridSpec:
         on periodic axes). ``dims``: cells per axis of a coarser grid over the same domain
         and periodic axes (the mobility cells), default this grid's. (The neighbour search
         unrolls its own stencil, with thin periodic axes handled: Broadphase.)"""
-        d = tuple(int(x) for x in (self.dims if dims is None else dims))
+        if dims is None:
+            dims_of = self.layout_funcs()[4]
+        else:       # another grid's (the mobility cells): compiled in
+            fixed = ti.Vector([int(x) for x in dims])
+
+            @ti.func
+            def dims_of():
+                return fixed
         periodic = self.periodic
 
         @ti.func
         def number(v):
+            d = dims_of()
             return (v[0] * d[1] + v[1]) * d[2] + v[2]
 
         @ti.func
         def coordinates(c):
+            d = dims_of()
             return ti.Vector([c // (d[1] * d[2]), (c // d[2]) % d[1], c % d[2]])
 
         @ti.func
         def neighbour(v, offset):
+            d = dims_of()
             nb = v + ti.Vector([offset // 9 - 1, (offset // 3) % 3 - 1, offset % 3 - 1])
             inside = True
             for k in ti.static(range(3)):
@@ -73,15 +123,13 @@ class GridSpec:
     def make_cell_of(self):
         """ti.funcs position (m) -> the cell's integer coordinates (a vector), and position ->
         the cell's number (z fastest). Positions outside the grid go to its border cells."""
-        lo = ti.Vector(list(self.lo))
-        inv_cell = ti.Vector([1.0 / c for c in self.cell_size])
-        dims = ti.Vector(list(self.dims))
+        lo_of, _, _, inv_cell_of, dims_of, _ = self.layout_funcs()
         number, _, _ = self.make_cell_arithmetic()
 
         @ti.func
         def cell_coordinates(p):
-            c = ti.cast(ti.floor((p - lo) * inv_cell), ti.i32)
-            return ti.max(ti.min(c, dims - 1), 0)
+            c = ti.cast(ti.floor((p - lo_of()) * inv_cell_of()), ti.i32)
+            return ti.max(ti.min(c, dims_of() - 1), 0)
 
         @ti.func
         def cell_of(p):
@@ -90,10 +138,12 @@ class GridSpec:
 
     def make_minimum_image(self):
         """ti.func d -> the shortest periodic image of the separation vector d (m)."""
-        periodic, span = self.periodic, self.span
+        periodic = self.periodic
+        span_of = self.layout_funcs()[2]
 
         @ti.func
         def minimum_image(d):
+            span = span_of()
             for k in ti.static(range(3)):
                 if ti.static(periodic[k]):
                     # positions are wrapped into the box, so one period at most separates images

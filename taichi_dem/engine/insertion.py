@@ -40,7 +40,7 @@ class Insertion:
         k = len(arrays["radius"])
         if k == 0:
             return count
-        if count + k > self.e.state.capacity:
+        if count + k > self.e.model.particle_limit:
             raise RuntimeError("particle capacity exceeded")
         C = InsertColumn
         # two arrays (each ndarray argument costs a launch ~25 us: an insertion every few
@@ -108,7 +108,7 @@ class Insertion:
     def _compile_insert(self):
         e = self.e
         s = e.state
-        gravity = ti.Vector(list(e.scene.simulation.gravity))
+        gravity_of = e.values.vector("gravity", e.scene.simulation.gravity)
         thermal = e.thermal
         process = s.process
         n_walls = s.n_walls
@@ -156,7 +156,7 @@ class Insertion:
                                     for a in ti.static(range(3))])
                 # inserted clear of every contact: free flight is the first step's acceleration
                 # (the initial fill's are computed by Engine.start)
-                s.acceleration[i] = gravity
+                s.acceleration[i] = gravity_of()
                 s.angular_acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
                 s.radius[i] = ti.cast(reals[q, C.RADIUS], real)
                 s.mass[i] = ti.cast(reals[q, C.MASS], real)

@@ -13,6 +13,7 @@ from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
 from ..setup.pair_tables import PairTables
 from .grid import GridSpec
+from .values import bucket
 
 # In f32, positions farther than this from the origin (m) carry a residual (split positions:
 # engine/precision.py): the f32 spacing there, 1.2e-7 m, is what a resting bed would jitter by
@@ -38,7 +39,8 @@ class Model:
     dt: float                     # time step, s
     skin: float                   # Verlet skin, m
     max_radius: float             # the largest radius the particles (and factories) have, m
-    capacity: int                 # particle slots
+    capacity: int                 # particle slots allocated: a bucket (engine/values.py)
+    particle_limit: int           # particle slots the scene may fill (fills + factories)
     # ((material index, radius m), ...) of every kind of particle, or None (a distribution):
     # what per-species tables (the gas gap's) are built for
     species: "tuple | None"
@@ -78,10 +80,14 @@ class Model:
         for e in effect_list:
             for name, values in e.table_values(scene, tables).items():
                 table_values.setdefault(name, values)
+        # the arrays are allocated for a bucket of slots, so that scenes whose counts differ
+        # a little share their kernels; the factories fill no more than the scene's own
+        slots = bucket(capacity)
         grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
                         (2.0 + pair_margin) * max_radius + skin, capacity)
         return cls(scene=scene, tables=tables, real=real, dt=dt, skin=skin,
-                   max_radius=max_radius, capacity=capacity, species=species,
+                   max_radius=max_radius, capacity=slots, particle_limit=int(capacity),
+                   species=species,
                    effect_list=effect_list, contact_effects=contact,
                    particle_effects=tuple(e for e in effect_list if e.stage == "particle"),
                    cell_effects=tuple(e for e in effect_list if hasattr(e, "after_pairs")),

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
+from ..setup.memory import bucket
 from .tuning import LIST_GROWTH
 
 VEC = 3
@@ -90,8 +91,9 @@ def grown_capacity(entries: int, alive: int, particle_capacity: int, floor: int 
     the kernel cache; the runs of steps 2-3 s cold), so a scene filling from a factory or a
     bed settling should reallocate a few times, not at every half-again of its entries."""
     per_particle = entries / max(alive, 1)
-    return int(max(LIST_GROWTH * entries, 1.2 * per_particle * particle_capacity,
-                   settled_per_particle * alive, floor))
+    # a bucket (engine/values.py): scenes whose lists differ a little share their kernels
+    return bucket(int(max(LIST_GROWTH * entries, 1.2 * per_particle * particle_capacity,
+                          settled_per_particle * alive, floor)))
 
 
 class ParticleState:

@@ -47,6 +47,7 @@ from ..effects.base import EffectContext
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 from . import drivers, tuning
 from .tuning import PARALLEL_FROM
+from .values import RuntimeValues
 from .workers import WorkerPool, persistent_workers
 
 
@@ -102,6 +103,11 @@ class Engine:
         # rebuild: a checkpoint of a serial run restores into a parallel one (or a GPU)
         self.scatter_ok = self.mobility is None
         self.trees: list[FieldTree] = []
+        # scene values the kernels read at run time (values.py): made first, so their place
+        # is the same in every simulation; the grid's layout and the skin are read from them
+        self.values = RuntimeValues(self.new_tree(), real)
+        self.grid.bind(self.values)
+        self.skin_of = self.values.scalar("skin", self.skin)
         # runs of steps on every thread above parallel_from (persistent_workers; off again,
         # for good, if its barrier waits show the threads sharing the cores with other work)
         self.worker_pool = WorkerPool(persistent_workers(self.threads) if self.runs else 0,
@@ -257,10 +263,8 @@ class Engine:
     def _compile_particle_kernels(self):
         s = self.state
         g = self.grid
-        lo = ti.Vector(list(g.lo))
-        hi = ti.Vector(list(g.hi))
-        span = ti.Vector(list(g.span))
-        half_skin_sq = (0.5 * self.skin) ** 2
+        lo_of, hi_of, span_of = g.layout_funcs()[:3]
+        half_skin_sq_of = self.values.scalar("half_skin_squared", (0.5 * self.skin) ** 2)
         real = self.real
         flags = self.flags
 
@@ -315,6 +319,7 @@ class Engine:
                 x = x_new
                 inside = True
                 wrap = vec0
+                lo, hi, span = lo_of(), hi_of(), span_of()
                 for k in ti.static(range(3)):
                     if ti.static(g.periodic[k]):
                         # wrap into [lo, hi): the particle re-enters through the opposite face
@@ -342,7 +347,7 @@ class Engine:
                     ti.atomic_add(flags[Flag.DEAD_IN_SLOTS], 1)
                 if not removed:
                     moved = minimum_image(x - s.reference_position[i])
-                    if moved.dot(moved) > half_skin_sq:
+                    if moved.dot(moved) > half_skin_sq_of():
                         flags[Flag.REBUILD] = 1      # benign race: every writer writes 1
         self.drift_particle = drift_particle
 

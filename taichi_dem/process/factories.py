@@ -233,12 +233,12 @@ class FactorySet:
             # that follows brings them to the factory's velocity at t
             arrays["velocity"] = arrays["velocity"] - 0.5 * self.sim.dt * self.gravity
         m = len(arrays["radius"])
-        free = engine.state.capacity - n
+        free = engine.model.particle_limit - n
         if m > free:
             if not self.capacity_warned:
                 self.capacity_warned = True
                 print(f"taichi-dem: warning: at t = {time:.4g} s the particle capacity "
-                      f"({engine.state.capacity}) is reached; factories wait. Raise "
+                      f"({engine.model.particle_limit}) is reached; factories wait. Raise "
                       f"[simulation] max_particles.", file=sys.stderr)
             # give back what does not fit (its mass stays behind schedule)
             for k in due:

@@ -75,6 +75,19 @@ def factory_capacity(scene) -> int:
     return int(min(1.1 * total + 64, packing))
 
 
+def bucket(n: int, floor: int = 64) -> int:
+    """The capacity an array of ``n`` entries is allocated with: the next of 64, 96, 128, 192,
+    256, 384, ... (powers of two and 1.5 times them), so that scenes whose counts differ a
+    little share their arrays' shapes, and so their compiled kernels, for at most 1.5x the
+    memory (2x below the floor of 64)."""
+    n = max(int(n), 1)
+    if n <= floor:
+        return floor
+    p = 1 << (n - 1).bit_length()          # the power of two at or above n
+    three_quarters = 3 * p // 4
+    return three_quarters if three_quarters >= n else p
+
+
 def particle_slots(scene) -> int:
     """Slots the engine allocates: the fills' particles plus the factories' capacity
     (``factory_capacity``, which honours max_particles)."""
@@ -98,7 +111,7 @@ def memory_problem(scene, arch: str = "cpu", precision: Optional[str] = None):
     estimate and the machine's figure in the reason), else None. Nothing is allocated."""
     precision = precision or scene.simulation.precision
     slots = particle_slots(scene)
-    need = estimated_device_bytes(slots, precision)
+    need = estimated_device_bytes(bucket(slots), precision)   # as allocated (a bucket)
     have, what = device_memory_bytes(arch)
     if have and need > have:
         return (_blamed_key(scene),

@@ -1,0 +1,109 @@
+"""Scene values the kernels read at run time instead of compiling them in (issue 45 item 1).
+
+Taichi 1.7 keys its compiled-kernel cache on the kernel's IR. A number a kernel closes over
+(``g = ti.Vector([0, 0, -9.81])``) is a constant in that IR, so two scenes that differ only
+in gravity, the domain, the cell size or the skin compiled every kernel that read them again
+(~1-2 s a scene: bench/jit_probe.py). Here such numbers live in two small device arrays, one
+real and one integer, in slots numbered in the order the kernels' builders ask for them: the
+IR holds the slot number, the array the value, and a scene with only its values changed
+reads its kernels from the cache.
+
+What still specialises a kernel - the kind of scene - is what is ``ti.static``: the enabled
+effects, the precision, which axes are periodic, a periodic axis only one or two cells long
+(the neighbour stencil is unrolled for it), the materials' count (the pair tables' shape), the
+number of plane walls and bodies, and the capacity buckets (``bucket``) of the particle and
+cell arrays. docs/architecture.md "What compiles" lists them.
+
+``values.vector(name, v)`` and ``values.scalar(name, x)`` (and ``integer``/``integers``)
+return a ti.func that reads the value; the same name gets the same slot (the value is
+written again, so a rebuilt kernel reads the current one).
+"""
+from __future__ import annotations
+
+import math
+
+import taichi as ti
+
+from ..setup.memory import bucket  # noqa: F401  (the capacity buckets: the kernels' shapes)
+
+# room for the values of one simulation (a few dozen are used; asked for more, it says so)
+REAL_SLOTS = 96
+INT_SLOTS = 32
+
+
+class RuntimeValues:
+    """Named scene values in device arrays (module docstring); ``tree`` a FieldTree of its own,
+    made before any other of the simulation's, so the arrays' place never moves."""
+
+    def __init__(self, tree, real):
+        self.reals = tree.add("runtime_reals", real, REAL_SLOTS)
+        self.ints = tree.add("runtime_ints", ti.i32, INT_SLOTS)
+        tree.finalize()
+        self._real_slots: dict[str, tuple[int, int]] = {}
+        self._int_slots: dict[str, tuple[int, int]] = {}
+
+    def _slots(self, table: dict, size: int, name: str, width: int) -> int:
+        if name in table:
+            start, w = table[name]
+            if w != width:
+                raise ValueError(f"runtime value {name!r} asked for with {width} components, "
+                                 f"first with {w}")
+            return start
+        start = sum(w for _, w in table.values())
+        if start + width > size:
+            raise RuntimeError(f"more runtime values than the {size} slots of "
+                               "engine/values.py: raise REAL_SLOTS/INT_SLOTS")
+        table[name] = (start, width)
+        return start
+
+    def _write(self, field, start: int, values) -> None:
+        for k, v in enumerate(values):
+            field[start + k] = v
+
+    def vector(self, name: str, value):
+        """A ti.func () -> the 3-vector ``value`` (real) read at run time."""
+        value = [float(v) for v in value]
+        for v in value:
+            if not math.isfinite(v):
+                raise ValueError(f"runtime value {name!r} is not finite: {value}")
+        k = self._slots(self._real_slots, REAL_SLOTS, name, 3)
+        self._write(self.reals, k, value)
+        f = self.reals
+
+        @ti.func
+        def read():
+            return ti.Vector([f[k], f[k + 1], f[k + 2]])
+        return read
+
+    def scalar(self, name: str, value):
+        """A ti.func () -> the real ``value`` read at run time."""
+        k = self._slots(self._real_slots, REAL_SLOTS, name, 1)
+        self._write(self.reals, k, [float(value)])
+        f = self.reals
+
+        @ti.func
+        def read():
+            return f[k]
+        return read
+
+    def integers(self, name: str, value):
+        """A ti.func () -> the integer 3-vector ``value`` read at run time."""
+        k = self._slots(self._int_slots, INT_SLOTS, name, 3)
+        self._write(self.ints, k, [int(v) for v in value])
+        f = self.ints
+
+        @ti.func
+        def read():
+            return ti.Vector([f[k], f[k + 1], f[k + 2]])
+        return read
+
+    def integer(self, name: str, value):
+        """A ti.func () -> the integer ``value`` read at run time."""
+        k = self._slots(self._int_slots, INT_SLOTS, name, 1)
+        self._write(self.ints, k, [int(value)])
+        f = self.ints
+
+        @ti.func
+        def read():
+            return f[k]
+        return read

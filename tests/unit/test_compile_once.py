@@ -1,0 +1,36 @@
+"""A scene with only its values changed compiles nothing new (issue 45 item 1).
+
+bench/compile_probe.py builds a scene in a fresh process per variant against one private
+Taichi kernel cache and counts the compiled kernels the cache gains; a kernel that closed over
+a scene value (gravity, the domain, a body's speed, a count) would be compiled again and
+counted. The scene is a periodic drum slice with a flighted mesh (the most kernels: the pair,
+mesh and binning paths, runs of steps), 50 steps so that the lists are built and rebuilt.
+Kernels a variant runs that no earlier variant ran (another path: a rebuild on another step)
+are told apart by name and not counted as recompiled."""
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "bench"))
+
+import compile_probe  # noqa: E402
+
+VARIANTS = ["simulation.gravity=[-0.8,0.0,-9.7]",        # a kernel constant before
+            "bodies.0.motion.rotate.speed=30 rpm",
+            "particles.0.count=+20",                        # within the slots' bucket
+            "domain.max=[0.02,0.06,0.06]"]                   # another grid of cells
+
+
+@pytest.mark.slow
+def test_changed_values_compile_nothing_new():
+    with tempfile.TemporaryDirectory() as cache:
+        rows = compile_probe.run(str(ROOT / "tests" / "unit" / "slice_drum.toml"), VARIANTS,
+                                 50, cache)
+    first, warm = rows[0], rows[1]
+    assert first["new_kernels"] > 20            # the cache was cold: the probe counts
+    assert warm["new_kernels"] == 0
+    for row in rows[2:]:
+        assert row["recompiled"] == 0, (row["variant"], row["new_kernels"], row["first_used"])
