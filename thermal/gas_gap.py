@@ -33,6 +33,8 @@ import math
 import numpy as np
 import taichi as ti
 
+from taichi_dem.setup.memo import disk_cached
+
 NODES = 12
 _X, _W = np.polynomial.legendre.leggauss(NODES)
 GAUSS_X = tuple(float(x) for x in _X)
@@ -486,6 +488,7 @@ def table_separations(radius_small, radius_big, lens, min_gap) -> np.ndarray:
     return np.concatenate([overlap, gap])
 
 
+@disk_cached
 def pair_table(radius_i, radius_j, lens, min_gap, model, gas_over_solid_i=0.0,
                gas_over_solid_j=0.0, porosity=0.4) -> np.ndarray:
     """The pair integral (m) at ``table_separations`` for two kinds of sphere; ``model``

@@ -43,6 +43,8 @@ import math
 
 import numpy as np
 
+from taichi_dem.setup.memo import disk_cached
+
 RATIO_TIMES = 64          # table nodes, log-spaced in thermal time
 FIRST_TIME = 1e-6         # of R^2 / a_s: the table's first node
 LAST_TIME = 3.0           # of R^2 / a_s: beyond, the quasi-steady ratio holds
@@ -61,6 +63,13 @@ def _graded_edges(total: float, first: float, growth: float, largest: float) -> 
     return np.array(edges)
 
 
+@functools.lru_cache(maxsize=8)
+def _gauss_legendre(samples: int):
+    """Gauss-Legendre nodes and weights on [-1, 1] (numpy computes them by an eigenvalue
+    problem: ~1 ms, and a scene's tables call for them hundreds of times)."""
+    return np.polynomial.legendre.leggauss(samples)
+
+
 def _gap_conductance(radius, phi_lo, phi_hi, reach_sin, offset, k_gas, samples=64):
     """k_g Int 2 pi r dr / D over the projected ring of the surface between polar angles
     phi_lo, phi_hi (measured from the contact point) of the hemisphere facing the wall, within
@@ -69,7 +78,7 @@ def _gap_conductance(radius, phi_lo, phi_hi, reach_sin, offset, k_gas, samples=6
     if phi_lo >= math.pi / 2:
         return 0.0
     phi_hi = min(phi_hi, math.pi / 2)
-    x, w = np.polynomial.legendre.leggauss(samples)
+    x, w = _gauss_legendre(samples)
     phi = 0.5 * (phi_hi - phi_lo) * x + 0.5 * (phi_hi + phi_lo)
     r = radius * np.sin(phi)
     gap = radius * (1.0 - np.cos(phi))
@@ -147,7 +156,7 @@ def _sphere_system(radius, k_solid, k_gas, offset, reach_sin, uniform_h=0.0, upt
     return laplacian, volume.ravel(), boundary, end, gas
 
 
-@functools.lru_cache(maxsize=256)
+@disk_cached
 def half_pair_conductance(radius: float, k_solid: float, k_gas: float, offset: float,
                           reach_sin: float):
     """(G_half, G_gas) (W/K): the steady conductance from a sphere's centre plane to the plane
@@ -166,7 +175,7 @@ def half_pair_conductance(radius: float, k_solid: float, k_gas: float, offset: f
     return heat, gas
 
 
-@functools.lru_cache(maxsize=64)
+@disk_cached
 def conductance_ratio(radius: float, k_solid: float, density: float, heat_capacity: float,
                       k_gas: float, offset: float, reach: float, uniform_h: float = 0.0):
     """(times (s), G(t) / G(0)) of a sphere of ``radius`` (m) and the solid's k (W/(m K)),

@@ -20,6 +20,8 @@ import math
 
 import numpy as np
 
+from .memo import disk_cached
+
 
 def edem_beta(restitution: float) -> float:
     """EDEM's beta = ln e / sqrt(ln^2 e + pi^2) (negative; 0 for e = 1)."""
@@ -66,7 +68,7 @@ def _rebound(c: np.ndarray, clamp: bool, ds: float = 1e-3) -> np.ndarray:
     return e
 
 
-@functools.lru_cache(maxsize=1)
+@disk_cached
 def _table():
     c = np.concatenate([[0.0], np.geomspace(1e-4, 40.0, 160)])
     e = _rebound(c, clamp=True)
