@@ -179,6 +179,7 @@ SLOW_FILES = {
     "tests/verification/test_saeman_drum.py": 120,
     "tests/verification/test_direct_check.py": 60,   # a 3-row cooler inlet to outlet, 40 s   # a 900-particle drum slice, 8 s (2026-12-04)
     "tests/unit/test_engine_surface.py": 73,
+    "tests/unit/test_compile_once.py": 45,     # six fresh processes on one scene (2026-12-05)
     "tests/verification/test_thermal.py": 72,
     "tests/verification/test_energy.py": 70,
     "tests/regression/test_angle_of_repose.py": 65,

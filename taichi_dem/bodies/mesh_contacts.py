@@ -35,6 +35,8 @@ from ..engine.tuning import LIST_GROWTH
 from ..engine.broadphase import exclusive_scan, previous_entry
 from ..engine import transfer
 from ..setup.memory import bucket
+from ..engine.values import reader
+from .triangle_images import make_triangle_image
 from ..engine.state import fit_rows, grown_capacity
 from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
 
@@ -42,83 +44,6 @@ SAME_SURFACE_COS = math.cos(math.radians(30.0))
 # the stored names of the history values per mesh contact (checkpoints know them)
 MESH_HISTORY_NAMES = {"tangential_history": "mesh_history",
                       "rolling_history": "mesh_rolling_history"}
-
-
-def make_triangle_image(grid, reach: float):
-    """ti.func (x, a, b, c) -> the periodic image of point x (m) nearest to the triangle abc
-    (world frame, m); x itself without periodic axes.
-
-    The image nearest one vertex is right only while the triangle's extent along a periodic
-    axis plus the reach is under half the period. A longer triangle (a floor plate or drum
-    shell spanning a periodic slice) is tested against the neighbouring images as well, as
-    many as its extent needs, and the image closest to the triangle wins. ``reach``: the
-    largest contact search distance (largest radius + skin), m."""
-    periodic, span = grid.periodic, grid.span
-    minimum_image = grid.make_minimum_image()
-    any_periodic = any(periodic)
-    span_of = grid.layout_funcs()[2]
-    reach_of = _read_scalar(grid, "triangle_reach", reach)
-
-    @ti.func
-    def triangle_image(x, a, b, c):
-        best = x
-        if ti.static(any_periodic):
-            lo_t = ti.min(a, b, c)
-            hi_t = ti.max(a, b, c)
-            mid = 0.5 * (lo_t + hi_t)
-            base = mid + minimum_image(x - mid)   # the image nearest the triangle's box centre
-            best = base
-            # images on each side worth testing: those within half the extent + reach of mid
-            n_side = ti.Vector([0, 0, 0])
-            span_v = span_of()
-            for k in ti.static(range(3)):
-                if ti.static(not periodic[k]):
-                    span_v[k] = 1.0
-            reach = reach_of()
-            for k in ti.static(range(3)):
-                if ti.static(periodic[k]):
-                    n_side[k] = ti.max(ti.cast(ti.ceil((0.5 * (hi_t[k] - lo_t[k]) + reach)
-                                                       / span_v[k] - 0.5), ti.i32), 0)
-            if n_side.sum() > 0:
-                q, region = closest_point_on_triangle(base, a, b, c)
-                best_sq = (base - q).norm_sqr()
-                for sx in range(-n_side[0], n_side[0] + 1):
-                    for sy in range(-n_side[1], n_side[1] + 1):
-                        for sz in range(-n_side[2], n_side[2] + 1):
-                            if sx != 0 or sy != 0 or sz != 0:
-                                trial = base + ti.Vector([sx, sy, sz]) * span_v
-                                q2, region2 = closest_point_on_triangle(trial, a, b, c)
-                                d_sq = (trial - q2).norm_sqr()
-                                if d_sq < best_sq:
-                                    best = trial
-                                    best_sq = d_sq
-        return best
-    return triangle_image
-
-
-def _read_scalar(grid, name, value):
-    """A ti.func () -> ``value``: read at run time when the grid is bound to runtime values
-    (engine/values.py), else compiled in."""
-    if grid.values is not None:
-        return grid.values.scalar(name, value)
-    value = float(value)
-
-    @ti.func
-    def read():
-        return value
-    return read
-
-
-def _read_vector(grid, name, value):
-    """As _read_scalar, for a 3-vector."""
-    if grid.values is not None:
-        return grid.values.vector(name, value)
-    constant = ti.Vector([float(v) for v in value])
-
-    @ti.func
-    def read():
-        return constant
-    return read
 
 
 @ti.data_oriented
@@ -375,10 +300,10 @@ class MeshContacts:
         m = self
         g = self.e.grid
         lo_of, _, _, inv_cell_of, dims_of, n_cells_of = g.layout_funcs()
-        cell_of_size = _read_vector(g, "cell_size", g.cell_size)
+        cell_of_size = reader(g.values, "cell_size", tuple(g.cell_size))
         nt = self.n_triangles
-        expand_of = _read_scalar(g, "triangle_reach", self.expand)
-        half_diagonal_of = _read_scalar(g, "half_cell_diagonal",
+        expand_of = reader(g.values, "triangle_reach", self.expand)
+        half_diagonal_of = reader(g.values, "half_cell_diagonal",
                                         0.5 * float(np.linalg.norm(g.cell_size)))
         items = self.tri_cell_items
 

@@ -52,17 +52,9 @@ class GridSpec:
         self.values = values
 
     def _read(self, name: str, value, integer: bool = False):
-        """A ti.func () -> ``value`` (a 3-vector, or a scalar integer ``n_cells``)."""
-        if self.values is None:
-            constant = ti.Vector(list(value)) if isinstance(value, tuple) else value
-
-            @ti.func
-            def read():
-                return constant
-            return read
-        if isinstance(value, tuple):
-            return (self.values.integers if integer else self.values.vector)("grid_" + name, value)
-        return self.values.integer("grid_" + name, value)
+        """A ti.func () -> ``value`` (values.reader: at run time once bound)."""
+        from .values import reader
+        return reader(self.values, "grid_" + name, value, integer)
 
     def layout_funcs(self):
         """ti.funcs () -> lo, hi, span (m), the inverse cell size (1/m), the cells per axis
@@ -72,7 +64,7 @@ class GridSpec:
                 self._read("span", self.span),
                 self._read("inverse_cell", tuple(1.0 / c for c in self.cell_size)),
                 self._read("dims", tuple(int(d) for d in self.dims), integer=True),
-                self._read("n_cells", int(self.n_cells)))
+                self._read("n_cells", int(self.n_cells), integer=True))
 
     def make_cell_arithmetic(self, dims=None):
         """The one place cells are numbered (z fastest) and stepped across periodic faces:

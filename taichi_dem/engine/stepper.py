@@ -47,6 +47,7 @@ from ..effects.base import EffectContext
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 from . import drivers, tuning
 from .tuning import PARALLEL_FROM
+from .drift import make_drift
 from .values import RuntimeValues
 from .workers import WorkerPool, persistent_workers
 
@@ -261,103 +262,7 @@ class Engine:
 
     # ------------------------------------------------------------------ kernels
     def _compile_particle_kernels(self):
-        s = self.state
-        g = self.grid
-        lo_of, hi_of, span_of = g.layout_funcs()[:3]
-        half_skin_sq_of = self.values.scalar("half_skin_squared", (0.5 * self.skin) ** 2)
-        real = self.real
-        flags = self.flags
-
-        minimum_image = self.minimum_image = g.make_minimum_image()
-
-        has_process = self.process is not None
-        after_drift = self.process.make_funcs(self) if has_process else None
-        from ..process.outlets import PARKED
-        mobility = self.mobility is not None
-        active = self.mobility.particle_active if mobility else None
-        body_frame = self.mobility_frame >= 0
-        rigid_drift = self.mobility.make_rigid_drift(self.context) if body_frame else None
-        rigid_velocity = self.mobility.make_rigid_velocity(self.context) if body_frame else None
-        # positions with residuals (engine/precision.py: f32 far from the origin)
-        split = self.model.split_positions
-        split_add = make_split_add(real) if split else None
-        vec0 = ti.Vector([0.0, 0.0, 0.0])
-
-        @ti.func
-        def drift_particle(i, dt, t_new):
-            """First half of a velocity Verlet step for particle i: half kick, then drift.
-            A particle that leaves the domain (or enters an outlet) is removed: marked dead
-            and parked far away until the next rebuild drops it. ``t_new``: time after the
-            step, s. [mobility]: an inactive particle is held ("at_rest") or carried rigidly
-            by the frame's body ("body_frame")."""
-            moves = s.inverse_mass[i] > 0.0 and s.alive[i] != 0
-            frozen = False
-            if ti.static(mobility):
-                frozen = active[i] == 0
-                if ti.static(not body_frame):
-                    if frozen:
-                        moves = False
-            if moves:
-                x_old = s.position[i]
-                x_new = x_old
-                if ti.static(body_frame):
-                    if frozen:
-                        x_new = rigid_drift(x_old, dt, t_new)
-                        s.velocity[i] = rigid_velocity(x_new, t_new)
-                residual = vec0
-                if ti.static(split):
-                    residual = s.position_residual[i]
-                if not frozen:
-                    v = s.velocity[i] + 0.5 * dt * s.acceleration[i]
-                    s.velocity[i] = v
-                    s.angular_velocity[i] = s.angular_velocity[i] + 0.5 * dt * s.angular_acceleration[i]
-                    if ti.static(split):
-                        # far from the origin: the step added to (position, residual) in f64
-                        x_new, residual = split_add(x_old, residual, dt * v)
-                    else:
-                        x_new = x_old + dt * v
-                x = x_new
-                inside = True
-                wrap = vec0
-                lo, hi, span = lo_of(), hi_of(), span_of()
-                for k in ti.static(range(3)):
-                    if ti.static(g.periodic[k]):
-                        # wrap into [lo, hi): the particle re-enters through the opposite face
-                        if x[k] >= hi[k]:
-                            wrap[k] = -span[k]
-                        elif x[k] < lo[k]:
-                            wrap[k] = span[k]
-                    elif x[k] < lo[k] or x[k] > hi[k]:
-                        inside = False
-                if ti.static(split):
-                    x, residual = split_add(x, residual, wrap)
-                    s.position_residual[i] = residual
-                else:
-                    x += wrap
-                s.position[i] = x
-                removed = False
-                if ti.static(has_process):
-                    removed = after_drift(i, x_old, x_new, x, inside, t_new)
-                elif not inside:
-                    removed = True
-                    s.alive[i] = 0
-                    s.position[i] = ti.Vector([PARKED, PARKED, PARKED])
-                    s.velocity[i] = ti.Vector([0.0, 0.0, 0.0])
-                    ti.atomic_add(flags[Flag.LOST], 1)
-                    ti.atomic_add(flags[Flag.DEAD_IN_SLOTS], 1)
-                if not removed:
-                    moved = minimum_image(x - s.reference_position[i])
-                    if moved.dot(moved) > half_skin_sq_of():
-                        flags[Flag.REBUILD] = 1      # benign race: every writer writes 1
-        self.drift_particle = drift_particle
-
-        @ti.kernel
-        def drift(n: ti.i32, dt: real, t_new: ti.f64, serial_loops: ti.template()):
-            ti.loop_config(serialize=serial_loops)
-            for i in range(n):
-                drift_particle(i, dt, t_new)
-
-        self._drift = self.serial_switch(drift)
+        self.minimum_image, self.drift_particle, self._drift = make_drift(self)
 
     def _compile_pair_kernels(self, p: PairState):
         s = self.state

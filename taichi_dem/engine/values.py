@@ -107,3 +107,22 @@ class RuntimeValues:
         def read():
             return f[k]
         return read
+
+
+def reader(values, name: str, value, integer: bool = False):
+    """A ti.func () -> ``value`` (a number, or a 3-tuple a vector): read at run time from
+    ``values`` (a RuntimeValues) under ``name``, or compiled in when ``values`` is None."""
+    vector = isinstance(value, (tuple, list))
+    if values is None:
+        if vector:
+            constant = ti.Vector([int(x) if integer else float(x) for x in value])
+        else:
+            constant = int(value) if integer else float(value)
+
+        @ti.func
+        def read():
+            return constant
+        return read
+    if vector:
+        return (values.integers if integer else values.vector)(name, tuple(value))
+    return (values.integer if integer else values.scalar)(name, value)
