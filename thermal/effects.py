@@ -431,7 +431,7 @@ class Radiation(Effect):
         radiate_to_gas = th.radiation_to == "gas"
         radiation_temperature = (gas.temperature if (radiate_to_gas and not plug_flow)
                                  else (th.radiation_temperature or 0.0))
-        in_radiation_region = region_test(th.radiation_region)
+        in_radiation_region = region_test(th.radiation_region, ctx.values, "radiation_region")
         emissivity = self.emissivity
 
         @ti.func

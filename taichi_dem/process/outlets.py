@@ -14,6 +14,7 @@ between two rebuilds; the host drains it at every rebuild and every output sampl
 import numpy as np
 import taichi as ti
 
+from ..effects.regions import region_test
 from ..engine.state import Flag
 from ..sensors.mass_flow import PlaneCrossings
 
@@ -22,30 +23,6 @@ EXIT_LOST = -1          # the particle left the domain
 # parked position of dead particles: far outside any domain, but finite in f32 so squared
 # distances to it stay finite
 PARKED = 1.0e9
-
-
-def region_test(region):
-    """ti.func x -> True when the point x lies inside ``region`` (box or finite cylinder)."""
-    if region.kind == "box":
-        lo = ti.Vector(list(region.box_min))
-        hi = ti.Vector(list(region.box_max))
-
-        @ti.func
-        def inside(x):
-            return (x[0] >= lo[0] and x[0] <= hi[0] and x[1] >= lo[1] and x[1] <= hi[1]
-                    and x[2] >= lo[2] and x[2] <= hi[2])
-        return inside
-    p = ti.Vector(list(region.axis_point))
-    a = ti.Vector(list(region.axis_direction))
-    length, radius_sq = region.length, region.radius ** 2
-
-    @ti.func
-    def inside_cylinder(x):
-        d = x - p
-        u = d.dot(a)
-        radial = d - u * a
-        return u >= 0.0 and u <= length and radial.dot(radial) <= radius_sq
-    return inside_cylinder
 
 
 class ProcessDevice:
@@ -113,7 +90,8 @@ class ProcessDevice:
         s = engine.state
         flags = engine.flags
         log_enabled = self.log_enabled
-        outlet_tests = [region_test(o.region) for o in self.outlets]
+        outlet_tests = [region_test(o.region, engine.values, f"outlet_{k}")
+                        for k, o in enumerate(self.outlets)]
         n_outlets = len(outlet_tests)
         thermal = self.thermal
         drying = self.log_moisture is not None
