@@ -15,3 +15,5 @@ echo "== chute on the CPU (f32, all cores)"
 $PY bench/chute.py --no-lammps --sizes 32k 128k --steps 500 --repeats 1
 echo "== the same physics on CUDA?"
 $PY bench/cuda_verify.py
+echo "== the seed's 6 m cooler (original design, 24 rows, 15 mm, 150 kg/m: ~585,000 spheres) on CUDA"
+$PY bench/gpu_cooler.py --arch cuda --rows 24 --holdup 150 --time 2 --json /tmp/gpu_cooler.json || true
