@@ -97,8 +97,11 @@ def run(rows: int, holdup: float, seconds: float, arch: str = "cpu") -> dict:
         sim.add_observer(observer, now=False)
         sim.add_observer(lambda s, v: walls.append((time.perf_counter(), s.step_count)),
                          now=False)
+        started = (time.perf_counter(), sim.step_count)
         sim.run(seconds)
         particles = sim.engine.count
+    if len(walls) < 2:          # a run of one sample: from the start (compile included)
+        walls.insert(0, started)
     (w0, s0), (w1, s1) = walls[0], walls[-1]
     rate = particles * (s1 - s0) / (w1 - w0) if w1 > w0 else math.nan
     half = len(observer.series["time"]) // 2

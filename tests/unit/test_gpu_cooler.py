@@ -25,7 +25,7 @@ def test_the_map_is_read_at_the_holdup():
 
 
 def test_a_small_machine_steps_on_the_cpu():
-    r = gpu_cooler.run(rows=1, holdup=30.0, seconds=0.2)
+    r = gpu_cooler.run(rows=1, holdup=30.0, seconds=0.3)
     assert r["length_m"] == 0.25
     # the count the hold-up asks for: 30 kg/m x 0.25 m of 1.54 g spheres
     assert abs(r["particles"] - 30.0 * 0.25 / (870.0 * 4 / 3 * math.pi * 0.0075 ** 3)) < 2
