@@ -36,6 +36,10 @@ MAP = ROOT / "docs" / "machine" / "seed_cooler" / "optimised"
 LENGTH = 0.5
 INCLINE = 2.0
 INLET_K = 450.0 + 273.15
+# where the factory drops the feed along the axis (its box, m): the march's E(t) spreads the
+# feed over it (dispersion.residence_time_distribution inlet); "a point inlet" is the same
+# march with the feed entering at the closed end
+FEED_STRETCH = (0.02, 0.2)
 
 
 def run(seconds: float, threads: int | None = None):
@@ -80,6 +84,7 @@ def direct_rtd(residence: np.ndarray, still: np.ndarray, end: float, start: floa
     left = np.concatenate([np.ones(len(done), bool), np.zeros(len(wait), bool)])
     best = dp.rtd_figures(stay, left)
     best["particles"], best["left"] = int(len(stay)), int(len(done))
+    best["longest_stay"] = float(np.max(stay[left]))
     blocks = np.floor((t_in - start) / block).astype(int)
     members = [np.nonzero(blocks == b)[0] for b in np.unique(blocks)]
     rng = np.random.default_rng(seed)
@@ -95,16 +100,32 @@ def direct_rtd(residence: np.ndarray, still: np.ndarray, end: float, start: floa
     return best, errors, (0.5 * (edges[1:] + edges[:-1]), density)
 
 
-def march_rtd(machine, feed: float, draws: int = 40, seed: int = 0):
+def restricted(r, horizon: float) -> tuple[float, float]:
+    """(mean, standard deviation) s of the march's E(t) ``r`` restricted to ``horizon`` s as
+    the direct run's Kaplan-Meier figures are (the integrals of S(t) and 2 t S(t) up to its
+    longest observed stay): the two compared over the same times."""
+    cumulative = np.concatenate([[0.0], np.cumsum(0.5 * (r.density[1:] + r.density[:-1])
+                                                  * np.diff(r.time))])
+    survival = 1.0 - cumulative / cumulative[-1]
+    keep = r.time <= horizon
+    t, s = r.time[keep], survival[keep]
+    mean = float(np.trapezoid(s, t))
+    second = float(np.trapezoid(2.0 * t * s, t))
+    return mean, math.sqrt(max(second - mean * mean, 0.0))
+
+
+def march_rtd(machine, feed: float, draws: int = 40, seed: int = 0, inlet=None,
+              horizon: float = math.inf):
     """The march's RTD at ``feed`` kg/s (dispersion.machine_rtd) and each figure's standard
     deviation over ``draws`` maps drawn from the figures' standard errors (D_ax's included)."""
     slope = -math.tan(math.radians(INCLINE))
 
     def figures(m):
         ans = mc.answer(m, LENGTH, feed, slope, None, None, INLET_K)
-        got = dp.machine_rtd(m, ans, slope, INLET_K)
+        got = dp.machine_rtd(m, ans, slope, INLET_K, inlet=inlet)
         r = got["rtd"]
-        return ans, got, {"mean": r.mean, "standard_deviation": math.sqrt(r.variance),
+        mean, sd = restricted(r, horizon)
+        return ans, got, {"mean": mean, "standard_deviation": sd,
                           "t10": r.t10, "t50": r.t50, "t90": r.t90}
     ans, got, best = figures(machine)
     rng = np.random.default_rng(seed)
@@ -145,13 +166,20 @@ def main(argv=None) -> int:
     d_best, d_err, (d_t, d_e) = direct_rtd(z["residence"], z["still"], float(z["end"]), start)
     machine = mc.MachineMap.load(MAP)
     feed = direct.discharge_rate.value
-    ans, got, m_best, m_err = march_rtd(machine, feed)
+    horizon = d_best["longest_stay"]
+    ans, got, m_best, m_err = march_rtd(machine, feed, inlet=FEED_STRETCH, horizon=horizon)
+    _, got_point, m_point, m_point_err = march_rtd(machine, feed, horizon=horizon)
     mass = float(np.mean(z["inside"][np.asarray(z["time"]) >= direct.steady_from]))
     particle_mass = 870.0 * 4.0 / 3.0 * math.pi * 0.0075 ** 3
-    names = {"mean": "mean residence time", "standard_deviation": "standard deviation",
+    names = {"mean": f"mean residence time to {horizon:.3g} s",
+             "standard_deviation": f"standard deviation to {horizon:.3g} s",
              "t10": "10 % out by", "t50": "50 % out by", "t90": "90 % out by"}
     rows = [dr.Comparison(names[k], "s", dr.Figure(d_best[k], d_err[k]),
                           dr.Figure(m_best[k], m_err[k]), TOLERANCES[k]) for k in TOLERANCES]
+    point = [dr.Comparison(names[k], "s", dr.Figure(d_best[k], d_err[k]),
+                           dr.Figure(m_point[k], m_point_err[k]), TOLERANCES[k])
+             for k in TOLERANCES]
+    little = direct.little_residence_time
     lines = [
         f"direct run: the optimised cooler, {LENGTH:g} m, {INCLINE:g} deg, {z['end']:.3g} s "
         f"simulated ({float(z['wall']) / 60:.0f} min wall); steady from {direct.steady_from:.1f} s "
@@ -162,7 +190,12 @@ def main(argv=None) -> int:
         f"({d_best['left']:,} left, the rest censored at the run's end; the tail not seen to "
         f"leave: {d_best['unseen_tail']:.1%}); the march at the measured discharge rate, D_ax "
         f"{got['dispersion'].min():.2g} - {got['dispersion'].max():.2g} m^2/s along it",
-        "", dr.table(rows)]
+        f"(Little's law over the same steady window: {little.value:.3g} +- {little.error:.2g} s, "
+        "the hold-up counting the start's particles still inside)",
+        "", f"The march with the feed falling over x = {FEED_STRETCH[0]:g} - "
+        f"{FEED_STRETCH[1]:g} m, where the factory drops it:", "", dr.table(rows),
+        "", "The march with the feed entering at the closed end (a point inlet):", "",
+        dr.table(point)]
     text = "\n".join(lines)
     print(text)
     (a.out / "comparison.md").write_text(text + "\n")
@@ -171,6 +204,8 @@ def main(argv=None) -> int:
         "feed_kg_per_s": feed, "holdup_direct_kg": mass, "holdup_march_kg": ans.holdup,
         "cohort_from_s": start, "steady_from_s": direct.steady_from,
         "wall_s": float(z["wall"]), "simulated_s": float(z["end"]),
+        "march_point_inlet": m_point, "march_point_inlet_errors": m_point_err,
+        "little_residence_s": [little.value, little.error], "feed_stretch_m": FEED_STRETCH,
         "rows": [{"name": r.name, "ratio": r.ratio, "tolerance": r.tolerance,
                   "within": bool(r.within)} for r in rows]}, indent=1, default=float))
     import matplotlib
@@ -179,7 +214,10 @@ def main(argv=None) -> int:
     fig, ax = plt.subplots(figsize=(7, 4))
     ax.step(d_t, d_e, where="mid", label=f"direct run ({d_best['particles']:,} particles)")
     r = got["rtd"]
-    ax.plot(r.time, r.density, label="march: axial dispersion model, D_ax from the map")
+    ax.plot(r.time, r.density, label="march: axial dispersion, D_ax from the map, feed over "
+            f"{FEED_STRETCH[0]:g}-{FEED_STRETCH[1]:g} m")
+    rp = got_point["rtd"]
+    ax.plot(rp.time, rp.density, "--", label="the same, the feed entering at the closed end")
     ax.set_xlim(0, max(d_t[-1], r.t90 * 2))
     ax.set_xlabel("residence time (s)")
     ax.set_ylabel("E(t) (1/s)")

@@ -39,6 +39,7 @@ root_doc = "index"
 exclude_patterns = ["_build", "reference/_generated", "machine/seed_cooler/seed_table.md",
                     "machine/seed_cooler/free_rolling/seed_table.md",
                     "machine/direct_check/comparison_6rows.md",
+                    "machine/direct_rtd/comparison.md",
                     "machine/modelling_choices/choices.md",
                     # the seed's modelling-choice maps: summed up by their choices.md and
                     # precision_long.md, which machine/tables.md includes

@@ -100,12 +100,15 @@ def _moments(time, density) -> tuple[float, float]:
 
 def residence_time_distribution(x: np.ndarray, holdup: np.ndarray, dispersion: np.ndarray,
                                 feed: float, cells: int | None = None,
-                                until: float = 6.0) -> ResidenceTimes:
+                                until: float = 6.0, inlet=None) -> ResidenceTimes:
     """E(t) of the axial dispersion model (module docstring) along a machine whose hold-up
     (kg/m) and D_ax (m^2/s) are given at the positions ``x`` (m, inlet at x[0], outlet at
     x[-1]), fed ``feed`` kg/s: a pulse at the inlet, finite volumes (central differences, the
     cells fine enough that the cell Peclet number stays below 1.5, so no numerical dispersion
-    is added), implicit in time, run until ``until`` mean residence times."""
+    is added), implicit in time, run until ``until`` mean residence times. ``inlet``: (x0, x1)
+    m, the feed falling evenly over that stretch instead of entering at x[0] (a feed box above
+    the bed): the flow grows from 0 to ``feed`` across it, the pulse is spread over it, and
+    the bed upstream of it only exchanges by dispersion."""
     from scipy.linalg import solve_banded
     x = np.asarray(x, float)
     length = float(x[-1] - x[0])
@@ -120,9 +123,21 @@ def residence_time_distribution(x: np.ndarray, holdup: np.ndarray, dispersion: n
     dx = length / cells
     centres = x[0] + (np.arange(cells) + 0.5) * dx
     faces = x[0] + np.arange(1, cells) * dx                       # the inner faces
+    if inlet is None:
+        flow = np.full(cells - 1, float(feed))                  # at the inner faces
+        pulse = np.zeros(cells)
+        pulse[0] = 1.0
+    else:
+        x0, x1 = (float(v) for v in inlet)
+        if not x[0] <= x0 < x1 <= x[-1]:
+            raise ValueError(f"the inlet stretch ({x0:g}, {x1:g}) m must lie in the machine")
+        # the fraction of the feed already in at each face, and each cell's share of it
+        fed = lambda s: np.clip((s - x0) / (x1 - x0), 0.0, 1.0)   # noqa: E731
+        flow = feed * fed(faces)
+        pulse = np.diff(fed(np.concatenate([[x[0]], faces, [x[-1]]])))
     h = h_of(centres)
     hd = h_of(faces) * d_of(faces) / dx                           # kg/s per unit phi jump
-    # inner face k (between cells k and k+1): flux = F (phi_k + phi_k+1) / 2 - hd_k (phi_k+1 - phi_k)
+    # inner face k (between cells k and k+1): flux = F_k (phi_k + phi_k+1) / 2 - hd_k (phi_k+1 - phi_k)
     dt = tau / 4000.0
     steps = int(math.ceil(until * tau / dt))
     m = h * dx / dt
@@ -130,17 +145,16 @@ def residence_time_distribution(x: np.ndarray, holdup: np.ndarray, dispersion: n
     main = m.copy()
     upper = np.zeros(cells)          # coefficient of phi_{k+1} in row k
     # face k carries out of cell k and into cell k+1
-    main[:-1] += 0.5 * feed + hd
-    upper[:-1] += 0.5 * feed - hd
-    main[1:] += -0.5 * feed + hd
-    lower[1:] += -0.5 * feed - hd
+    main[:-1] += 0.5 * flow + hd
+    upper[:-1] += 0.5 * flow - hd
+    main[1:] += -0.5 * flow + hd
+    lower[1:] += -0.5 * flow - hd
     main[-1] += feed                 # the outlet carries F phi_N away (closed: no gradient)
     banded = np.zeros((3, cells))
     banded[0, 1:] = upper[:-1]
     banded[1] = main
     banded[2, :-1] = lower[1:]
-    phi = np.zeros(cells)
-    phi[0] = 1.0 / (h[0] * dx)       # a unit pulse of tracer mass in the first cell
+    phi = pulse / (h * dx)           # a unit pulse of tracer mass: the first cell, or the inlet's
     times = np.empty(steps + 1)
     out = np.empty(steps + 1)
     times[0], out[0] = 0.0, 0.0
@@ -207,19 +221,20 @@ def dispersion_law(machine, axial_slope: float):
 
 
 def machine_rtd(machine, answer, axial_slope: float,
-                inlet_temperature: float | None = None) -> dict | None:
+                inlet_temperature: float | None = None, inlet=None) -> dict | None:
     """The residence-time distribution of a marched machine (``answer``: app/machine.py's, its
     hold-up profile) with the map's D_ax: E(t), its mean, variance and 10/50/90 % times; with
     ``inlet_temperature`` (K) and an outlet temperature from the march, the distribution of
     the outlet temperatures: a parcel that stays t cools as the bed does over the fraction
     t / tau of the machine's NTU (T = T_wall + (T_in - T_wall) exp(-NTU t / tau)), so the
-    mixed outlet (the E-weighted mean) is warmer than the plug's. None without D_ax."""
+    mixed outlet (the E-weighted mean) is warmer than the plug's. None without D_ax.
+    ``inlet``: (x0, x1) m where the feed falls (residence_time_distribution)."""
     law = dispersion_law(machine, axial_slope)
     if law is None:
         return None
     prof = answer.profile
     d = np.interp(prof.holdup, *law)
-    rtd = residence_time_distribution(prof.x, prof.holdup, d, answer.feed)
+    rtd = residence_time_distribution(prof.x, prof.holdup, d, answer.feed, inlet=inlet)
     out = {"rtd": rtd, "dispersion": d}
     walls = list(machine.wall_temperatures.values())
     if inlet_temperature is not None and answer.outlet_temperature is not None and walls:
