@@ -66,6 +66,34 @@ def test_a_machine_of_two_hold_ups_keeps_its_mean_residence():
     assert narrow.t90 - narrow.t10 < wide.t90 - wide.t10
 
 
+def test_a_feed_spread_over_a_stretch():
+    """The feed falling evenly over x0..x1 instead of at the closed end: every parcel still
+    passes the whole bed in the mean (a closed vessel's mean is V / F wherever the tracer
+    enters, 1e-3), the pulse starting spread widens the distribution and cuts its early
+    part short, and a stretch shrunk towards the end gives the point inlet back (1 %).
+    Nearly plug flow (Pe 200) along L = 6 m, the feed over the first a = L / 3: the flow grows
+    as F x / a there, so a parcel fed at x_e takes (a / u) ln(a / x_e) to reach a (u = F / h),
+    then (L - a) / u; with x_e even on (0, a), ln(a / x_e) is exponential with mean and
+    variance 1: the mean stays tau and the variance gains (tau a / L)^2 over the point
+    inlet's (5 %: the dispersion and the feed's spread are not quite independent)."""
+    length, holdup, feed = 6.0, 60.0, 1.8
+    tau = length * holdup / feed
+    x = np.array([0.0, length])
+    h = np.array([holdup, holdup])
+    d = np.full(2, feed / holdup * length / 200.0)
+    point = residence_time_distribution(x, h, d, feed)
+    spread = residence_time_distribution(x, h, d, feed, inlet=(0.0, length / 3))
+    near = residence_time_distribution(x, h, d, feed, inlet=(0.0, 0.01))
+    assert spread.mean == pytest.approx(tau, rel=1e-3)
+    assert near.mean == pytest.approx(point.mean, rel=1e-3)
+    assert near.variance == pytest.approx(point.variance, rel=0.01)
+    plug_spread = (tau / 3.0) ** 2
+    assert spread.variance == pytest.approx(plug_spread + point.variance, rel=0.05)
+    assert spread.t10 < point.t10
+    with pytest.raises(ValueError):
+        residence_time_distribution(x, h, d, feed, inlet=(-0.1, 1.0))
+
+
 def test_outlet_temperatures_of_the_parcels():
     """Each parcel cools as exp(-NTU t / tau): the median parcel (t50 just below tau for a
     closed vessel) leaves near the plug's outlet; by Jensen's inequality (exp is convex) the
