@@ -36,6 +36,7 @@ class RuntimeValues:
     made before any other of the simulation's, so the arrays' place never moves."""
 
     def __init__(self, tree, real):
+        self.tree = tree
         self.reals = tree.add("runtime_reals", real, REAL_SLOTS)
         self.ints = tree.add("runtime_ints", ti.i32, INT_SLOTS)
         tree.finalize()

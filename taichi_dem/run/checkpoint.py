@@ -81,7 +81,8 @@ class Snapshot:
 # ------------------------------------------------------------------------------ engine walk
 def field_trees(engine) -> dict:
     """Live FieldTrees of an engine by label (first field name; unique by construction)."""
-    trees = list(engine.trees)
+    # (the run-time scene values are the scene's, not state: rebuilt, never saved)
+    trees = [t for t in engine.trees if t is not getattr(engine.values, "tree", None)]
     if engine.pairs is not None:
         trees.append(engine.pairs.tree)
     out, seen = {}, set()
@@ -109,7 +110,9 @@ def capacities(engine) -> dict[str, int]:
 
 def reallocate(engine, caps: dict) -> None:
     """Give the growable arrays the sizes ``caps`` (and recompile what uses them)."""
-    if caps["particles"] != engine.state.capacity:
+    # a checkpoint written before the slots came in buckets (engine/values.py) holds fewer:
+    # its rows fill the first slots (restore pads them)
+    if caps["particles"] > engine.state.capacity:
         raise CheckpointError(f"the checkpoint holds {caps['particles']} particle slots, this "
                               f"scene allocates {engine.state.capacity}")
     m = engine.mesh
@@ -308,6 +311,14 @@ def restore(sim, snap: Snapshot) -> None:
                 continue
             arr = saved[name]
             shape = transfer.host_shape(f)
+            saved_slots = json.loads(a["capacities"])["particles"]
+            if (arr.shape != shape and arr.shape[1:] == shape[1:] and arr.ndim >= 1
+                    and arr.shape[0] in (saved_slots, saved_slots + 1)
+                    and shape[0] - arr.shape[0] == e.state.capacity - saved_slots):
+                # per-slot rows of a checkpoint with fewer slots: the rest stay empty
+                padded = np.zeros(shape, arr.dtype)
+                padded[:arr.shape[0]] = arr
+                arr = padded
             if arr.shape != shape:
                 raise CheckpointError(f"field {label}/{name}: saved shape {arr.shape}, "
                                       f"allocated {shape}")
