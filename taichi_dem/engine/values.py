@@ -57,57 +57,45 @@ class RuntimeValues:
         table[name] = (start, width)
         return start
 
-    def _write(self, field, start: int, values) -> None:
-        for k, v in enumerate(values):
-            field[start + k] = v
+    def _read(self, name: str, values: list, integer: bool):
+        """A ti.func () -> ``values`` (one: a scalar; three: a vector) from their slots."""
+        if not integer:
+            values = [float(v) for v in values]
+            if not all(math.isfinite(v) for v in values):
+                raise ValueError(f"runtime value {name!r} is not finite: {values}")
+        else:
+            values = [int(v) for v in values]
+        f = self.ints if integer else self.reals
+        k = self._slots(self._int_slots if integer else self._real_slots,
+                        INT_SLOTS if integer else REAL_SLOTS, name, len(values))
+        for offset, v in enumerate(values):
+            f[k + offset] = v
+        if len(values) == 3:
+            @ti.func
+            def read_vector():
+                return ti.Vector([f[k], f[k + 1], f[k + 2]])
+            return read_vector
+
+        @ti.func
+        def read():
+            return f[k]
+        return read
 
     def vector(self, name: str, value):
         """A ti.func () -> the 3-vector ``value`` (real) read at run time."""
-        value = [float(v) for v in value]
-        for v in value:
-            if not math.isfinite(v):
-                raise ValueError(f"runtime value {name!r} is not finite: {value}")
-        k = self._slots(self._real_slots, REAL_SLOTS, name, 3)
-        self._write(self.reals, k, value)
-        f = self.reals
-
-        @ti.func
-        def read():
-            return ti.Vector([f[k], f[k + 1], f[k + 2]])
-        return read
+        return self._read(name, list(value), False)
 
     def scalar(self, name: str, value):
         """A ti.func () -> the real ``value`` read at run time."""
-        k = self._slots(self._real_slots, REAL_SLOTS, name, 1)
-        self._write(self.reals, k, [float(value)])
-        f = self.reals
-
-        @ti.func
-        def read():
-            return f[k]
-        return read
+        return self._read(name, [value], False)
 
     def integers(self, name: str, value):
         """A ti.func () -> the integer 3-vector ``value`` read at run time."""
-        k = self._slots(self._int_slots, INT_SLOTS, name, 3)
-        self._write(self.ints, k, [int(v) for v in value])
-        f = self.ints
-
-        @ti.func
-        def read():
-            return ti.Vector([f[k], f[k + 1], f[k + 2]])
-        return read
+        return self._read(name, list(value), True)
 
     def integer(self, name: str, value):
         """A ti.func () -> the integer ``value`` read at run time."""
-        k = self._slots(self._int_slots, INT_SLOTS, name, 1)
-        self._write(self.ints, k, [int(value)])
-        f = self.ints
-
-        @ti.func
-        def read():
-            return f[k]
-        return read
+        return self._read(name, [value], True)
 
 
 def reader(values, name: str, value, integer: bool = False):
