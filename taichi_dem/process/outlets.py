@@ -97,7 +97,7 @@ class ProcessDevice:
         drying = self.log_moisture is not None
         compensated = engine.state.compensated
         process_fields = s.process
-        count_crossings = self.planes.make_func(s)
+        count_crossings = self.planes.make_func(s, engine.values)
         me = self
 
         @ti.func

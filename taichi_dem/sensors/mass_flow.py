@@ -22,33 +22,42 @@ class PlaneCrossings:
         self.plane_mass = tree.add("plane_mass", ti.f64, n_planes)
         self.plane_count = tree.add("plane_count", ti.i32, n_planes)
 
-    def make_func(self, state):
+    def make_func(self, state, values=None):
         """Compile-time construction of ``count_crossings(i, x_old, x_new)``: x_old and x_new
-        are particle i's centre before and after this step's drift (m, unwrapped)."""
+        are particle i's centre before and after this step's drift (m, unwrapped). With
+        ``values`` (engine/values.py) each plane's point, normal, radius and box are read at
+        run time (a moved plane compiles nothing); whether it has a radius or a box is
+        compiled in."""
+        from ..engine.values import reader
         s = state
-        planes = [(tuple(x.point), tuple(x.normal), x.radius if x.radius is not None else -1.0,
-                   tuple(x.box_min) if x.box_min is not None else (0.0, 0.0, 0.0),
-                   tuple(x.box_max) if x.box_max is not None else (0.0, 0.0, 0.0),
-                   x.box_min is not None) for x in self.planes]
+        planes = []
+        for k, x in enumerate(self.planes):
+            name = f"mass_flow_{k}"
+            has_radius, has_box = x.radius is not None, x.box_min is not None
+            planes.append((
+                reader(values, name + "_point", tuple(x.point)),
+                reader(values, name + "_normal", tuple(x.normal)),
+                reader(values, name + "_radius_squared", x.radius ** 2 if has_radius else 0.0),
+                reader(values, name + "_box_min", tuple(x.box_min) if has_box else (0.0,) * 3),
+                reader(values, name + "_box_max", tuple(x.box_max) if has_box else (0.0,) * 3),
+                has_radius, has_box))
         n_planes = len(planes)
         me = self
 
         @ti.func
         def count_crossings(i, x_old, x_new):
             for k in ti.static(range(n_planes)):
-                point = ti.Vector(planes[k][0])
-                normal = ti.Vector(planes[k][1])
+                point, normal = planes[k][0](), planes[k][1]()
                 before = (x_old - point).dot(normal)
                 after = (x_new - point).dot(normal)
                 if (before < 0.0) != (after < 0.0):
                     crossing = x_old + (x_new - x_old) * (before / (before - after))
                     within = True
-                    if ti.static(planes[k][2] > 0.0):
-                        off = crossing - point
-                        within = off.dot(off) <= ti.static(planes[k][2] ** 2)
                     if ti.static(planes[k][5]):
-                        lo = ti.Vector(planes[k][3])
-                        hi = ti.Vector(planes[k][4])
+                        off = crossing - point
+                        within = off.dot(off) <= planes[k][2]()
+                    if ti.static(planes[k][6]):
+                        lo, hi = planes[k][3](), planes[k][4]()
                         for a in ti.static(range(3)):
                             if crossing[a] < lo[a] or crossing[a] > hi[a]:
                                 within = False
