@@ -50,6 +50,10 @@ class GridSpec:
         ti.funcs made from here on close over slots, not numbers (what stays compiled in: the
         periodic axes). Unbound, they compile the numbers in."""
         self.values = values
+        # written now, while no other field tree is being built (a write launches a kernel,
+        # which Taichi refuses while a FieldsBuilder is open: an effect's allocate asks for
+        # the layout while its own tree is)
+        self.layout_funcs()
 
     def _read(self, name: str, value, integer: bool = False):
         """A ti.func () -> ``value`` (values.reader: at run time once bound)."""

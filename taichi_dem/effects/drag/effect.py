@@ -42,7 +42,8 @@ class Drag(Effect):
 
     def allocate(self, ctx, tree):
         g = ctx.grid
-        self.cell_solid = tree.add("drag_cell_solid", ctx.real, g.n_cells)      # m^3
+        # (a bucket of cells, as the neighbour search's: the count is read at run time)
+        self.cell_solid = tree.add("drag_cell_solid", ctx.real, g.cell_capacity)      # m^3
         # the force on each particle in the last step, N (for the sensors; not state)
         self.force = tree.add("drag_force", ctx.real, ctx.state.capacity, vector=True)
         self._compile_cells(ctx)
@@ -50,11 +51,12 @@ class Drag(Effect):
     def _compile_cells(self, ctx):
         s = ctx.state
         cell_solid = self.cell_solid
+        n_cells_of = ctx.grid.layout_funcs()[5]
 
         @ti.kernel
         def solid_per_cell(n: ti.i32, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
-            for c in range(cell_solid.shape[0]):
+            for c in range(n_cells_of()):
                 cell_solid[c] = 0.0
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
@@ -67,7 +69,7 @@ class Drag(Effect):
         @ti.func
         def solid_per_cell_serial(n, dt):
             """The same inside a loop that is already serial (drivers.run_steps)."""
-            for c in range(cell_solid.shape[0]):
+            for c in range(n_cells_of()):
                 cell_solid[c] = 0.0
             for i in range(n):
                 if s.alive[i] != 0:
@@ -89,11 +91,16 @@ class Drag(Effect):
         s = ctx.state
         g = ctx.grid
         d = self.drag
-        cell_volume = float(g.cell_size[0] * g.cell_size[1] * g.cell_size[2])
+        # the gas and the cells read at run time (engine/values.py): another gas velocity
+        # or density compiles nothing
+        values = ctx.values
+        cell_volume_of = values.scalar("drag_cell_volume",
+                                       float(g.cell_size[0] * g.cell_size[1] * g.cell_size[2]))
         cell_solid = self.cell_solid
         force_field = self.force
-        superficial = ti.Vector(list(d.velocity))
-        rho, mu = d.density, d.viscosity
+        superficial_of = values.vector("drag_superficial_velocity", tuple(d.velocity))
+        rho_of = values.scalar("drag_gas_density", d.density)
+        rho_over_mu_of = values.scalar("drag_density_over_viscosity", d.density / d.viscosity)
         di_felice = d.model == "di_felice"
 
         _, coordinates, neighbour = g.make_cell_arithmetic()
@@ -108,7 +115,7 @@ class Drag(Effect):
                 if inside:
                     solid += cell_solid[nb]
                     cells += 1
-            return ti.min(ti.max(1.0 - solid / (cells * ti.static(cell_volume)), 0.1), 1.0)
+            return ti.min(ti.max(1.0 - solid / (cells * cell_volume_of()), 0.1), 1.0)
 
         @ti.func
         def drag(i, load):
@@ -116,24 +123,25 @@ class Drag(Effect):
             eps = 1.0 + 0.0 * diameter
             if ti.static(di_felice):
                 eps = voidage(i)
-            slip = superficial / eps - s.velocity[i]
+            slip = superficial_of() / eps - s.velocity[i]
+            rho, rho_over_mu = rho_of(), rho_over_mu_of()
             speed = slip.norm()
             force = slip * 0.0
             if speed > 0.0:
                 area = 0.25 * math.pi * diameter * diameter
                 if ti.static(di_felice):
-                    reynolds = ti.static(rho / mu) * eps * speed * diameter
+                    reynolds = rho_over_mu * eps * speed * diameter
                     c_d = (0.63 + 4.8 / ti.sqrt(reynolds)) ** 2
                     lg = ti.log(reynolds) / ti.log(10.0)
                     chi = 3.7 - 0.65 * ti.exp(-0.5 * (1.5 - lg) ** 2)
                     # drag, and the pressure gradient that balances it: F / eps (docstring)
-                    force = 0.5 * c_d * ti.static(rho) * area * speed * slip * eps ** (1.0 - chi)
+                    force = 0.5 * c_d * rho * area * speed * slip * eps ** (1.0 - chi)
                 else:
-                    reynolds = ti.static(rho / mu) * speed * diameter
+                    reynolds = rho_over_mu * speed * diameter
                     c_d = 0.44 + 0.0 * reynolds
                     if reynolds < 1000.0:
                         c_d = 24.0 / reynolds * (1.0 + 0.15 * reynolds ** 0.687)
-                    force = 0.5 * c_d * ti.static(rho) * area * speed * slip
+                    force = 0.5 * c_d * rho * area * speed * slip
             force_field[i] = force
             load.acceleration += force * s.inverse_mass[i]
             return load
