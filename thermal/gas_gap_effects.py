@@ -218,6 +218,8 @@ class GasGapWall(_GasGap):
 
     def contact_func(self, ctx):
         k_gas, lens, min_gap = self.parameters
+        # the gas's conductivity read at run time (engine/values.py); the tables are per unit k
+        k_gas_of = ctx.values.scalar("gap_gas_conductivity", k_gas)
         solid, voronoi, porosity, ratio, tabulated, species_of, table, table_range, last = \
             self._kernel_inputs(ctx)
 
@@ -257,7 +259,7 @@ class GasGapWall(_GasGap):
                         f = x - k
                         factor = ((1.0 - f) * ratio_table[c.material_i, k]
                                   + f * ratio_table[c.material_i, k + 1])
-                    out.conductance += k_gas * value * factor
+                    out.conductance += k_gas_of() * value * factor
             elif ti.static(solid):
                 integrate = True
                 value = 0.0 * distance
@@ -281,9 +283,9 @@ class GasGapWall(_GasGap):
                         value = gas_gap.plane_solid_gap_integral(
                             c.radius_i, distance, lens, min_gap,
                             ratio[c.material_i, c.material_j])
-                out.conductance += k_gas * value
+                out.conductance += k_gas_of() * value
             else:
-                out.conductance += k_gas * gas_gap.plane_gap_integral(
+                out.conductance += k_gas_of() * gas_gap.plane_gap_integral(
                     c.radius_i, distance, lens, min_gap)
             return out
 
@@ -387,6 +389,8 @@ class GasGapPair(_GasGap):
 
     def contact_func(self, ctx):
         k_gas, lens, min_gap = self.parameters
+        # the gas's conductivity read at run time (engine/values.py); the tables are per unit k
+        k_gas_of = ctx.values.scalar("gap_gas_conductivity", k_gas)
         solid, voronoi, porosity, ratio, tabulated, species_of, table, table_range, last = \
             self._kernel_inputs(ctx)
         widened = self.widened
@@ -432,7 +436,7 @@ class GasGapPair(_GasGap):
                 if integrate:
                     # (the tables hold the share by separation; here: the touching pair's)
                     value *= share[c.material_i, c.material_j]
-            out.conductance += k_gas * value
+            out.conductance += k_gas_of() * value
             return out
 
         return gas_gap_pair
