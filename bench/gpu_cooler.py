@@ -113,8 +113,11 @@ def run(rows: int, holdup: float, seconds: float, arch: str = "cpu") -> dict:
     return {"rows": rows, "length_m": rows * ROW, "holdup_kg_per_m": kg_per_m,
             "particles": int(particles), "arch": arch, "simulated_s": seconds,
             "build_s": built, "particle_steps_per_s": rate,
-            "figures": {k: (None if v is None else [v.mean, v.standard_error])
+            "figures": {k: (None if v is None else [v.mean, v.standard_error, bool(v.steady),
+                                                    int(v.samples)])
                         for k, v in figures.items()},
+            "window_s": [float(observer.series["time"][half]), float(observer.series["time"][-1])]
+            if len(observer.series["time"]) > half else None,
             "map": mapped(kg_per_m)}
 
 
@@ -133,7 +136,9 @@ def main(argv=None) -> int:
           "particle-steps/s")
     for name, fig in r["figures"].items():
         ref, err = r["map"][name]
-        got = "n/a" if fig is None else f"{fig[0]:.4g} +- {fig[1]:.2g}"
+        got = ("n/a (too few samples)" if fig is None else
+               f"{fig[0]:.4g} +- {fig[1]:.2g} over {r['window_s'][0]:.3g}-{r['window_s'][1]:.3g} s "
+               f"({fig[3]} samples{'' if fig[2] else ', NOT steady: a transient, not a check'})")
         print(f"  {name}: this run {got}; the one-row map {ref:.4g} +- {err:.2g}")
     if a.json:
         a.json.write_text(json.dumps(r, indent=1, default=float))

@@ -153,3 +153,38 @@ def test_checkpoint_without_the_per_step_sums_restores_them_silently(small_text,
         capsys.readouterr()
         checkpoint.restore(sim, gone)
         assert "position/owned_force" in capsys.readouterr().err
+
+
+def test_checkpoint_with_fewer_slots_restores_into_the_first(small_text):
+    """A checkpoint written before the particle slots came in buckets holds the scene's own
+    count of slots: its per-slot rows fill the first slots and the run goes on exactly as from
+    a checkpoint of the bucket. One with more slots than the scene allocates is refused."""
+    import json
+    with td.Simulation.from_text(small_text) as sim:
+        sim.step(300)
+        full = checkpoint.capture(sim)
+        slots, used = sim.engine.state.capacity, sim.engine.model.particle_limit
+    assert used < slots            # (the scene's 200 in a bucket of 256)
+    caps = json.loads(full.attrs["capacities"])
+
+    def cut(a):
+        if a.ndim and a.shape[0] in (slots, slots + 1):
+            return a[: a.shape[0] - (slots - used)].copy()
+        return a
+    old = dataclasses.replace(
+        full, fields={label: {n: cut(a) for n, a in arrays.items()}
+                      for label, arrays in full.fields.items()},
+        attrs=dict(full.attrs, capacities=json.dumps(dict(caps, particles=used))))
+    assert old.fields["position"]["position"].shape[0] == used
+    ends = []
+    for snap in (full, old):
+        with td.Simulation.from_text(small_text) as sim:
+            checkpoint.restore(sim, snap)
+            sim.step(200)
+            ends.append(sim.particles()["velocity"])
+    assert np.array_equal(ends[0], ends[1])
+    more = dataclasses.replace(full, attrs=dict(full.attrs, capacities=json.dumps(
+        dict(caps, particles=slots + 1))))
+    with td.Simulation.from_text(small_text) as sim:
+        with pytest.raises(td.CheckpointError, match="particle slots"):
+            checkpoint.restore(sim, more)
