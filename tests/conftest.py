@@ -272,14 +272,18 @@ def _core_gate():
 def pytest_runtest_protocol(item, nextitem):
     gate = _core_gate()
     if gate is None:
+        profile = _TestProfile(item)
         yield
+        profile.close()
         _forget_last_exception()
         return
     exclusive = item.get_closest_marker("two_cores") is not None
     gate.acquire(exclusive)
+    profile = _TestProfile(item)
     try:
         yield
     finally:
+        profile.close()
         gate.release(exclusive)
         _forget_last_exception()
 
@@ -307,3 +311,77 @@ def no_taichi_runtime(monkeypatch):
     def refuse(*args, **kwargs):
         raise RuntimeStarted("the Taichi runtime was started (ti.init): kernels would compile")
     monkeypatch.setattr(backend, "acquire", refuse)
+
+
+# ------------------------------------------------------------------ where the suite's time goes
+# TAICHI_DEM_SUITE_PROFILE=FOLDER: each worker appends one JSON line per test to FOLDER: the
+# test's wall time (set-up included), its kernels' first launches (compiled, or read from
+# Taichi's offline cache; over 0.08 s counted as compiled) and the seconds they took, and how
+# many Taichi runtimes it started
+# (bench/suite_profile.py sums them by file). Off by default: it changes no test.
+_profile: dict = {}
+
+
+def _profile_start() -> None:
+    import os
+    folder = os.environ.get("TAICHI_DEM_SUITE_PROFILE")
+    if not folder or _profile:
+        return
+    import time
+    from taichi.lang import kernel_impl
+    from taichi_dem.engine import backend
+    _profile.update(folder=Path(folder), kernels=0, kernel_s=0.0, inits=0, slow=0)
+    launch = kernel_impl.Kernel.launch_kernel
+    seen: set = set()
+
+    def timed(self, t_kernel, *args):
+        # a kernel's first launch compiles it (or reads it from the offline cache)
+        if id(t_kernel) in seen:
+            return launch(self, t_kernel, *args)
+        seen.add(id(t_kernel))
+        t0 = time.perf_counter()
+        try:
+            return launch(self, t_kernel, *args)
+        finally:
+            dt = time.perf_counter() - t0
+            _profile["kernels"] += 1
+            _profile["kernel_s"] += dt
+            _profile["slow"] += int(dt > 0.08)      # compiled, not read from the cache
+    kernel_impl.Kernel.launch_kernel = timed
+    acquire = backend.acquire
+
+    def counted(*a, **k):
+        before = backend.generation()
+        out = acquire(*a, **k)
+        _profile["inits"] += int(backend.generation() != before)
+        return out
+    backend.acquire = counted
+
+
+class _TestProfile:
+    """Per-test row of the suite profile (above), when it is on."""
+
+    def __init__(self, item):
+        import os
+        import time
+        self.item = item
+        self.on = bool(os.environ.get("TAICHI_DEM_SUITE_PROFILE"))
+        if self.on:
+            _profile_start()
+            self.start = (_profile["kernels"], _profile["kernel_s"], _profile["inits"],
+                          _profile["slow"], time.perf_counter())
+
+    def close(self) -> None:
+        if not self.on:
+            return
+        import json
+        import os
+        import time
+        k0, s0, i0, c0, t0 = self.start
+        row = {"test": self.item.nodeid, "wall_s": time.perf_counter() - t0,
+               "kernels": _profile["kernels"] - k0, "kernel_s": _profile["kernel_s"] - s0,
+               "inits": _profile["inits"] - i0, "slow_kernels": _profile["slow"] - c0}
+        worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+        _profile["folder"].mkdir(parents=True, exist_ok=True)
+        with open(_profile["folder"] / f"{worker}.jsonl", "a") as out:
+            out.write(json.dumps(row) + "\n")
