@@ -1,14 +1,37 @@
 """The settings modules of the effects that have scene keys of their own (plain Python, no
-Taichi). Importing this registers their sections (scene/keys.py) with the loader and the
-schema; a new effect with a section of its own adds its settings module here, once.
+Taichi), found, not listed: every package under ``taichi_dem/effects/`` with a ``settings``
+module, and the heat transfer's (``taichi_dem.thermal.settings``). Importing this registers
+their sections (scene/keys.py) with the loader and the schema; a new effect package is found
+here without an edit.
 
-Each module declares its Section(s); one whose whole top-level section it reads itself gives
-the Section a ``reader`` (the loader then keeps the result in ``Scene.settings``). [thermal],
-[gas] and [mobility] predate that and keep their own Scene fields (``scene.thermal``,
-``scene.drag``, ``scene.mobility``), read by the loader in a fixed order (drag after thermal).
+Each module declares its Section(s) and its ``SERIES`` (the series its effect writes, with
+their units: recorders/units.py). One whose whole top-level section it reads itself gives the
+Section a ``reader`` (the loader keeps the result in ``Scene.settings``), and a ``builds``
+function making the effect objects (effects/registry.py). [thermal] and [mobility] predate
+that and keep their own Scene fields (``scene.thermal``, ``scene.mobility``).
 """
-from taichi_dem.thermal import settings as thermal_settings  # noqa: F401
+from __future__ import annotations
 
-from .drag import settings as drag_settings  # noqa: F401
-from .mobility import settings as mobility_settings  # noqa: F401
-from .viscous_damping import settings as viscous_damping_settings  # noqa: F401
+import importlib
+import pkgutil
+from pathlib import Path
+from types import ModuleType
+
+# the heat transfer's keys come first: an effect's ``derive`` may read the parsed [thermal]
+_THERMAL = "taichi_dem.thermal.settings"
+
+
+def _effect_packages() -> list[str]:
+    """The effect packages under taichi_dem/effects/ that have a settings module, by name."""
+    here = Path(__file__).parent
+    return sorted(f"{__package__}.{m.name}.settings" for m in pkgutil.iter_modules([str(here)])
+                  if m.ispkg and (here / m.name / "settings.py").exists())
+
+
+SETTINGS_MODULES: tuple[ModuleType, ...] = tuple(
+    importlib.import_module(name) for name in [_THERMAL] + _effect_packages())
+
+
+def settings_modules() -> tuple[ModuleType, ...]:
+    """Every effect's settings module (thermal first, then the effect packages by name)."""
+    return SETTINGS_MODULES

@@ -7,7 +7,6 @@ import importlib
 from ..scene.keys import effect_sections
 from ..scene.model import Scene
 from .base import Effect
-from .drag.effect import Drag
 from .gravity import Gravity
 from .hertz_mindlin import HertzMindlin
 from .mobility.effect import Mobility
@@ -20,12 +19,6 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
                                     "velocity_verlet", "integrate")]
     if any(abs(g) > 0 for g in scene.simulation.gravity):
         effects.append(Gravity("uniform gravity", scene.simulation.gravity))
-    if scene.drag is not None:
-        d = scene.drag
-        speed = sum(c * c for c in d.velocity) ** 0.5
-        effects.append(Drag(f"gas drag ({d.model.replace('_', '-')}"
-                            + (", local voidage from the cell grid" if d.model == "di_felice" else "")
-                            + f"), superficial gas velocity {speed:.3g} m/s, one-way", d))
     effects.append(HertzMindlin("Hertz-Mindlin no-slip, tangential history, Coulomb limit"))
     models = {i.rolling_model for i in scene.interactions.values() if i.rolling_friction > 0}
     if "constant_torque" in models:

@@ -185,11 +185,6 @@ class Engine:
         return e.stream if e is not None else None
 
     @property
-    def drag(self):
-        """The Drag effect, or None."""
-        return self.context.effect("drag")
-
-    @property
     def evaporated(self):
         """The drying effect's evaporated water, kg since the start (a 1-entry f64 field)."""
         return self.drying_effect.evaporated

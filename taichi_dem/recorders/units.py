@@ -11,8 +11,7 @@ from ..sensors.series import SERIES, Series
 def declared() -> tuple[Series, ...]:
     """The sensors' series and every effect's (their settings modules' SERIES)."""
     out = list(SERIES)
-    for module in (catalog.thermal_settings, catalog.drag_settings, catalog.mobility_settings,
-                   catalog.viscous_damping_settings):
+    for module in catalog.settings_modules():
         out.extend(getattr(module, "SERIES", ()))
     return tuple(out)
 

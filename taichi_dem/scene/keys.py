@@ -235,6 +235,10 @@ class Section:
     # with a reader: "module:function" building the effect objects from (scene, settings);
     # effects/registry.py imports it only for a scene that has the section
     builds: str = ""
+    # with a reader: ``derive(parser) -> settings or None``, the effect's settings implied by
+    # other sections when the scene lacks this one (the drag of a [thermal.gas] with
+    # ``drag``); the loader calls it after [thermal]
+    derive: Optional[Callable[[Any], Any]] = None
 
     def __post_init__(self):
         names = [k.name for k in self.keys]

@@ -20,7 +20,6 @@ from pathlib import Path
 
 from taichi_dem.thermal.settings import parse_thermal
 
-from ..effects.drag.settings import parse as parse_drag
 from ..effects.mobility.settings import parse as parse_mobility
 from ..effects import catalog as _catalog  # noqa: F401 (registers the effects' sections)
 from ..errors import SceneError
@@ -38,7 +37,7 @@ from .sections.surfaces import SurfaceSections
 # (effects/catalog.py) is accepted too
 BUILT_IN_SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls",
                      "bodies", "factories", "outlets", "sensors", "thermal", "mobility",
-                     "output", "gas")
+                     "output")
 SECTIONS = BUILT_IN_SECTIONS + tuple(p for p in effect_sections() if p not in BUILT_IN_SECTIONS)
 PLANNED_SECTIONS: tuple[str, ...] = ()
 
@@ -156,17 +155,23 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
                 if f.moisture is not None:
                     raise self.err(f"{f.key}.moisture", "drying needs heat transfer: add a "
                                                         "[thermal] section (and a gas to dry in)")
-        drag = parse_drag(doc, self.source, thermal.gas if thermal is not None else None)
         mobility = (parse_mobility(doc["mobility"], self.source, simulation.gravity, sources, bodies)
                     if "mobility" in doc else None)
         # every other effect's section, read by its own settings module (scene/keys.py)
         self.simulation, self.sources, self.walls, self.bodies = simulation, sources, walls, bodies
         self.thermal = thermal
-        settings = {path: section.reader(doc[path], self)
-                    for path, section in effect_sections().items()
-                    if path in doc and path not in BUILT_IN_SECTIONS}
+        settings = {}
+        for path, section in effect_sections().items():
+            if path in BUILT_IN_SECTIONS:
+                continue
+            if path in doc:
+                settings[path] = section.reader(doc[path], self)
+            elif section.derive is not None:
+                implied = section.derive(self)      # (from other sections: [thermal.gas])
+                if implied is not None:
+                    settings[path] = implied
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
                      walls=walls, bodies=bodies, output=output, thermal=thermal,
-                     factories=factories, outlets=outlets, sensors=sensors, drag=drag,
+                     factories=factories, outlets=outlets, sensors=sensors,
                      mobility=mobility, settings=settings)

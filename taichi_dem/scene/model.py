@@ -14,7 +14,6 @@ import numpy as np
 
 # the effects' own settings, declared with their keys where the effect lives
 from taichi_dem.thermal.settings import GasSettings, ThermalSettings  # noqa: F401
-from ..effects.drag.settings import DragSettings  # noqa: F401
 from ..effects.mobility.settings import MobilitySettings  # noqa: F401
 
 Vec3 = tuple[float, float, float]
@@ -420,10 +419,10 @@ class Scene:
     factories: tuple[Factory, ...] = ()
     outlets: tuple[Outlet, ...] = ()
     sensors: tuple[Sensor, ...] = ()
-    drag: Optional[DragSettings] = None
     mobility: Optional[MobilitySettings] = None
-    # the settings of every other effect section the scene has, by section name: what an
-    # effect's settings module returns for it (scene/keys.py ``Section.reader``)
+    # the settings of every other effect section the scene has (or another section implies),
+    # by section name: what an effect's settings module returns for it (scene/keys.py
+    # ``Section.reader``, ``Section.derive``): settings["gas"] is the drag's (DragSettings)
     settings: dict = field(default_factory=dict)
 
     def interaction(self, a: str, b: str) -> Interaction:

@@ -35,9 +35,10 @@ class ParticleSeries:
         values["particles/kinetic_energy"] = m["kinetic_energy"]
         values["particles/lost"] = e.lost
         values.update(thermal)
-        if getattr(e, "drag", None) is not None:
-            # the gas's pull on all particles in the last step (N; effects/drag.py)
-            values["gas/drag_force"] = e.drag.total_force(e.count)
+        for effect in e.effect_list:
+            # an effect's own series (declared with its keys: SERIES in its settings module)
+            if hasattr(effect, "sample"):
+                effect.sample(values, e.count, m)
 
 
 class ParticleMass:

@@ -812,7 +812,7 @@ def test_gas_gap_keys_without_gas_gap():
 def test_mechanics_gas_drag_loads_and_refuses():
     d = base()
     d["gas"] = {"velocity": [0.0, 0.0, 1.5], "drag": "schiller_naumann", "density": 1.2}
-    g = load(d).drag
+    g = load(d).settings["gas"]
     assert g.model == "schiller_naumann" and g.velocity == (0.0, 0.0, 1.5) and g.density == 1.2
     d["gas"]["drag"] = "ergun"
     error(d, "gas.drag", "\"di_felice\" or \"schiller_naumann\"")
@@ -825,9 +825,11 @@ def test_mechanics_gas_drag_loads_and_refuses():
 def test_thermal_gas_drag():
     d = _thermal_base()
     d["thermal"]["gas"] = {"model": "fixed", "velocity": [1.0, 0.0, 0.0], "drag": "di_felice"}
-    g = load(d).drag
+    g = load(d).settings["gas"]
     assert g.model == "di_felice" and g.velocity == (1.0, 0.0, 0.0)
     d["thermal"]["gas"]["drag"] = "stokes"
     error(d, "thermal.gas.drag", "\"none\", \"di_felice\" or \"schiller_naumann\"")
     d["thermal"]["gas"]["drag"] = "none"
-    assert load(d).drag is None
+    assert "gas" not in load(d).settings
+    d["gas"] = {"velocity": [0.0, 0.0, 1.0]}
+    error(d, "gas", "[thermal.gas] already")

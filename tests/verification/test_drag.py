@@ -136,7 +136,7 @@ def test_packed_bed_drag_against_ergun():
         e = sim.engine
         n = e.count
         z = e.state.position.to_numpy()[:n, 2].astype(float)
-        force = e.drag.force.to_numpy()[:n].astype(float)
+        force = e.model.effect("drag").force.to_numpy()[:n].astype(float)
         speed = np.abs(e.state.velocity.to_numpy()[:n]).max()
     r = 0.001
     top = z.max()
@@ -164,7 +164,7 @@ def test_without_a_gas_nothing_is_compiled():
     text = BED.replace('[gas]\nvelocity = [0.0, 0.0, 0.2]\ndrag = "di_felice"\n', "")
     with taichi_dem.Simulation.from_text(text.replace("count = 700", "count = 20")) as sim:
         assert "drag" not in {e.name for e in sim.effects}
-        assert sim.engine.drag is None
+        assert sim.engine.model.effect("drag") is None
         assert "drag_force" not in {k for t in sim.engine.trees for k in t.fields}
 
 

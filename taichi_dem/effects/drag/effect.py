@@ -152,3 +152,16 @@ class Drag(Effect):
         """The drag on all particles in the last step (N, a 3-vector)."""
         import numpy as np
         return self.force.to_numpy()[:n].astype(np.float64).sum(axis=0)
+
+    def sample(self, values: dict, n: int, measured: dict) -> None:
+        """Its series at an output sample (declared in settings.py SERIES): the gas's pull on
+        the ``n`` slots' particles in the last step."""
+        values["gas/drag_force"] = self.total_force(n)
+
+
+def build(scene, settings) -> list:
+    """The effect for a scene's drag ``settings`` (DragSettings: from [gas] or [thermal.gas])."""
+    speed = sum(c * c for c in settings.velocity) ** 0.5
+    return [Drag(f"gas drag ({settings.model.replace('_', '-')}"
+                 + (", local voidage from the cell grid" if settings.model == "di_felice" else "")
+                 + f"), superficial gas velocity {speed:.3g} m/s, one-way", settings)]

@@ -21,7 +21,8 @@ SECTION = register(Section("gas", "A gas that drags the particles (one-way coupl
         default=air.VISCOSITY, minimum=0.0, exclusive_minimum=True),
     Key("drag", "choice", "the drag law: Di Felice (local voidage from the cell grid) or "
         "Schiller-Naumann (a dilute particle)", default="di_felice", choices=MODELS),
-), owner=__name__))
+), owner=__name__, reader=lambda table, parser: read(table, parser),
+   derive=lambda parser: derive(parser), builds="taichi_dem.effects.drag.effect:build"))
 
 
 # the series this effect writes (sensors/series.py)
@@ -43,23 +44,28 @@ class DragSettings:
     viscosity: float
 
 
-def parse(doc: dict, file: str, heat_gas) -> Optional[DragSettings]:
-    """Drag from the mechanics-only [gas] section or from [thermal.gas] (``heat_gas``, the
-    parsed GasSettings or None) with drag = "di_felice" | "schiller_naumann"; not both."""
-    if "gas" in doc:
-        if heat_gas is not None:
-            raise SceneError(file, "gas", "the scene has a [thermal.gas] already: give its drag "
-                                          "there (drag = \"di_felice\"), not a second gas")
-        g = doc["gas"]
-        if not isinstance(g, dict):
-            raise SceneError(file, "gas", f"expected a table, got {type_name(g)}")
-        SECTION.check(g, file, "gas")
-        if "velocity" not in g:
-            SECTION.read(g, file, "gas", only=("drag",))
-            raise SceneError(file, "gas.velocity", "required: the gas's superficial velocity, m/s")
-        v = SECTION.read(g, file, "gas", defaults=True)
-        return DragSettings(model=v["drag"], velocity=v["velocity"], density=v["density"],
-                            viscosity=v["viscosity"])
+def read(table, parser) -> DragSettings:
+    """The mechanics-only [gas] section (``parser``: the loader's; its ``thermal`` is read
+    already): refused beside a [thermal.gas], which gives its drag itself."""
+    file = parser.source
+    if parser.thermal is not None and parser.thermal.gas is not None:
+        raise SceneError(file, "gas", "the scene has a [thermal.gas] already: give its drag "
+                                      "there (drag = \"di_felice\"), not a second gas")
+    if not isinstance(table, dict):
+        raise SceneError(file, "gas", f"expected a table, got {type_name(table)}")
+    SECTION.check(table, file, "gas")
+    if "velocity" not in table:
+        SECTION.read(table, file, "gas", only=("drag",))
+        raise SceneError(file, "gas.velocity", "required: the gas's superficial velocity, m/s")
+    v = SECTION.read(table, file, "gas", defaults=True)
+    return DragSettings(model=v["drag"], velocity=v["velocity"], density=v["density"],
+                        viscosity=v["viscosity"])
+
+
+def derive(parser) -> Optional[DragSettings]:
+    """The drag of a [thermal.gas] with drag = "di_felice" | "schiller_naumann" (its gas's
+    velocity, density and viscosity), when the scene has no [gas]; else None."""
+    heat_gas = parser.thermal.gas if parser.thermal is not None else None
     if heat_gas is not None and heat_gas.drag != "none":
         return DragSettings(model=heat_gas.drag, velocity=heat_gas.velocity,
                             density=heat_gas.density, viscosity=heat_gas.viscosity)

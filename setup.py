@@ -1,0 +1,22 @@
+"""The package list, found rather than kept by hand: every package under taichi_dem/, and
+the top-level folders pyproject.toml maps into the namespace (thermal/, geometry/, demos/ as
+taichi_dem.thermal, ...). Everything else is declared in pyproject.toml."""
+import tomllib
+from pathlib import Path
+
+from setuptools import find_packages, setup
+
+ROOT = Path(__file__).resolve().parent
+
+
+def packages() -> list[str]:
+    """The dotted names of every package the wheel holds."""
+    mapped = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-dir"]
+    found = find_packages(where=str(ROOT), include=["taichi_dem", "taichi_dem.*"])
+    for name, folder in mapped.items():
+        found += [name] + [f"{name}.{p}" for p in find_packages(where=str(ROOT / folder))]
+    return sorted(found)
+
+
+if __name__ == "__main__":
+    setup(packages=packages())
