@@ -358,6 +358,15 @@ def _profile_start() -> None:
     backend.acquire = counted
 
 
+def _alive_simulations() -> int:
+    """Simulations still on the Taichi runtime (not closed, still referenced): while any
+    lives, the next simulation compiles its kernels afresh (engine/backend.py acquire)."""
+    import gc
+    from taichi_dem.engine import backend
+    gc.collect()
+    return len(backend._live)
+
+
 class _TestProfile:
     """Per-test row of the suite profile (above), when it is on."""
 
@@ -380,7 +389,8 @@ class _TestProfile:
         k0, s0, i0, c0, t0 = self.start
         row = {"test": self.item.nodeid, "wall_s": time.perf_counter() - t0,
                "kernels": _profile["kernels"] - k0, "kernel_s": _profile["kernel_s"] - s0,
-               "inits": _profile["inits"] - i0, "slow_kernels": _profile["slow"] - c0}
+               "inits": _profile["inits"] - i0, "slow_kernels": _profile["slow"] - c0,
+               "alive_after": _alive_simulations()}
         worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
         _profile["folder"].mkdir(parents=True, exist_ok=True)
         with open(_profile["folder"] / f"{worker}.jsonl", "a") as out:

@@ -45,6 +45,10 @@ def real_type(precision: str):
 # is such a leftover.
 STALE_CACHE_LOCK_SECONDS = 600.0
 
+# Taichi's own IR optimisation (``opt_level`` 1, its default: the simplification passes
+# before LLVM, which then optimises at -O3 either way); 0 skips them
+DEFAULT_OPT_LEVEL = 1
+
 
 def kernel_cache_dir() -> Path:
     """Where Taichi keeps its offline kernel cache: $TI_OFFLINE_CACHE_FILE_PATH, else
@@ -109,12 +113,23 @@ def acquire(owner, arch: str = "cpu", precision: str = "f32", threads: int | Non
                       unrolling_limit=0)
         if threads:
             kwargs["cpu_max_num_threads"] = threads
+        kwargs["opt_level"] = ir_optimisation_level()
         ti.init(**kwargs)
         _settle_field_numbering()
         _current.update(arch=arch, precision=precision, generation=_current["generation"] + 1,
                         threads=threads)
     _live.add(owner)
     return _current["generation"]
+
+
+def ir_optimisation_level() -> int:
+    """Taichi's ``opt_level``: $TAICHI_DEM_OPT_LEVEL, else DEFAULT_OPT_LEVEL (see there)."""
+    value = os.environ.get("TAICHI_DEM_OPT_LEVEL", "")
+    if value == "":
+        return DEFAULT_OPT_LEVEL
+    if value not in ("0", "1"):
+        raise BackendError(f"TAICHI_DEM_OPT_LEVEL={value!r}: expected 0 or 1")
+    return int(value)
 
 
 def _settle_field_numbering() -> None:
