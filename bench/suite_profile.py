@@ -60,9 +60,16 @@ def main(argv=None) -> int:
           f"{total['kernels']:7d} {total['kernel_s']:7.1f} {total['slow_kernels']:8d} "
           f"{total['inits']:5d}")
     workers = defaultdict(float)
+    spans: dict = {}
     for row in rows:
         workers[row["worker"]] += row["wall_s"]
-    print("per worker (s):", ", ".join(f"{w} {s:.0f}" for w, s in sorted(workers.items())))
+        if "end" in row:
+            lo, hi = spans.get(row["worker"], (float("inf"), 0.0))
+            spans[row["worker"]] = (min(lo, row["end"] - row["wall_s"]), max(hi, row["end"]))
+    print("per worker (s): " + ", ".join(
+        f"{w} {t:.0f} in tests" + (f" of {spans[w][1] - spans[w][0]:.0f} from its first test's start "
+                                  f"to its last's end" if w in spans else "")
+        for w, t in sorted(workers.items())))
     return 0
 
 

@@ -390,7 +390,7 @@ class _TestProfile:
         row = {"test": self.item.nodeid, "wall_s": time.perf_counter() - t0,
                "kernels": _profile["kernels"] - k0, "kernel_s": _profile["kernel_s"] - s0,
                "inits": _profile["inits"] - i0, "slow_kernels": _profile["slow"] - c0,
-               "alive_after": _alive_simulations()}
+               "alive_after": _alive_simulations(), "end": time.time()}
         worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
         _profile["folder"].mkdir(parents=True, exist_ok=True)
         with open(_profile["folder"] / f"{worker}.jsonl", "a") as out:

@@ -105,27 +105,27 @@ def test_schedule_time_for_mass():
 def test_sheet_delivers_the_scheduled_mass_without_overlaps(tmp_path):
     # a free stream (no gravity, no walls): 0.03 kg/s (99 % of what this lattice carries at
     # 1 m/s, so successive layers are at their least spacing), then 0.015 kg/s from t = 10 ms
-    sim = _sim(tmp_path, '[[0.0, "0.03 kg/s"], [0.01, "0.015 kg/s"]]')
-    gaps = _watch_insertions(sim)
-    sim.run()
-    f = sim.factories
-    m_layer = max(f.layer_mass(0, 0), f.layer_mass(0, 1))
-    schedule = sim.scene.factories[0].mass_rate
-    t = sim.series["time"]
-    fed = sim.series["factories/inlet/mass"]
-    scheduled = np.array([schedule.mass_until(x) for x in t])
-    tol = 0.5 * m_layer + 0.03 * sim.dt
-    assert np.max(np.abs(fed - scheduled)) <= tol
-    assert np.max(np.abs(fed - scheduled)) > 0.05 * tol        # (not vacuous: layers are discrete)
-    # the mean rate over the run, to the same bound over the run time
-    assert fed[-1] / t[-1] == pytest.approx(schedule.mass_until(t[-1]) / t[-1], abs=tol / t[-1])
-    assert sim.series["factories/inlet/behind"][-1] == 0.0
-    # no insertion overlapped anything, and the free stream keeps every gap (rigid motion)
-    assert len(gaps) >= 18 and min(gaps) >= 0.0     # 13 layers at 0.03 kg/s, 6 at 0.015
-    x = sim.particles()["position"].astype(float)
-    d2 = np.sum((x[:, None] - x[None]) ** 2, axis=-1)
-    np.fill_diagonal(d2, np.inf)
-    assert math.sqrt(d2.min()) >= 1e-3 * (1.0 - 1e-5)
+    with _sim(tmp_path, '[[0.0, "0.03 kg/s"], [0.01, "0.015 kg/s"]]') as sim:
+        gaps = _watch_insertions(sim)
+        sim.run()
+        f = sim.factories
+        m_layer = max(f.layer_mass(0, 0), f.layer_mass(0, 1))
+        schedule = sim.scene.factories[0].mass_rate
+        t = sim.series["time"]
+        fed = sim.series["factories/inlet/mass"]
+        scheduled = np.array([schedule.mass_until(x) for x in t])
+        tol = 0.5 * m_layer + 0.03 * sim.dt
+        assert np.max(np.abs(fed - scheduled)) <= tol
+        assert np.max(np.abs(fed - scheduled)) > 0.05 * tol        # (not vacuous: layers are discrete)
+        # the mean rate over the run, to the same bound over the run time
+        assert fed[-1] / t[-1] == pytest.approx(schedule.mass_until(t[-1]) / t[-1], abs=tol / t[-1])
+        assert sim.series["factories/inlet/behind"][-1] == 0.0
+        # no insertion overlapped anything, and the free stream keeps every gap (rigid motion)
+        assert len(gaps) >= 18 and min(gaps) >= 0.0     # 13 layers at 0.03 kg/s, 6 at 0.015
+        x = sim.particles()["position"].astype(float)
+        d2 = np.sum((x[:, None] - x[None]) ** 2, axis=-1)
+        np.fill_diagonal(d2, np.inf)
+        assert math.sqrt(d2.min()) >= 1e-3 * (1.0 - 1e-5)
 
 
 def test_a_blocked_stream_drops_sites_instead_of_overlapping(tmp_path, capsys):
@@ -135,13 +135,13 @@ def test_a_blocked_stream_drops_sites_instead_of_overlapping(tmp_path, capsys):
              'material = "wall"\n'
              '[[walls]]\nname = "back"\nplane = { point = [0.0, 0, 0], normal = [1, 0, 0] }\n'
              'material = "wall"')
-    sim = _sim(tmp_path, '"0.03 kg/s"', end=0.015, gravity="[-9.81, 0.0, 0.0]", walls=walls)
-    gaps = _watch_insertions(sim)
-    sim.run()
-    assert min(gaps) >= 0.0
-    behind = sim.series["factories/inlet/behind"][-1]
-    assert behind > 0.3 * 0.03 * 0.015                       # most of the feed had no room
-    assert "dropped" in capsys.readouterr().err
+    with _sim(tmp_path, '"0.03 kg/s"', end=0.015, gravity="[-9.81, 0.0, 0.0]", walls=walls) as sim:
+        gaps = _watch_insertions(sim)
+        sim.run()
+        assert min(gaps) >= 0.0
+        behind = sim.series["factories/inlet/behind"][-1]
+        assert behind > 0.3 * 0.03 * 0.015                       # most of the feed had no room
+        assert "dropped" in capsys.readouterr().err
 
 
 def test_resumed_sheet_continues_its_layers(tmp_path):
