@@ -1,7 +1,11 @@
-"""The kernel cache's lock: a leftover of a killed process is removed, a live one is not."""
+"""The kernel cache's lock: a leftover of a killed process is removed, a live one is not;
+Taichi's IR optimisation level."""
 import os
 import time
 
+import pytest
+
+import taichi_dem
 from taichi_dem.engine import backend
 
 
@@ -76,3 +80,26 @@ def test_the_front_end_savings_keep_taichis_kernels_and_error_positions(tmp_path
     assert "TaichiNameError" in out
     assert f'File "{script}", line 11, in fill:' in out
     assert "        x[i] = undefined_name + 1.0\n               ^^^^^^^^^^^^^^\n" in out
+
+
+def test_the_ir_optimisation_level(monkeypatch):
+    """Off (0) on a CPU unless $TAICHI_DEM_OPT_LEVEL says 1; Taichi's default (1) on a GPU;
+    anything else in the variable is refused with its name."""
+    from taichi_dem.errors import BackendError
+    monkeypatch.delenv("TAICHI_DEM_OPT_LEVEL", raising=False)
+    assert backend.ir_optimisation_level("cpu") == 0
+    assert backend.ir_optimisation_level("cuda") == 1
+    monkeypatch.setenv("TAICHI_DEM_OPT_LEVEL", "1")
+    assert backend.ir_optimisation_level("cpu") == 1
+    monkeypatch.setenv("TAICHI_DEM_OPT_LEVEL", "fast")
+    with pytest.raises(BackendError, match="TAICHI_DEM_OPT_LEVEL"):
+        backend.ir_optimisation_level("cpu")
+
+
+def test_the_runtime_runs_at_that_level():
+    import taichi as ti
+    from tests.conftest import SMALL_SCENE
+    with taichi_dem.Simulation.from_text(SMALL_SCENE.format(precision="f64", rolling=0.0,
+                                                             count=10)) as sim:
+        sim.step(2)
+        assert ti.lang.impl.current_cfg().opt_level == backend.ir_optimisation_level("cpu")
