@@ -7,8 +7,9 @@ here without an edit.
 Each module declares its Section(s) and its ``SERIES`` (the series its effect writes, with
 their units: recorders/units.py). One whose whole top-level section it reads itself gives the
 Section a ``reader`` (the loader keeps the result in ``Scene.settings``), and a ``builds``
-function making the effect objects (effects/registry.py). [thermal] and [mobility] predate
-that and keep their own Scene fields (``scene.thermal``, ``scene.mobility``).
+function making the effect objects (effects/registry.py): the drag's [gas] (also derived from
+a [thermal.gas] with ``drag``), [mobility], [viscous_damping]. [thermal] predates that and
+keeps its own Scene field (``scene.thermal``).
 """
 from __future__ import annotations
 

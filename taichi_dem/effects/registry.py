@@ -9,7 +9,6 @@ from ..scene.model import Scene
 from .base import Effect
 from .gravity import Gravity
 from .hertz_mindlin import HertzMindlin
-from .mobility.effect import Mobility
 from .rolling import RollingConstantTorque, RollingEPSD
 
 
@@ -54,17 +53,6 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
     if scene.domain.periodic:
         effects.append(Effect("periodic faces: " + ", ".join(scene.domain.periodic),
                               "periodic", "integrate"))
-    if scene.mobility is not None:
-        m = scene.mobility
-        frame = f"relative to body '{m.body}'" if m.mode == "body_frame" else "at rest"
-        effects.append(Mobility(
-            f"mobility: contacts between inactive particles frozen, their integration skipped "
-            f"(granular temperature > {m.granular_temperature_threshold:.3g} (m/s)^2"
-            f"{' (auto: 1e-5 g d_max)' if m.threshold_is_auto else ''}, solid fraction < "
-            f"{m.solid_fraction_threshold:g}"
-            + (f", rms acceleration > {m.acceleration_threshold:.3g} m/s^2"
-               if m.acceleration_threshold < float("inf") else "")
-            + f", cells of {m.cell_size * 1e3:.3g} mm, {frame})", m, scene.bodies))
     if any(f.fixed for f in scene.fills):
         effects.append(Effect("fixed (frozen) particles", "fixed_particles", "integrate"))
     return tuple(effects)

@@ -20,7 +20,6 @@ from pathlib import Path
 
 from taichi_dem.thermal.settings import parse_thermal
 
-from ..effects.mobility.settings import parse as parse_mobility
 from ..effects import catalog as _catalog  # noqa: F401 (registers the effects' sections)
 from ..errors import SceneError
 from .keys import effect_sections, suggest as _suggest
@@ -36,7 +35,7 @@ from .sections.surfaces import SurfaceSections
 # the sections this module reads itself; every effect section with a reader of its own
 # (effects/catalog.py) is accepted too
 BUILT_IN_SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls",
-                     "bodies", "factories", "outlets", "sensors", "thermal", "mobility",
+                     "bodies", "factories", "outlets", "sensors", "thermal",
                      "output")
 SECTIONS = BUILT_IN_SECTIONS + tuple(p for p in effect_sections() if p not in BUILT_IN_SECTIONS)
 PLANNED_SECTIONS: tuple[str, ...] = ()
@@ -155,8 +154,6 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
                 if f.moisture is not None:
                     raise self.err(f"{f.key}.moisture", "drying needs heat transfer: add a "
                                                         "[thermal] section (and a gas to dry in)")
-        mobility = (parse_mobility(doc["mobility"], self.source, simulation.gravity, sources, bodies)
-                    if "mobility" in doc else None)
         # every other effect's section, read by its own settings module (scene/keys.py)
         self.simulation, self.sources, self.walls, self.bodies = simulation, sources, walls, bodies
         self.thermal = thermal
@@ -165,7 +162,9 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
             if path in BUILT_IN_SECTIONS:
                 continue
             if path in doc:
-                settings[path] = section.reader(doc[path], self)
+                read = section.reader(doc[path], self)
+                if read is not None:            # (None: the section says it is off)
+                    settings[path] = read
             elif section.derive is not None:
                 implied = section.derive(self)      # (from other sections: [thermal.gas])
                 if implied is not None:
@@ -174,4 +173,4 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
                      materials=self.materials, interactions=interactions, fills=fills,
                      walls=walls, bodies=bodies, output=output, thermal=thermal,
                      factories=factories, outlets=outlets, sensors=sensors,
-                     mobility=mobility, settings=settings)
+                     settings=settings)

@@ -14,7 +14,6 @@ import numpy as np
 
 # the effects' own settings, declared with their keys where the effect lives
 from taichi_dem.thermal.settings import GasSettings, ThermalSettings  # noqa: F401
-from ..effects.mobility.settings import MobilitySettings  # noqa: F401
 
 Vec3 = tuple[float, float, float]
 
@@ -419,7 +418,6 @@ class Scene:
     factories: tuple[Factory, ...] = ()
     outlets: tuple[Outlet, ...] = ()
     sensors: tuple[Sensor, ...] = ()
-    mobility: Optional[MobilitySettings] = None
     # the settings of every other effect section the scene has (or another section implies),
     # by section name: what an effect's settings module returns for it (scene/keys.py
     # ``Section.reader``, ``Section.derive``): settings["gas"] is the drag's (DragSettings)

@@ -264,7 +264,7 @@ def test_mobility_section_is_read():
     # [mobility] is no longer a planned section (issue 12): tests/unit/test_mobility.py
     d = base()
     d["mobility"] = {"enabled": True}
-    assert load(d).mobility is not None
+    assert load(d).settings.get("mobility") is not None
 
 
 # --- [simulation] ---------------------------------------------------------------------------------

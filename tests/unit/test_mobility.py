@@ -26,15 +26,15 @@ def error_of(text):
 
 # --------------------------------------------------------------------------------- keys
 def test_defaults_scale_with_the_scene():
-    m = parse_scene(small("\n[mobility]\nenabled = true\n")).mobility
+    m = parse_scene(small("\n[mobility]\nenabled = true\n")).settings.get("mobility")
     d = 2 * 0.004
     assert m.granular_temperature_threshold == pytest.approx(1e-5 * 9.81 * d, rel=1e-12)
     assert m.acceleration_threshold == math.inf
     assert m.threshold_is_auto and m.cell_size == pytest.approx(3 * d)
     assert m.solid_fraction_threshold == 0.4 and m.mode == "at_rest"
-    assert parse_scene(small("\n[mobility]\nenabled = false\n")).mobility is None
+    assert parse_scene(small("\n[mobility]\nenabled = false\n")).settings.get("mobility") is None
     m = parse_scene(small("\n[mobility]\ngranular_temperature_threshold = 2e-4\n"
-                          "solid_fraction_threshold = 0.3\ncell_size = \"30 mm\"\n")).mobility
+                          "solid_fraction_threshold = 0.3\ncell_size = \"30 mm\"\n")).settings.get("mobility")
     assert (m.granular_temperature_threshold, m.solid_fraction_threshold, m.cell_size) == (2e-4, 0.3, 0.03)
 
 
@@ -80,7 +80,7 @@ def numpy_status(engine, p):
     velocities, radii), with the rules of effects/mobility.py; returns (status by cell,
     temperature by cell, block of each particle)."""
     g, m = engine.grid, engine.mobility
-    st = engine.scene.mobility
+    st = engine.scene.settings["mobility"]
     cells = np.clip(np.floor((p["position"] - g.lo) / np.asarray(g.cell_size)).astype(int), 0,
                     np.asarray(g.dims) - 1)
     b3 = cells * np.asarray(m.blocks) // np.asarray(g.dims)

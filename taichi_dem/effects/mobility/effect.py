@@ -488,3 +488,18 @@ class Mobility(Effect):
         c = self.counts.to_numpy()
         return {"inactive_particles": int(c[0]), "inactive_cells": int(c[1]),
                 "active_cells": int(c[2]), "mobile_cells": int(c[3])}
+
+
+def build(scene, settings) -> list:
+    """The effect for a scene's [mobility] ``settings`` (MobilitySettings; its body frame
+    among ``scene.bodies``)."""
+    m = settings
+    frame = f"relative to body '{m.body}'" if m.mode == "body_frame" else "at rest"
+    return [Mobility(
+        f"mobility: contacts between inactive particles frozen, their integration skipped "
+        f"(granular temperature > {m.granular_temperature_threshold:.3g} (m/s)^2"
+        f"{' (auto: 1e-5 g d_max)' if m.threshold_is_auto else ''}, solid fraction < "
+        f"{m.solid_fraction_threshold:g}"
+        + (f", rms acceleration > {m.acceleration_threshold:.3g} m/s^2"
+           if m.acceleration_threshold < float("inf") else "")
+        + f", cells of {m.cell_size * 1e3:.3g} mm, {frame})", m, scene.bodies)]

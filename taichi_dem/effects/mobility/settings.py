@@ -35,7 +35,8 @@ SECTION = register(Section("mobility", "Skip the contacts and the integration of
         default="at_rest", choices=MODES),
     Key("body", "string", "mode \"body_frame\": the body whose rigid motion the bed follows "
         "(a drum's shell)", default=None),
-), owner=__name__))
+), owner=__name__, reader=lambda table, parser: read(table, parser),
+   builds="taichi_dem.effects.mobility.effect:build"))
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,12 @@ class MobilitySettings:
     acceleration_threshold: float = math.inf  # m/s^2, rms acceleration; inf = not checked
     body: Optional[str] = None               # the body whose frame "body_frame" uses
     threshold_is_auto: bool = False
+
+
+def read(table: Any, parser) -> Optional[MobilitySettings]:
+    """The section (``parser``: the loader's, with the scene's gravity, particle sources and
+    bodies read already); None when ``enabled = false``."""
+    return parse(table, parser.source, parser.simulation.gravity, parser.sources, parser.bodies)
 
 
 def parse(table: Any, file: str, gravity, sources, bodies) -> Optional[MobilitySettings]:
