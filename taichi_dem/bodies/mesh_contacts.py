@@ -135,7 +135,10 @@ class MeshContacts:
         self.scratch_tree = None
         self._alloc_items(bucket(max(4 * self.n_triangles, 1024)))
         self._alloc_scratch(16)
-        self._alloc_entries(bucket(max(2 * s.capacity // 8, 1024)))
+        # one candidate entry per slot to start with (~90 bytes each): the seed's cooler slice
+        # at 60 kg/m needs ~0.5 per sphere once the bed has packed, and a list that grows
+        # mid-run compiles the step's kernels again (a quarter per slot grew at 0.11 s)
+        self._alloc_entries(bucket(max(s.capacity, 1024)))
         # gas-gap conduction reaches a fluid lens beyond the contact (thermal/gas_gap.py)
         self.lens = margin_fraction(engine.contact_effects, "surface")
         self.expand = engine.max_radius * (1.0 + self.lens) + engine.skin
