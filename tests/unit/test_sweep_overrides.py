@@ -192,7 +192,7 @@ def test_tradeoff_planning_timestep_modulus_and_hooks():
     # mobility (issue 12) is a knob now: its variant enables it
     assert "mobility: enabled" not in skipped
     mobility = [v for v in variants if v.labels["knob"] == "mobility"]
-    assert len(mobility) == 1 and parse_scene(mobility[0].text, source=str(BOX)).mobility is not None
+    assert len(mobility) == 1 and parse_scene(mobility[0].text, source=str(BOX)).settings.get("mobility") is not None
     assert "no [thermal]" in skipped["time_scale"]
 
     import os
