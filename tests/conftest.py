@@ -332,13 +332,14 @@ def _profile_start() -> None:
     from taichi_dem.engine import backend
     _profile.update(folder=Path(folder), kernels=0, kernel_s=0.0, inits=0, slow=0)
     launch = kernel_impl.Kernel.launch_kernel
+    # the compiled kernels launched so far (held, so that no id is reused for another)
     seen: set = set()
 
     def timed(self, t_kernel, *args):
         # a kernel's first launch compiles it (or reads it from the offline cache)
-        if id(t_kernel) in seen:
+        if t_kernel in seen:
             return launch(self, t_kernel, *args)
-        seen.add(id(t_kernel))
+        seen.add(t_kernel)
         t0 = time.perf_counter()
         try:
             return launch(self, t_kernel, *args)

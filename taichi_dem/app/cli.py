@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CheckpointError, DivergenceError, SceneError, WindowError
+from ..errors import BackendError, CheckpointError, DivergenceError, SceneError, WindowError
 
 def _fail(message: str, code: int = 2) -> int:
     print(f"taichi-dem: {message}", file=sys.stderr)
@@ -204,6 +204,8 @@ def _main(argv=None) -> int:
             from .calibrate import run as cmd_calibrate
             return cmd_calibrate(args)
     except SceneError as err:
+        return _fail(str(err), 2)
+    except BackendError as err:       # the runtime cannot be had as asked (bad input: exit 2)
         return _fail(str(err), 2)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)

@@ -103,3 +103,17 @@ def test_the_runtime_runs_at_that_level():
                                                              count=10)) as sim:
         sim.step(2)
         assert ti.lang.impl.current_cfg().opt_level == backend.ir_optimisation_level("cpu")
+
+
+def test_a_bad_level_is_a_clear_error_from_the_command_line(tmp_path):
+    """Exit status 2 and one line naming the variable, no traceback."""
+    import subprocess
+    import sys
+    from pathlib import Path
+    scene = Path(__file__).resolve().parents[2] / "demos" / "pile.toml"
+    out = subprocess.run([sys.executable, "-m", "taichi_dem", "run", str(scene), "--until",
+                          "0.001", "--out", str(tmp_path)],
+                         env=dict(os.environ, TAICHI_DEM_OPT_LEVEL="fast"),
+                         capture_output=True, text=True)
+    assert out.returncode == 2
+    assert "TAICHI_DEM_OPT_LEVEL='fast'" in out.stderr and "Traceback" not in out.stderr
