@@ -73,11 +73,22 @@ class EffectContext:
         return None
 
 
+def particle_load(real):
+    """The load a particle stage adds to (``particle_func``, ``inserted_func``): a Taichi
+    struct of ``acceleration`` m/s^2 (3-vector), ``heat`` W and ``conductance`` W/K."""
+    import taichi as ti
+    return ti.types.struct(acceleration=ti.types.vector(3, real), heat=real, conductance=real)
+
+
 class Effect:
     """One enabled physical effect (see the module docstring for what each attribute means)."""
 
     name = "effect"
     stage = "particle"
+    # its place in its stage: the names of the effects it must run after, or before, where
+    # both are enabled (effects/registry.py order_effects); otherwise the registry's order
+    after: tuple[str, ...] = ()
+    before: tuple[str, ...] = ()
     kinds: tuple[str, ...] = ()
     mechanical = False
     margin = 0.0
@@ -107,6 +118,13 @@ class Effect:
         """A stability check at every output sample (``measured``: Engine.measure()): raise
         taichi_dem.DivergenceError to stop the run, or warn. Effects that have one override
         it; the run driver attaches only those (run/simulation.py)."""
+
+    def inserted_func(self, ctx):
+        """What an inserted particle starts with from this effect: it is inserted clear of
+        every contact, so its first half step's acceleration is the sum of the effects that
+        act on a free particle (gravity, a body force). A ti.func ``(i, load) -> load`` as
+        ``particle_func``'s, or None (this effect gives a free particle nothing)."""
+        return None
 
     def contact_func(self, ctx):
         raise NotImplementedError(f"{self.name} is not a contact effect")

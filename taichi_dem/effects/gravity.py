@@ -22,3 +22,7 @@ class Gravity(Effect):
             return load
 
         return gravity
+
+    def inserted_func(self, ctx):
+        """A particle inserted in free flight starts at g."""
+        return self.particle_func(ctx)

@@ -55,7 +55,40 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
                               "periodic", "integrate"))
     if any(f.fixed for f in scene.fills):
         effects.append(Effect("fixed (frozen) particles", "fixed_particles", "integrate"))
-    return tuple(effects)
+    return order_effects(effects)
+
+
+def order_effects(effects) -> tuple[Effect, ...]:
+    """``effects`` in the order the step runs them: the given order, except that an effect
+    comes after every enabled effect its ``after`` names and before every one its ``before``
+    names (a stable topological sort; names of effects that are not enabled are ignored).
+    A cycle is a programming error in the effects' declarations: ValueError naming it."""
+    effects = list(effects)
+    names = {e.name for e in effects}
+    # edges first -> then, by index in the given order
+    index = {}
+    for k, e in enumerate(effects):
+        index.setdefault(e.name, []).append(k)
+    preceding: dict[int, set] = {k: set() for k in range(len(effects))}
+    for k, e in enumerate(effects):
+        for name in e.after:
+            if name in names:
+                preceding[k].update(index[name])
+        for name in e.before:
+            if name in names:
+                for j in index[name]:
+                    preceding[j].add(k)
+    out: list[int] = []
+    placed: set = set()
+    while len(out) < len(effects):
+        ready = [k for k in range(len(effects)) if k not in placed and preceding[k] <= placed]
+        if not ready:
+            stuck = sorted({effects[k].name for k in range(len(effects)) if k not in placed})
+            raise ValueError("the effects' declared order (after/before) has a cycle among: "
+                             + ", ".join(stuck))
+        out.append(ready[0])           # the earliest in the given order: stable
+        placed.add(ready[0])
+    return tuple(effects[k] for k in out)
 
 
 def effect_names(scene: Scene) -> set[str]:

@@ -6,6 +6,7 @@ particle left there (rows, contact history, body loads, what effects keep per pa
 import numpy as np
 import taichi as ti
 
+from ..effects.base import particle_load
 from .precision import make_compensated_add
 from .state import SPHERE_INERTIA, Flag
 
@@ -108,7 +109,11 @@ class Insertion:
     def _compile_insert(self):
         e = self.e
         s = e.state
-        gravity_of = e.values.vector("gravity", e.scene.simulation.gravity)
+        # what the effects give a particle in free flight (Effect.inserted_func: gravity, a
+        # body force): its first half step's acceleration
+        Load = particle_load(e.real)
+        starts = tuple(f for f in (effect.inserted_func(e.context) for effect in e.effect_list)
+                       if f is not None)
         thermal = e.thermal
         process = s.process
         n_walls = s.n_walls
@@ -154,10 +159,6 @@ class Insertion:
                                     for a in ti.static(range(3))])
                 s.angular_velocity[i] = ti.Vector([ti.cast(reals[q, C.ANGULAR_VELOCITY + a], real)
                                     for a in ti.static(range(3))])
-                # inserted clear of every contact: free flight is the first step's acceleration
-                # (the initial fill's are computed by Engine.start)
-                s.acceleration[i] = gravity_of()
-                s.angular_acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
                 s.radius[i] = ti.cast(reals[q, C.RADIUS], real)
                 s.mass[i] = ti.cast(reals[q, C.MASS], real)
                 s.inverse_mass[i] = ti.cast(reals[q, C.INVERSE_MASS], real)
@@ -165,6 +166,14 @@ class Insertion:
                 s.material[i] = ints[q, 0]
                 s.particle_id[i] = ints[q, 1]
                 s.alive[i] = 1
+                # inserted clear of every contact: free flight is the first step's acceleration
+                # (the initial fill's are computed by Engine.start); after the particle's own
+                # values, which an effect may read (its material, its mass)
+                load = Load(acceleration=ti.Vector([0.0, 0.0, 0.0]), heat=0.0, conductance=0.0)
+                for start_of in ti.static(starts):
+                    load = start_of(i, load)
+                s.acceleration[i] = load.acceleration
+                s.angular_acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
                 if ti.static(mobility):
                     active[i] = 1     # until the rebuild this insertion flags judges it
                 if ti.static(process):

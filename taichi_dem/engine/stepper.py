@@ -43,7 +43,7 @@ from ..contacts.geometry import contact_types, make_geometry
 from ..contacts.history import history_members, make_history_io
 from ..contacts.law import make_contact_law, margin_fraction
 from ..contacts.planes import PlaneWalls, make_plane_contacts
-from ..effects.base import EffectContext
+from ..effects.base import EffectContext, particle_load
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 from . import drivers, tuning
 from .tuning import PARALLEL_FROM
@@ -294,8 +294,7 @@ class Engine:
         has_mesh = mesh_contacts is not None
         # a plate between two spheres: no pair contact through it
         shields = self.mesh.make_shields() if has_mesh else None
-        Load = ti.types.struct(acceleration=ti.types.vector(3, real), heat=real,
-                               conductance=real)
+        Load = particle_load(real)
         particle_effects = tuple(e.particle_func(self.context) for e in self.particle_effects)
         update_temperature = (self.temperature_effect.integrate_func(self.context, self.drying_effect)
                               if thermal else None)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Optional
 
 from ..errors import SceneError
@@ -239,6 +239,18 @@ class Section:
     # other sections when the scene lacks this one (the drag of a [thermal.gas] with
     # ``drag``); the loader calls it after [thermal]
     derive: Optional[Callable[[Any], Any]] = None
+    # with a reader: keys the effect adds to every [materials.NAME] (read by the materials
+    # section, kept in ``Material.effect_values``, listed by the schema under materials.*)
+    material_keys: tuple = ()
+    # with a reader: what the effect can do to a free particle, for the time step and the
+    # divergence guard (setup/timestep.py expected_max_speed), both from (scene, settings):
+    # ``acceleration_bound`` the largest acceleration it gives one, m/s^2 (a body force);
+    # ``speed_bound`` the largest speed it can carry one to, m/s (a gas's drag)
+    acceleration_bound: Optional[Callable[[Any, Any], float]] = None
+    speed_bound: Optional[Callable[[Any, Any], float]] = None
+    # with a reader: ``step_problem(settings, dt) -> (key, reason) or None``, why the effect
+    # cannot be stepped at ``dt`` s (the scene is refused naming [path].key)
+    step_problem: Optional[Callable[[Any, float], Any]] = None
 
     def __post_init__(self):
         names = [k.name for k in self.keys]
@@ -306,7 +318,25 @@ def register(section: Section) -> Section:
 
 
 def registered() -> dict[str, Section]:
-    return dict(_REGISTRY)
+    """Every declared section by path; [materials.NAME] with the keys effects add to it."""
+    out = dict(_REGISTRY)
+    if "materials.*" in out:
+        out["materials.*"] = material_section(out["materials.*"])
+    return out
+
+
+def material_keys() -> tuple[Key, ...]:
+    """The keys enabled-or-not effects add to every [materials.NAME] (Section.material_keys),
+    by the effect sections' order of registration."""
+    return tuple(k for s in _REGISTRY.values() for k in s.material_keys)
+
+
+def material_section(section: Section) -> Section:
+    """``section`` ([materials.NAME]'s own keys) with the keys effects add to it."""
+    extra = material_keys()
+    for k in extra:
+        assert k.name not in section, f"{k.name}: an effect's material key is a built-in one"
+    return replace(section, keys=section.keys + extra) if extra else section
 
 
 def effect_sections() -> dict[str, Section]:

@@ -169,6 +169,14 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
                 implied = section.derive(self)      # (from other sections: [thermal.gas])
                 if implied is not None:
                     settings[path] = implied
+            for key in section.material_keys:
+                # a material key of an effect the scene does not enable would do nothing
+                given = [n for n, m in doc.get("materials", {}).items()
+                         if isinstance(m, dict) and key.name in m]
+                if given and path not in settings:
+                    raise self.err(f"materials.{given[0]}.{key.name}",
+                                   f"acts only with [{path}], which the scene does not have: "
+                                   f"add the section or drop the key")
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
                      walls=walls, bodies=bodies, output=output, thermal=thermal,

@@ -106,6 +106,9 @@ class Material:
     surface_slope: Optional[float] = None          # RMS asperity slope (rough contact spots)
     microhardness: Optional[float] = None          # Pa (rough contact spots)
     calibration: Optional[Calibration] = None      # what it was calibrated against
+    # the keys effects add to a material (scene/keys.py Section.material_keys): {name: SI
+    # value, or the key's default}
+    effect_values: dict = field(default_factory=dict, compare=False)
 
     @property
     def shear_modulus(self) -> float:

@@ -485,8 +485,7 @@ def builder_schema() -> dict:
 _TOP = {"simulation": "simulation", "domain": "domain", "output": "output",
         "materials": "materials.*", "interactions": "interactions[]", "particles": "particles[]",
         "walls": "walls[]", "bodies": "bodies[]", "factories": "factories[]",
-        "outlets": "outlets[]", "sensors": "sensors[]", "thermal": "thermal",
-        "mobility": "mobility", "gas": "gas"}
+        "outlets": "outlets[]", "sensors": "sensors[]", "thermal": "thermal"}
 
 
 def scene_schema() -> dict:

@@ -16,6 +16,7 @@ import numpy as np
 
 from .pair_tables import effective_youngs_modulus, hertz_contact_time, rayleigh_time
 from ..errors import SceneError
+from ..scene.keys import effect_sections
 from ..scene.model import Scene
 
 MIN_STEPS_PER_CONTACT = 20      # below this an impact is poorly resolved (auto dt avoids it)
@@ -68,20 +69,40 @@ def body_surface_speed(scene: Scene) -> float:
     return best
 
 
+def effect_bounds(scene: Scene) -> tuple[float, float]:
+    """What the scene's effects can do to a free particle, as they declare it
+    (scene/keys.py ``Section.acceleration_bound`` and ``speed_bound``): the sum of their
+    largest accelerations (m/s^2) and the largest speed any carries one to (m/s)."""
+    acceleration = speed = 0.0
+    sections = effect_sections()
+    for path, settings in scene.settings.items():
+        section = sections[path]
+        if section.acceleration_bound is not None:
+            acceleration += float(section.acceleration_bound(scene, settings))
+        if section.speed_bound is not None:
+            speed = max(speed, float(section.speed_bound(scene, settings)))
+    return acceleration, speed
+
+
 def expected_max_speed(scene: Scene, initial_speeds: np.ndarray) -> float:
-    """Largest speed expected: initial speeds, and free fall across the domain (m/s)."""
+    """Largest speed expected (m/s): the initial speeds; free fall across the domain under
+    gravity and the effects' accelerations; the speed an effect carries a particle to; and
+    the fastest body surface on top (a particle meets a moving paddle at both speeds)."""
     g = float(np.linalg.norm(scene.simulation.gravity))
     span = np.asarray(scene.domain.max) - np.asarray(scene.domain.min)
+    # the work per unit mass a field can do across the domain bounds the kinetic energy:
+    # gravity along its own direction, an effect's acceleration (any direction) along the
+    # domain's diagonal
+    work = 0.0
     if g > 0:
         gdir = np.abs(np.asarray(scene.simulation.gravity)) / g
         # periodic axes do not bound a fall (a chute): cap those by the non-periodic span
-        height = float(np.dot(gdir, span))
-        fall = math.sqrt(2.0 * g * height)
-    else:
-        fall = 0.0
+        work += g * float(np.dot(gdir, span))
+    acceleration, carried = effect_bounds(scene)
+    work += acceleration * float(np.linalg.norm(span))
+    fall = math.sqrt(2.0 * work)
     v0 = float(np.max(initial_speeds)) if len(initial_speeds) else 0.0
-    # a particle falling onto a moving paddle meets it at both speeds
-    return max(v0, fall, 1e-3) + body_surface_speed(scene)
+    return max(v0, fall, carried, 1e-3) + body_surface_speed(scene)
 
 
 def choose_time_step(scene: Scene, radii: np.ndarray, materials: np.ndarray,
@@ -227,8 +248,8 @@ def refuse_absurd_step(scene: Scene, report: TimeStepReport, setter: str | None,
                        material_names: list[str], fixed: np.ndarray | None = None) -> None:
     """SceneError (file: key: reason) for a step no run can use (issue 43): below MIN_DT,
     more than MAX_STEPS to end_time, longer than the run or the output interval, a contact
-    too soft to carry a particle's weight, or a [viscous_damping] time constant the step
-    cannot resolve. ``setter``: the material whose bound set an automatic step."""
+    too soft to carry a particle's weight, or a step an effect cannot take (its
+    ``Section.step_problem``: the damping's time constant). ``setter``: the material whose bound set an automatic step."""
     sim = scene.simulation
     dt = report.dt
     explicit = sim.dt is not None
@@ -271,12 +292,14 @@ def refuse_absurd_step(scene: Scene, report: TimeStepReport, setter: str | None,
                          f"{'' if explicit else _property_words(scene, setter, r_min)}, "
                          f"longer than {what} ({bound:g} s): the run could not resolve "
                          "anything (no sample, or steps coarser than the samples)")
-    damping = scene.settings.get("viscous_damping")
-    if damping is not None:
-        from ..effects.viscous_damping.settings import step_problem
-        problem = step_problem(damping, dt)
+    sections = effect_sections()
+    for path, settings in scene.settings.items():
+        # an effect's own limit on the step (Section.step_problem: the damping's time constant)
+        check = sections[path].step_problem
+        problem = check(settings, dt) if check is not None else None
         if problem:
-            raise SceneError(scene.source, "viscous_damping.time_constant", problem)
+            key, reason = problem
+            raise SceneError(scene.source, f"{path}.{key}", reason)
 
 
 # The cell grid (engine/grid.py) starts from cells one pair cutoff (at least 2 r_max) wide and

@@ -2,6 +2,7 @@
 (the effect is effect.py). Plain Python (no Taichi)."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Optional
 
@@ -22,7 +23,8 @@ SECTION = register(Section("gas", "A gas that drags the particles (one-way coupl
     Key("drag", "choice", "the drag law: Di Felice (local voidage from the cell grid) or "
         "Schiller-Naumann (a dilute particle)", default="di_felice", choices=MODELS),
 ), owner=__name__, reader=lambda table, parser: read(table, parser),
-   derive=lambda parser: derive(parser), builds="taichi_dem.effects.drag.effect:build"))
+   derive=lambda parser: derive(parser), builds="taichi_dem.effects.drag.effect:build",
+   speed_bound=lambda scene, settings: carried_speed(settings)))
 
 
 # the series this effect writes (sensors/series.py)
@@ -42,6 +44,18 @@ class DragSettings:
     velocity: tuple
     density: float
     viscosity: float
+
+
+# the voidage of a loose packing: the gas between its particles moves at U / 0.4
+LOOSE_VOIDAGE = 0.4
+
+
+def carried_speed(settings: DragSettings) -> float:
+    """The fastest the gas can carry a particle, m/s (for the time step and the divergence
+    guard): its interstitial speed in a loose packing, |U| / 0.4. A particle dragged along
+    approaches the gas's speed and no more (gravity's part is bounded apart); Di Felice's
+    voidage is clamped at 0.1, but a bed that dense does not move at the gas's speed."""
+    return math.sqrt(sum(c * c for c in settings.velocity)) / LOOSE_VOIDAGE
 
 
 def read(table, parser) -> DragSettings:

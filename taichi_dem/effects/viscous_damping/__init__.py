@@ -4,7 +4,7 @@ it is not physics of the granular flow, so it is off unless a scene has [viscous
 
 ``settings.py``: the [viscous_damping] keys and ``DampingSettings`` (plain Python);
 ``effect.py``: the ``ViscousDamping`` effect (a particle stage; Taichi), loaded on first use.
-This package is the worked example of docs/architecture.md: an effect is its package and its
-tests (tests/verification/test_viscous_damping.py); effects/catalog.py finds it.
+An effect is its package and its tests (tests/verification/test_viscous_damping.py);
+effects/catalog.py finds it.
 """
 from .settings import SECTION, DampingSettings  # noqa: F401

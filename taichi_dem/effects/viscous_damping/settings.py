@@ -23,10 +23,11 @@ MIN_STEPS_PER_TIME_CONSTANT = 5
 
 
 def step_problem(settings: DampingSettings, dt: float):
-    """Why the time step ``dt`` (s) cannot resolve the damping (a reason string), or None."""
+    """Why the time step ``dt`` (s) cannot resolve the damping: (its key, a reason), or
+    None."""
     least = MIN_STEPS_PER_TIME_CONSTANT * dt
     if settings.time_constant < least:
-        return (f"{settings.time_constant:g} s is shorter than {MIN_STEPS_PER_TIME_CONSTANT} "
+        return "time_constant", (f"{settings.time_constant:g} s is shorter than {MIN_STEPS_PER_TIME_CONSTANT} "
                 f"time steps (dt = {dt:.3g} s): the explicit damping would overshoot or "
                 f"diverge; use time_constant >= {least:.3g} s")
     return None
@@ -46,4 +47,5 @@ SECTION = register(Section("viscous_damping", "Background viscous damping for se
     Key("time_constant", "quantity", "the velocity falls by e in this time; at least 5 time "
         "steps (the explicit decay is resolved)", unit="time",
         default=REQUIRED, minimum=0.0, exclusive_minimum=True),
-), owner=__name__, reader=read, builds="taichi_dem.effects.viscous_damping.effect:build"))
+), owner=__name__, reader=read, builds="taichi_dem.effects.viscous_damping.effect:build",
+   step_problem=step_problem))

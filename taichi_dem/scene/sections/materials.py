@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from ..keys import REQUIRED, Key, Section, register
+from ..keys import REQUIRED, Key, Section, material_keys, material_section, register
 from ..keys import type_name as _type_name
 from ..model import CoarseGraining, Interaction, Material
 from .calibration import CALIBRATION, CalibrationSection
@@ -85,7 +85,9 @@ class MaterialSections(CalibrationSection):
         for name, m in t.items():
             key = f"materials.{name}"
             m = self.table(m, key, f"a table ([materials.{name}])")
-            kw = MATERIAL.read(m, self.source, key)
+            kw = material_section(MATERIAL).read(m, self.source, key)
+            # the keys effects add (Section.material_keys), with their defaults
+            kw["effect_values"] = {k.name: kw.pop(k.name, k.default) for k in material_keys()}
             if kw.get("real_youngs_modulus", math.inf) < kw["youngs_modulus"]:
                 raise self.err(f"{key}.real_youngs_modulus",
                                f"the real (unsoftened) modulus {kw['real_youngs_modulus']:g} Pa "
