@@ -42,7 +42,7 @@ def main() -> int:
             sim.run(a.settle)
             start = time.perf_counter() - t0
             t0 = time.perf_counter()
-            steps = int(round(a.seconds / sim.engine.dt))
+            steps = int(round(a.seconds / sim.engine.model.dt))
             sim.run(sim.time + a.seconds)
             rate = sim.particle_count * steps / (time.perf_counter() - t0) / 1e6
         print(f"run {k}: {rate:.3f} M particle-steps/s ({count} particles, {holdup:g} kg/m, "

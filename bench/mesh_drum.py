@@ -205,8 +205,8 @@ def kernel_costs(sims, rounds: int, calls: int = 30):
 
             def step():
                 e._pair_forces(n, 0.0)
-                for c in e.cell_effects:
-                    c.after_pairs(e, n, 0.0)
+                for c in e.model.cell_effects:
+                    c.after_pairs(e.context, n, 0.0)
                 e._gather(n, 0.0, 0, 0, e.time)
             step()
             ti.sync()

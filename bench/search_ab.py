@@ -37,11 +37,11 @@ def main(argv) -> int:
         if name == "cells":
             # the 27-cell stencil, as compiled for a periodic z (the chute's z faces are far
             # from every particle, so the wrap adds no candidate: checked by the bitwise test)
-            periodic = sim.engine.grid.periodic
-            sim.engine.grid.periodic = (periodic[0], periodic[1], 1)
+            periodic = sim.engine.model.grid.periodic
+            sim.engine.model.grid.periodic = (periodic[0], periodic[1], 1)
             bp._compile_search(bp.scratch_width)
             bp._compact = bp._make_compact(sim.engine.pairs)     # reads the new scratch
-            sim.engine.grid.periodic = periodic
+            sim.engine.model.grid.periodic = periodic
         search = bp._find_candidates
 
         def timed(*args, search=search, name=name):

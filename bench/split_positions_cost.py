@@ -44,7 +44,7 @@ def one(split: bool, seconds: float) -> float:
         sim.run(0.2)
         n = sim.particle_count
         t0 = time.perf_counter()
-        steps = int(round(seconds / sim.engine.dt))
+        steps = int(round(seconds / sim.engine.model.dt))
         sim.run(sim.time + seconds)
         return n * steps / (time.perf_counter() - t0) / 1e6
 

@@ -136,8 +136,8 @@ def pairs_within(sim, cutoff_extra: float) -> set:
     ids = s.particle_id.to_numpy()[:n]
     d = x[:, None, :] - x[None, :, :]
     for k in range(3):
-        if e.grid.periodic[k]:
-            d[..., k] -= e.grid.span[k] * np.round(d[..., k] / e.grid.span[k])
+        if e.model.grid.periodic[k]:
+            d[..., k] -= e.model.grid.span[k] * np.round(d[..., k] / e.model.grid.span[k])
     close = np.linalg.norm(d, axis=2) < r[:, None] + r[None, :] + cutoff_extra
     i, j = np.nonzero(close & (ids[:, None] < ids[None, :]))
     return {(int(ids[a]), int(ids[b])) for a, b in zip(i, j)}

@@ -56,7 +56,7 @@ class MeshContacts:
         # what touches the bodies now, for the sensors and the checks (surface_survey.py)
         self.survey = SurfaceSurvey(self)
         bodies = kinematics.bodies
-        real = engine.real
+        real = engine.model.real
         s = engine.state
         tris, owner = triangle_arrays(bodies)
         self.n_triangles = len(tris)
@@ -67,7 +67,7 @@ class MeshContacts:
         self.triangle_owner = np.asarray(owner, np.int64)
         self.n_bodies = len(bodies)
         t = self.tree = engine.new_tree()
-        nt, nb, ncell = max(self.n_triangles, 1), max(self.n_bodies, 1), engine.grid.cell_capacity
+        nt, nb, ncell = max(self.n_triangles, 1), max(self.n_bodies, 1), engine.model.grid.cell_capacity
         self.tri_a = t.add("tri_a", real, nt, vector=True)
         self.tri_b = t.add("tri_b", real, nt, vector=True)
         self.tri_c = t.add("tri_c", real, nt, vector=True)
@@ -101,7 +101,7 @@ class MeshContacts:
         self.particle_load_force = t.add("particle_load_force", real, (s.capacity, nb), vector=True)
         self.particle_load_torque = t.add("particle_load_torque", real, (s.capacity, nb), vector=True)
         self.particle_load_heat = (t.add("particle_load_heat", real, (s.capacity, nb))
-                                   if engine.wall_conduction else None)
+                                   if engine.model.wall_conduction else None)
         self.mesh_start = t.add("mesh_start", ti.i32, s.capacity + 1)
         self.mesh_count = t.add("mesh_count", ti.i32, s.capacity)
         self.old_start_by_id = t.add("old_mesh_start_by_id", ti.i32, s.capacity)
@@ -119,14 +119,14 @@ class MeshContacts:
         mat = np.zeros(nb, np.int32)
         for k, b in enumerate(bodies):
             ap[k], ad[k], bv[k] = b.motion.axis_point, b.motion.axis_direction, b.motion.velocity
-            mat[k] = engine.tables.index(b.material)
+            mat[k] = engine.model.tables.index(b.material)
         self.axis_point.from_numpy(ap.astype(self._np_real()))
         self.axis_direction.from_numpy(ad.astype(self._np_real()))
         self.body_velocity.from_numpy(bv.astype(self._np_real()))
         self.body_material.from_numpy(mat)
         temps = np.full(nb, -1.0)
         for k, b in enumerate(bodies):
-            if engine.wall_conduction and b.temperature is not None:
+            if engine.model.wall_conduction and b.temperature is not None:
                 temps[k] = b.temperature
         self.body_temperature.from_numpy(temps.astype(self._np_real()))
         self.upload_schedules()
@@ -140,10 +140,10 @@ class MeshContacts:
         # mid-run compiles the step's kernels again (a quarter per slot grew at 0.11 s)
         self._alloc_entries(bucket(max(s.capacity, 1024)))
         # gas-gap conduction reaches a fluid lens beyond the contact (thermal/gas_gap.py)
-        self.lens = margin_fraction(engine.contact_effects, "surface")
-        self.expand = engine.max_radius * (1.0 + self.lens) + engine.skin
-        self.minimum_image = engine.grid.make_minimum_image()
-        self.triangle_image = make_triangle_image(engine.grid, self.expand)
+        self.lens = margin_fraction(engine.model.contact_effects, "surface")
+        self.expand = engine.model.max_radius * (1.0 + self.lens) + engine.model.skin
+        self.minimum_image = engine.model.grid.make_minimum_image()
+        self.triangle_image = make_triangle_image(engine.model.grid, self.expand)
         self.binned_time = 0.0
         self.interval_steps = 0
         # the ti.func bodies of the kernels (Broadphase.fused_rebuild runs them in one launch)
@@ -151,7 +151,7 @@ class MeshContacts:
         self._compile_static_kernels()
 
     def _np_real(self):
-        return np.float64 if self.e.real == ti.f64 else np.float32
+        return np.float64 if self.e.model.real == ti.f64 else np.float32
 
     def upload_schedules(self):
         times, speeds, angles, counts = self.kin.schedule_arrays()
@@ -185,7 +185,7 @@ class MeshContacts:
             saved = dict(zip(names, transfer.read([self.old_fields()[n] for n in names])))
             self.entries_tree.destroy()
         self.entries_capacity = capacity
-        real = self.e.real
+        real = self.e.model.real
         t = self.entries_tree = self.e.new_tree()
         self.mesh_tri = t.add("mesh_tri", ti.i32, capacity)
         self.mesh_contact = t.add("mesh_contact", ti.u8, capacity)
@@ -199,7 +199,7 @@ class MeshContacts:
         # for the previous list, under the names checkpoints know (mesh_history: the
         # tangential spring; mesh_rolling_history: EPSD's)
         self.history, self.old_history_by_name = {}, {}
-        for name, (vec, kind) in self.e.contact_fields.items():
+        for name, (vec, kind) in self.e.model.contact_fields.items():
             stored = MESH_HISTORY_NAMES.get(name, "mesh_" + name)
             self.history[name] = t.add(stored, real, capacity, vector=vec)
             self.old_history_by_name[name] = t.add("old_" + stored, real, capacity, vector=vec)
@@ -245,7 +245,7 @@ class MeshContacts:
             return rot, m.body_velocity[b] * time, speed * axis
 
         @ti.kernel
-        def update_frames(time: self.e.real):
+        def update_frames(time: self.e.model.real):
             ti.loop_config(serialize=True)
             for b in range(nb):
                 rot, off, omega = frame_of(b, time)
@@ -301,7 +301,7 @@ class MeshContacts:
 
     def _compile_binning(self):
         m = self
-        g = self.e.grid
+        g = self.e.model.grid
         lo_of, _, _, inv_cell_of, dims_of, n_cells_of = g.layout_funcs()
         cell_of_size = reader(g.values, "cell_size", tuple(g.cell_size))
         nt = self.n_triangles
@@ -444,7 +444,7 @@ class MeshContacts:
         scratch = self.scratch
         # (value, its previous list's field, its zero)
         carried = [(self.history[n], self.old_history_by_name[n],
-                    ti.Vector([0.0, 0.0, 0.0]) if self.e.contact_fields[n][0] else 0.0)
+                    ti.Vector([0.0, 0.0, 0.0]) if self.e.model.contact_fields[n][0] else 0.0)
                    for n in self.history]
 
         @ti.func
@@ -486,21 +486,21 @@ class MeshContacts:
         point nearest the centre (``surface_law``)."""
         m = self
         e = self.e
-        real = e.real
+        real = e.model.real
         # the history values the enabled effects keep (contacts/history.py), stored per mesh
         # contact under the names checkpoints know: mesh_history (the tangential spring),
         # mesh_rolling_history (EPSD's)
-        members = history_members(e.effect_list)
+        members = history_members(e.model.effect_list)
         _, _, History = contact_types(real, members)
         mesh_history = make_history_io(History, members,
                                        {k: m.history[k + "_history"] for k in members})
-        periodic = any(e.grid.periodic)
+        periodic = any(e.model.grid.periodic)
         heat_loads = self.particle_load_heat is not None
         same_surface_cos = SAME_SURFACE_COS
         # near-contact heat effects (the gas gap) see each body's nearest surface point within
         # the margin they ask for (one lens per body: the plane closed form stands for the
         # surface there)
-        near = has_effects(e.contact_effects, "surface")
+        near = has_effects(e.model.contact_effects, "surface")
         lens = self.lens
         nb = self.n_bodies
         vec0 = ti.Vector([0.0, 0.0, 0.0])
@@ -718,7 +718,7 @@ class MeshContacts:
 
     def needs_rebinning(self, time: float) -> bool:
         """True when some body has moved half the skin since its triangles were binned."""
-        half = 0.5 * self.e.skin
+        half = 0.5 * self.e.model.skin
         return any(self.kin.displacement(k, self.binned_time, time) > half
                    for k in range(self.n_bodies))
 

@@ -92,7 +92,7 @@ class SurfaceSurvey:
             nb = self.m.n_bodies
             if not hasattr(self, "deepest"):
                 tree = self.m.e.new_tree()
-                self.deepest = tree.add("deepest", self.m.e.real, max(nb, 1))
+                self.deepest = tree.add("deepest", self.m.e.model.real, max(nb, 1))
                 tree.finalize()
             deepest = self.deepest
 

@@ -36,30 +36,56 @@ from __future__ import annotations
 
 
 class EffectContext:
-    """What an effect sees of the simulation it runs in: the model (``real`` precision,
-    ``dt`` s, ``grid``, ``values`` (scene values read at run time: engine/values.py), the material-pair device ``table`` by name, ``material_names`` in
-    table order, ``species`` (kinds of particle), ``max_radius`` m) and the state
-    (``state``: the particle fields, its declared ones among them; ``broadphase`` and
-    ``mesh``: the neighbour cells and the mesh contacts, once built), the loop mode
-    (``serial``, ``serial_switch``) and ``effect(name)``, another enabled effect.
+    """What an effect sees of the simulation it runs in, from explicit objects: the ``model``
+    (engine/model.py: ``real`` precision, ``dt`` s, ``grid``, ``material_names`` in table
+    order, ``species`` (kinds of particle), ``max_radius`` m), the run-time scene ``values``
+    (engine/values.py), the material-pair device ``table`` by name, the particle ``state``
+    (its declared fields among them), the neighbour cells and mesh contacts once built
+    (``broadphase``, ``mesh``: ``attach``), the step's loop mode (``serial``,
+    ``serial_switch``, from ``step``) and ``effect(name)``, another enabled effect.
 
     Read-only, and nothing else: an effect keeps what it allocates on itself, reads its
     scene settings from its own constructor's arguments (effects/registry.py), and never the
     engine or the raw scene (tests/unit/test_effect_boundary.py)."""
 
-    VISIBLE = frozenset(("real", "dt", "grid", "values", "table", "material_names", "species",
-                         "max_radius", "state", "broadphase", "mesh", "serial",
-                         "serial_switch"))
-    __slots__ = ("_engine",)
+    __slots__ = ("_model", "_values", "_table", "_state", "_step", "_parts")
 
-    def __init__(self, engine):
-        object.__setattr__(self, "_engine", engine)
+    def __init__(self, model, values, table: dict, state, step):
+        """``step``: what runs the kernels (the Engine), asked only for its loop mode."""
+        for name, value in (("_model", model), ("_values", values), ("_table", table),
+                            ("_state", state), ("_step", step), ("_parts", {})):
+            object.__setattr__(self, name, value)
+
+    def attach(self, name: str, part) -> None:
+        """Make ``broadphase`` or ``mesh`` visible once the engine has built it."""
+        assert name in ("broadphase", "mesh"), name
+        self._parts[name] = part
+
+    real = property(lambda self: self._model.real, doc="ti.f32 or ti.f64")
+    dt = property(lambda self: self._model.dt, doc="the time step, s")
+    grid = property(lambda self: self._model.grid, doc="the neighbour search's cells")
+    material_names = property(lambda self: self._model.tables.names,
+                              doc="the materials in table order")
+    species = property(lambda self: self._model.species,
+                       doc="((material index, radius m), ...) or None")
+    max_radius = property(lambda self: self._model.max_radius, doc="the largest radius, m")
+    values = property(lambda self: self._values, doc="scene values read at run time")
+    table = property(lambda self: self._table, doc="material-pair device tables by name")
+    state = property(lambda self: self._state, doc="the particle state (engine/state.py)")
+    broadphase = property(lambda self: self._parts.get("broadphase"),
+                          doc="the neighbour cells and pair list, once built")
+    mesh = property(lambda self: self._parts.get("mesh"),
+                    doc="the mesh contacts, once built (None without bodies)")
+    serial = property(lambda self: self._step.serial,
+                      doc="whether the step's loops run on one thread now")
+
+    def serial_switch(self, kernel):
+        """``kernel`` launched in the step's loop mode (Engine.serial_switch)."""
+        return self._step.serial_switch(kernel)
 
     def __getattr__(self, name):
-        if name in EffectContext.VISIBLE:
-            return getattr(object.__getattribute__(self, "_engine"), name)
         raise AttributeError(f"an effect sees the model and the state, not {name!r} "
-                             f"(visible: {', '.join(sorted(EffectContext.VISIBLE))})")
+                             "(effects/base.py EffectContext)")
 
     def __setattr__(self, name, value):
         raise AttributeError(f"an effect cannot set {name!r} on the simulation: keep it on "
@@ -67,10 +93,7 @@ class EffectContext:
 
     def effect(self, name: str):
         """The enabled effect called ``name``, or None."""
-        for e in object.__getattribute__(self, "_engine").effect_list:
-            if e.name == name:
-                return e
-        return None
+        return self._model.effect(name)
 
 
 def particle_load(real):

@@ -82,7 +82,7 @@ class Broadphase:
 
     def __init__(self, engine):  # noqa: D107  (no postponed annotations here: Taichi reads them)
         self.e = engine
-        self.grid = engine.grid
+        self.grid = engine.model.grid
         t = self.tree = engine.new_tree()
         # (a bucket of cells: the count itself is read at run time, engine/values.py)
         self.cell_count = t.add("cell_count", ti.i32, self.grid.cell_capacity)
@@ -246,8 +246,8 @@ class Broadphase:
         cell_start = self.cell_start
         total = self.total
         # two fixed particles are listed only when a pair effect conducts heat between them
-        fixed_pairs = self.e.pair_heat
-        margin = self.e.pair_margin
+        fixed_pairs = self.e.model.pair_heat
+        margin = self.e.model.pair_margin
 
         minimum_image = g.make_minimum_image()
         cell_coordinates = g.make_cell_of()[0]
@@ -526,7 +526,7 @@ class Broadphase:
         SEARCHED, LISTED, DONE = self.SEARCHED, self.LISTED, self.DONE
 
         @ti.kernel
-        def fused_rebuild(n: ti.i32, time: e.real) -> ti.types.vector(2, ti.i32):
+        def fused_rebuild(n: ti.i32, time: e.model.real) -> ti.types.vector(2, ti.i32):
             """rebuild(n) at ``time`` (s, the bodies' pose) on one thread; returns (alive
             particles, the stage reached)."""
             save_rows(n, True)

@@ -14,10 +14,10 @@ def make_drift(e):
     and the kernel ``drift(n, dt, t_new)`` over the first n particles (its loop mode the
     engine's)."""
     s = e.state
-    g = e.grid
+    g = e.model.grid
     lo_of, hi_of, span_of = g.layout_funcs()[:3]
-    half_skin_sq_of = e.values.scalar("half_skin_squared", (0.5 * e.skin) ** 2)
-    real = e.real
+    half_skin_sq_of = e.values.scalar("half_skin_squared", (0.5 * e.model.skin) ** 2)
+    real = e.model.real
     flags = e.flags
 
     minimum_image = g.make_minimum_image()
@@ -25,11 +25,11 @@ def make_drift(e):
     has_process = e.process is not None
     after_drift = e.process.make_funcs(e) if has_process else None
     from ..process.outlets import PARKED
-    mobility = e.mobility is not None
-    active = e.mobility.particle_active if mobility else None
-    body_frame = e.mobility_frame >= 0
-    rigid_drift = e.mobility.make_rigid_drift(e.context) if body_frame else None
-    rigid_velocity = e.mobility.make_rigid_velocity(e.context) if body_frame else None
+    mobility = e.model.mobility is not None
+    active = e.model.mobility.particle_active if mobility else None
+    body_frame = e.model.mobility_frame >= 0
+    rigid_drift = e.model.mobility.make_rigid_drift(e.context) if body_frame else None
+    rigid_velocity = e.model.mobility.make_rigid_velocity(e.context) if body_frame else None
     # positions with residuals (engine/precision.py: f32 far from the origin)
     split = e.model.split_positions
     split_add = make_split_add(real) if split else None

@@ -210,10 +210,10 @@ def compile_run_worker_steps(step: StepFunctions, pool):
 
 
 def advance_per_stage(engine, steps: int, record_last: bool):
-    """``steps`` steps of ``engine.dt`` as one launch per stage and step; the rebuild on the
+    """``steps`` steps of ``engine.model.dt`` as one launch per stage and step; the rebuild on the
     host when the drift (or a body) asks for it."""
     e = engine
-    dt = e.dt
+    dt = e.model.dt
     for k in range(steps):
         n = e.count
         if k == 0:
@@ -231,10 +231,10 @@ def advance_per_stage(engine, steps: int, record_last: bool):
         record = 1 if (record_last and last) else 0
         if record:
             e.wall_force.fill(0.0)
-            if e.thermal:
+            if e.model.thermal:
                 e.wall_heat.fill(0.0)
         e._pair_forces(e.count, dt, 1 if rebuild else 0)
-        for effect in e.cell_effects:
+        for effect in e.model.cell_effects:
             effect.after_pairs(e.context, e.count, dt)    # the gas sees this step's particles
         # the state is left at a whole step (no pending drift) when advance returns
         e._gather(e.count, dt, record, 0 if last else 1, e.time + dt)
@@ -246,7 +246,7 @@ def advance_in_runs(engine, steps: int, record_last: bool, on_workers: bool = Fa
     current binning of the bodies' triangles serves, or at ``steps``."""
     e = engine
     pool = e.worker_pool
-    dt = e.dt
+    dt = e.model.dt
     k = 0
     while k < steps:
         n = e.count
@@ -267,7 +267,7 @@ def advance_in_runs(engine, steps: int, record_last: bool, on_workers: bool = Fa
         if on_workers:
             done, stalls = (int(v) for v in e._run_worker_steps(*args))
             pool.runs += 1
-            pool.count_stalls(stalls, done * (3 if e.cell_effects else 2)
+            pool.count_stalls(stalls, done * (3 if e.model.cell_effects else 2)
                               + (1 if pool.copies else 0))
         else:
             done = int(e._run_steps(*args))

@@ -111,10 +111,10 @@ class Insertion:
         s = e.state
         # what the effects give a particle in free flight (Effect.inserted_func: gravity, a
         # body force): its first half step's acceleration
-        Load = particle_load(e.real)
-        starts = tuple(f for f in (effect.inserted_func(e.context) for effect in e.effect_list)
+        Load = particle_load(e.model.real)
+        starts = tuple(f for f in (effect.inserted_func(e.context) for effect in e.model.effect_list)
                        if f is not None)
-        thermal = e.thermal
+        thermal = e.model.thermal
         process = s.process
         n_walls = s.n_walls
         wall_fields = [getattr(s, n) for n in s.wall_fields]
@@ -123,19 +123,19 @@ class Insertion:
         n_bodies = mesh.n_bodies if has_mesh else 0
         heat_loads = has_mesh and mesh.particle_load_heat is not None
         flags = e.flags
-        drying = e.moisture
+        drying = e.model.moisture
         compensated = s.compensated
-        real = e.real
+        real = e.model.real
         _, split_f64 = make_compensated_add(real)
-        mobility = e.mobility is not None
-        active = e.mobility.particle_active if mobility else None
+        mobility = e.model.mobility is not None
+        active = e.model.mobility.particle_active if mobility else None
         C = InsertColumn
         # what effects keep per particle beyond what is inserted (a coarse-grained particle's
         # wall-contact clock): zero, not what a removed particle left in the slot
         inserted = {"temperature", "temperature_residual", "inverse_thermal_mass", "moisture",
                     "moisture_residual"}
         fresh = {}
-        for effect in e.effect_list:
+        for effect in e.model.effect_list:
             fresh.update({n: v for n, (v, _) in effect.particle_fields.items() if n not in inserted})
         fresh_scalars = [getattr(s, n) for n, vec in fresh.items() if not vec]
         fresh_vectors = [getattr(s, n) for n, vec in fresh.items() if vec]

@@ -16,12 +16,12 @@ class Measure:
         self.e = e = engine
         s = e.state
         red = e.reduction
-        thermal = e.thermal
-        moisture = e.moisture
+        thermal = e.model.thermal
+        moisture = e.model.moisture
         compensated = s.compensated
         sums = e.thermal_sums if thermal else None
         # the thermal step: S dt with heat capacities divided by S ([thermal] time_scale)
-        dt_step = e.dt * (e.scene.thermal.time_scale if thermal else 1.0)
+        dt_step = e.model.dt * (e.model.scene.thermal.time_scale if thermal else 1.0)
 
         @ti.kernel
         def measure(n: ti.i32, serial_loops: ti.template()):
@@ -70,17 +70,17 @@ class Measure:
     def __call__(self, n: int) -> dict:
         e = self.e
         self._kernel(n)
-        r, h = transfer.read([e.reduction, e.thermal_sums]) if e.thermal else (
+        r, h = transfer.read([e.reduction, e.thermal_sums]) if e.model.thermal else (
             e.reduction.to_numpy(), None)
         out = {"kinetic_energy": float(r[Reduction.KINETIC_ENERGY]),
                "max_speed": float(r[Reduction.MAX_SPEED]),
                "non_finite": bool(r[Reduction.NON_FINITE] > 0)}
-        if e.thermal:
+        if e.model.thermal:
             energy, thermal_mass = h[ThermalSum.THERMAL_ENERGY], h[ThermalSum.THERMAL_MASS]
             out.update(thermal_energy=float(energy),
                        mean_temperature=float(energy / thermal_mass) if thermal_mass else math.nan,
                        thermal_step_ratio=float(r[Reduction.THERMAL_STEP_RATIO]))
-        if e.moisture:
+        if e.model.moisture:
             water, dry = h[ThermalSum.WATER_MASS], h[ThermalSum.DRY_MASS]
             out.update(mean_moisture=float(water / dry) if dry else math.nan,
                        evaporated_mass=float(e.evaporated[0]))

@@ -125,3 +125,20 @@ class Model:
     def pair_heat(self) -> bool:
         """A pair effect conducts heat (partner heat shares at the entries)."""
         return "partner_heat" in self.pair_fields
+
+    @property
+    def wall_conduction(self) -> bool:
+        """Heat is conducted to walls and bodies with a temperature (their heat series)."""
+        return "wall_conduction" in self.effect_names
+
+    @property
+    def mobility(self):
+        """[mobility]'s effect (effects/mobility/): inactive particles skip their mutual
+        contacts and their integration; or None."""
+        return self.effect("mobility")
+
+    @property
+    def mobility_frame(self) -> int:
+        """The body whose frame carries inactive particles ("body_frame" mobility), or -1."""
+        m = self.mobility
+        return m.frame if m is not None else -1

@@ -69,54 +69,29 @@ class Engine:
         self.serial = False
         self.choose_loop_mode(0)
 
-        # (the model's, under the names the step's kernels read)
-        self.scene, self.tables, self.real, self.species = scene, tables, real, model.species
-        self.skin, self.dt, self.max_radius = model.skin, model.dt, model.max_radius
-        self.grid, self.pair_margin, self.walls = model.grid, model.pair_margin, scene.walls
-        # the step is composed of these (effects/base.py): what they declare is allocated,
-        # what they do is unrolled into the kernels; nothing else is compiled
-        self.effect_list = model.effect_list
-        self.effects = model.effect_names
-        self.contact_effects = model.contact_effects
-        self.particle_effects = model.particle_effects
-        self.cell_effects = model.cell_effects
-        self.contact_fields, self.pair_fields = model.contact_fields, model.pair_fields
-        self.thermal, self.moisture, self.pair_heat = model.thermal, model.moisture, model.pair_heat
-        # what the effects see of this engine: the model and the state, read-only
-        self.context = EffectContext(self)
-        self.material_names = tables.names
         # several steps per launch in the serial mode (drivers.run_steps), unless some
         # effect's cell stage has no ti.func form
         self.runs = self.threads is not None and all(hasattr(e, "cell_func")
-                                                     for e in self.cell_effects)
-        self.temperature_effect = model.effect("temperature")
-        self.drying_effect = model.effect("drying")
-        self.wall_conduction = "wall_conduction" in self.effects
-        self.gas_gap = "gas_gap_wall" in self.effects
-        self.rolling_epsd = "rolling_epsd" in self.effects
-        # [mobility] (effects/mobility/): inactive particles skip mutual contacts and their
-        # integration; "body_frame" carries them with that body (its index, else -1)
-        self.mobility = model.effect("mobility")
-        self.mobility_frame = self.mobility.frame if self.mobility is not None else -1
+                                                     for e in self.model.cell_effects)
         # the serial mode's pair stage adds partner shares to the partner directly, with no
         # gather through the mirror index (one thread: no race); [mobility] keeps the entries
         # (its frozen pairs re-use their stored shares). The mirror is still built at every
         # rebuild: a checkpoint of a serial run restores into a parallel one (or a GPU)
-        self.scatter_ok = self.mobility is None
+        self.scatter_ok = model.mobility is None
         self.trees: list[FieldTree] = []
         # scene values the kernels read at run time (values.py): made first, so their place
         # is the same in every simulation; the grid's layout and the skin are read from them
         self.values = RuntimeValues(self.new_tree(), real)
-        self.grid.bind(self.values)
-        self.skin_of = self.values.scalar("skin", self.skin)
+        self.model.grid.bind(self.values)
+        self.skin_of = self.values.scalar("skin", self.model.skin)
         # runs of steps on every thread above parallel_from (persistent_workers; off again,
         # for good, if its barrier waits show the threads sharing the cores with other work)
         self.worker_pool = WorkerPool(persistent_workers(self.threads) if self.runs else 0,
-                                      capacity, real, self.thermal,
+                                      capacity, real, self.model.thermal,
                                       copies=self.scatter_ok and tuning.WORKER_COPIES)
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
         self.state = ParticleState(capacity, real, len(scene.walls), model.particle_fields,
-                                   self.contact_fields, thermal=self.thermal,
+                                   self.model.contact_fields, thermal=self.model.thermal,
                                    process=bool(scene.factories or scene.outlets))
         self.trees.append(self.state.tree)
         t = self.new_tree()
@@ -128,15 +103,17 @@ class Engine:
         self.flags = t.add("flags", ti.i32, Flag.SIZE)
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
         # the plane walls as fields, read in a loop (contacts/planes.py)
-        self.plane_walls = PlaneWalls(scene.walls, tables.index, "wall_conduction" in self.effects,
+        self.plane_walls = PlaneWalls(scene.walls, tables.index, model.wall_conduction,
                                       real, t)
         self.reduction = t.add("reduction", real, Reduction.SIZE)   # named slots: Reduction
-        if self.thermal:
+        if self.model.thermal:
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
             # f64 sums over the particles: sum m c T (J), sum m c (J/K), water (kg), dry solid
             # (kg); an f32 sum of m c T at 723 K would round the heat balance away
             self.thermal_sums = t.add("thermal_sums", ti.f64, ThermalSum.SIZE)
-        for e in self.effect_list:
+        # what the effects see: the model, the values, the tables and the state, read-only
+        self.context = EffectContext(model, self.values, self.table, self.state, self)
+        for e in self.model.effect_list:
             e.allocate(self.context, t)
         self.process = None
         if scene.factories or scene.outlets or has_planes:
@@ -156,7 +133,7 @@ class Engine:
                                                         else npf))
                         for name, values in model.table_values.items()]
                        + self.plane_walls.writes())
-        for e in self.effect_list:
+        for e in self.model.effect_list:
             if hasattr(e, "upload"):
                 e.upload(self.context)
         if self.gas_stream is not None:
@@ -164,14 +141,16 @@ class Engine:
         self.time = 0.0
         self.pairs: "PairState | None" = None
         self.broadphase = Broadphase(self)
+        self.context.attach("broadphase", self.broadphase)
         self.mesh = None
         if scene.bodies:
             from ..bodies.kinematics import BodyKinematics
             from ..bodies.mesh_contacts import MeshContacts
             self.kinematics = BodyKinematics(scene.bodies)
             self.mesh = MeshContacts(self, self.kinematics)
-        if self.mobility is not None:
-            self.mobility.compile(self.context)
+            self.context.attach("mesh", self.mesh)
+        if self.model.mobility is not None:
+            self.model.mobility.compile(self.context)
         self._compile_particle_kernels()
         self.count = 0                     # slots in use
         self._measure = None               # (measure.py, compiled on first use)
@@ -187,7 +166,7 @@ class Engine:
     @property
     def evaporated(self):
         """The drying effect's evaporated water, kg since the start (a 1-entry f64 field)."""
-        return self.drying_effect.evaporated
+        return self.model.effect("drying").evaporated
 
     @property
     def workers(self) -> int:
@@ -235,10 +214,10 @@ class Engine:
         """(Re)allocate the pair arrays with room for ``capacity`` entries, keeping the saved
         previous list (old_* arrays) so the history can still be carried."""
         old = self.pairs
-        new = PairState(capacity, self.real, self.contact_fields, self.pair_fields)
+        new = PairState(capacity, self.model.real, self.model.contact_fields, self.model.pair_fields)
         if old is not None:
             # the partner ids and every history value the enabled effects keep, by name
-            names = ["old_partner_id"] + ["old_" + name for name in self.contact_fields]
+            names = ["old_partner_id"] + ["old_" + name for name in self.model.contact_fields]
             saved = transfer.read([getattr(old, name) for name in names])
             transfer.write([(getattr(new, name), fit_rows(values, capacity))
                             for name, values in zip(names, saved)])
@@ -262,11 +241,11 @@ class Engine:
     def _compile_pair_kernels(self, p: PairState):
         s = self.state
         minimum_image = self.minimum_image
-        real = self.real
-        effects = self.effect_list
+        real = self.model.real
+        effects = self.model.effect_list
         # the contact geometry of each kind and the contact law composed from the enabled
         # effects (contacts/): the same law runs on pairs, planes and triangles
-        _, sphere_surface, sphere_sphere_gap, with_motion = make_geometry(real, self.thermal)
+        _, sphere_surface, sphere_sphere_gap, with_motion = make_geometry(real, self.model.thermal)
         # the history values the enabled effects keep, and one load/store/clear of them per
         # storage: the neighbour entries and the (particle, plane wall) slots
         members = history_members(effects)
@@ -276,15 +255,15 @@ class Engine:
         pair_law = make_contact_law(effects, "pair", real, self.context)
         plane_law = make_contact_law(effects, "plane", real, self.context)
         # a pair is handed to the law while its gap is below the margin an effect asks for
-        pair_margin = self.pair_margin
-        pair_heat = self.pair_heat
-        n_walls = len(self.walls)
+        pair_margin = self.model.pair_margin
+        pair_heat = self.model.pair_heat
+        n_walls = len(self.model.scene.walls)
         wall_history = (make_history_io(History, members,
                                         {m: getattr(s, "wall_" + m + "_history") for m in members})
                         if n_walls else None)
         wall_force = self.wall_force
         drift_particle = self.drift_particle
-        thermal = self.thermal
+        thermal = self.model.thermal
         wall_heat = self.wall_heat if thermal else None
         mesh_contacts = None
         if self.mesh is not None:
@@ -295,8 +274,9 @@ class Engine:
         # a plate between two spheres: no pair contact through it
         shields = self.mesh.make_shields() if has_mesh else None
         Load = particle_load(real)
-        particle_effects = tuple(e.particle_func(self.context) for e in self.particle_effects)
-        update_temperature = (self.temperature_effect.integrate_func(self.context, self.drying_effect)
+        particle_effects = tuple(e.particle_func(self.context) for e in self.model.particle_effects)
+        update_temperature = (self.model.effect("temperature").integrate_func(
+                                  self.context, self.model.effect("drying"))
                               if thermal else None)
         vec0 = ti.Vector([0.0, 0.0, 0.0])
 
@@ -310,15 +290,15 @@ class Engine:
         plane_contacts = (make_plane_contacts(s, self.plane_walls, sphere_surface, plane_law,
                                               wall_history, wall_force, wall_heat, thermal,
                                               temperature_of,
-                                              margin_fraction(self.contact_effects, "plane"))
+                                              margin_fraction(self.model.contact_effects, "plane"))
                           if n_walls else None)
 
-        mobility = self.mobility is not None
-        active = self.mobility.particle_active if mobility else None
+        mobility = self.model.mobility is not None
+        active = self.model.mobility.particle_active if mobility else None
         # [mobility] "body_frame": the frozen core is carried by the frame's body, so what holds
         # it there is a load on that body (booked in the gather); its inner contacts cancel in
         # that sum and are left out of both sides
-        core_internal = mobility and self.mobility_frame >= 0
+        core_internal = mobility and self.model.mobility_frame >= 0
         # one thread (the serial mode) adds each pair's partner share to the partner directly
         # (Engine.scatter_ok); [mobility]'s frozen and carried pairs read theirs at the entries
         scatter_ok = self.scatter_ok
@@ -372,7 +352,7 @@ class Engine:
         add_partner_share = share_adder(s.scattered_force, s.scattered_torque, copy_force,
                                         copy_torque)
         add_partner_heat = (share_adder(s.scattered_heat, s.scattered_conductance, copy_heat,
-                                        copy_conductance) if self.thermal else None)
+                                        copy_conductance) if self.model.thermal else None)
 
         @ti.func
         def pair_particle(i, dt, full, scatter: ti.template(), copy):
@@ -483,7 +463,7 @@ class Engine:
                 pair_particle(i, dt, full, ti.static(serial_loops and scatter_ok), 0)
 
         # [mobility] "body_frame": what the frame's body supplies to carry an inactive particle
-        book_carried_load = self.mobility.make_carried_load(self.context) if core_internal else None
+        book_carried_load = self.model.mobility.make_carried_load(self.context) if core_internal else None
 
         @ti.func
         def gather_particle(i, dt, record, then_drift, t_next, scatter: ti.template()):
@@ -618,7 +598,7 @@ class Engine:
         self._gather = self.serial_switch(gather)
 
         # runs of steps (serial mode): the cell stage of each effect as a ti.func
-        cell_funcs = tuple(e.cell_func(self.context) for e in self.cell_effects) if self.runs else ()
+        cell_funcs = tuple(e.cell_func(self.context) for e in self.model.cell_effects) if self.runs else ()
         set_frames = self.mesh.set_frames if has_mesh else None
         flags = self.flags
         n_wall_slots = max(n_walls, 1)
@@ -661,14 +641,14 @@ class Engine:
         self.choose_loop_mode(n)
         self.flags[Flag.REBUILD] = 0          # (set by the insertion of the initial fill)
         self.count = self.broadphase.rebuild(n)
-        if self.mobility is not None:
-            self.mobility.update(self.context, self.count, self.time)
+        if self.model.mobility is not None:
+            self.model.mobility.update(self.context, self.count, self.time)
         if self.serial and self.runs:
             # one step of no length in the kernel the runs use (nothing else to compile)
             self._run_steps(self.count, 0.0, self.time, 0.0, 1, 1, 0, 0)
             return self.count
         self._pair_forces(self.count, 0.0, 1)
-        for e in self.cell_effects:
+        for e in self.model.cell_effects:
             e.after_pairs(self.context, self.count, 0.0)
         self._gather(self.count, 0.0, 0, 0, self.time)
         return self.count
@@ -688,11 +668,11 @@ class Engine:
         self.choose_loop_mode(n)
         self.count = self.broadphase.rebuild(n)
         self.flags[Flag.DEAD_IN_SLOTS] = 0
-        if self.mobility is not None:
-            self.mobility.update(self.context, self.count, self.time)
+        if self.model.mobility is not None:
+            self.model.mobility.update(self.context, self.count, self.time)
 
     def advance(self, steps: int, record_last: bool = False):
-        """Advance ``steps`` time steps of ``self.dt``: in runs of steps per launch in the
+        """Advance ``steps`` time steps of ``self.model.dt``: in runs of steps per launch in the
         serial mode (``runs``), else two parallel launches per step."""
         if self.serial and self.runs:
             drivers.advance_in_runs(self, steps, record_last)

@@ -30,11 +30,11 @@ class ProcessDevice:
     counters of its mass-flow planes (``planes``, sensors/mass_flow.py)."""
 
     def __init__(self, engine, tree):
-        scene = engine.scene
+        scene = engine.model.scene
         s = engine.state
         self.outlets = scene.outlets
         self.log_enabled = bool(scene.factories or scene.outlets)
-        self.thermal = engine.thermal
+        self.thermal = engine.model.thermal
         cap = s.capacity
         self.log_capacity = 0
         self.log_temperature = None
@@ -52,7 +52,7 @@ class ProcessDevice:
             self.log_temperature = tree.add("log_temperature", ti.f64, cap) if self.thermal else None
             # m c of what leaves (J/K): the enthalpy it carries out, for the energy balance
             self.log_thermal_mass = tree.add("log_thermal_mass", ti.f64, cap) if self.thermal else None
-            self.log_moisture = tree.add("log_moisture", ti.f64, cap) if engine.moisture else None
+            self.log_moisture = tree.add("log_moisture", ti.f64, cap) if engine.model.moisture else None
         self.planes = PlaneCrossings(scene, tree)
         if self.log_enabled:
             self._compile_drain(engine)

@@ -74,9 +74,9 @@ class DivergenceGuard:
         self.expected_speed = float(sim.timestep.expected_speed)
         self.speed_limit = SPEED_FACTOR * self.expected_speed
         t = e.new_tree()
-        self.worst = t.add("divergence_worst_overlap", e.real, e.state.capacity)
+        self.worst = t.add("divergence_worst_overlap", e.model.real, e.state.capacity)
         self.index = t.add("divergence_index", ti.i32, 3)     # [non-finite, overlap, speed]
-        self.largest = t.add("divergence_largest", e.real, 2)  # [overlap ratio, speed m/s]
+        self.largest = t.add("divergence_largest", e.model.real, 2)  # [overlap ratio, speed m/s]
         t.finalize()
         self._key = None
         self.seconds = 0.0          # wall time spent checking (measured for BENCHMARKS.md)
@@ -87,7 +87,7 @@ class DivergenceGuard:
         s, p, mesh = e.state, e.pairs, e.mesh
         worst, index, largest = self.worst, self.index, self.largest
         minimum_image = e.minimum_image
-        walls = [(tuple(w.point), tuple(w.normal)) for w in e.walls]
+        walls = [(tuple(w.point), tuple(w.normal)) for w in e.model.scene.walls]
         n_walls = len(walls)
         has_mesh = mesh is not None
         body_scale = OVERLAP_LIMIT / BODY_OVERLAP_LIMIT

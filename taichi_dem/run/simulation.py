@@ -179,8 +179,8 @@ class Simulation:
                             species=_particle_species(scene, placed, self.tables.names),
                             effects=self._effects)
         self.engine = Engine(model, parallel_from=parallel_from)
-        small = self.engine.grid.too_small_periodic_axes(
-            (2.0 + self.engine.pair_margin) * float(np.max(radii)) + self.skin)
+        small = self.engine.model.grid.too_small_periodic_axes(
+            (2.0 + self.engine.model.pair_margin) * float(np.max(radii)) + self.skin)
         if small:     # (_fit_skin_to_periodic_axes makes this unreachable; kept as a guard)
             self.engine.destroy()
             raise SceneError(scene.source, "domain.periodic",
@@ -251,7 +251,7 @@ class Simulation:
         self.checkpointer = Checkpointer(self)
         self.checks += [self.divergence, self._check_state]
         # the stability checks the enabled effects contribute (effects/base.py: Effect.check)
-        for effect in self.engine.effect_list:
+        for effect in self.engine.model.effect_list:
             if type(effect).check is not Effect.check:
                 self.checks.append(functools.partial(effect.check, self))
         self.after_sample.append(self.checkpointer.after_sample)
@@ -291,7 +291,7 @@ class Simulation:
                                       for name in self.tables.names])[placed.material]
             arrays["temperature"] = placed.temperature
             thermal_mass = mass * heat_capacity
-            if self.engine.moisture:
+            if self.engine.model.moisture:
                 # X per particle from its fill (dry where the fill gives none); the water's heat
                 # capacity counts in the thermal mass m (c + X c_w)
                 x = np.concatenate([np.asarray(f.moistures, float)
@@ -579,9 +579,9 @@ class Simulation:
         n = self.engine.count
         names = ["alive", "serial" if s.process else "particle_id", "position", "velocity",
                  "angular_velocity", "radius", "mass", "inverse_mass", "material"]
-        if self.engine.thermal:
+        if self.engine.model.thermal:
             names += ["temperature"] + (["temperature_residual"] if s.compensated else [])
-        if self.engine.moisture:
+        if self.engine.model.moisture:
             names += ["moisture"] + (["moisture_residual"] if s.compensated else [])
         if self.engine.model.split_positions:
             names.append("position_residual")

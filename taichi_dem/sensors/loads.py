@@ -24,7 +24,7 @@ class BodyLoads:
         e = self.engine
         forces, torques, heats = e.mesh.take_loads(e.count)
         hot = [b.temperature is not None for b in self.scene.bodies]
-        areas = e.mesh.survey.covered_areas(e.count) if (e.wall_conduction and any(hot)) else None
+        areas = e.mesh.survey.covered_areas(e.count) if (e.model.wall_conduction and any(hot)) else None
         for k, body in enumerate(self.scene.bodies):
             axis = np.asarray(body.motion.axis_direction, float)
             speed = e.kinematics.speed(k, now.time)
@@ -36,7 +36,7 @@ class BodyLoads:
             values[prefix + "angular_speed"] = speed
             # the particles' torque resists the turning; the drive supplies -T w
             values[prefix + "power"] = -axial * speed
-            if e.wall_conduction and body.temperature is not None:
+            if e.model.wall_conduction and body.temperature is not None:
                 values[prefix + "heat_flow"] = heats[k]
                 values[prefix + "covered_area"] = float(areas[k])
                 difference = now.measured.get("mean_temperature", body.temperature) - body.temperature
@@ -56,8 +56,8 @@ class WallLoads:
     def sample(self, values: dict, now) -> None:
         e = self.engine
         wf = e.wall_force.to_numpy()
-        wq = e.wall_heat.to_numpy() if e.thermal else None
+        wq = e.wall_heat.to_numpy() if e.model.thermal else None
         for k, w in enumerate(self.walls):
             values[f"walls/{w.name}/force"] = wf[k].astype(np.float64)
-            if wq is not None and e.wall_conduction and w.temperature is not None:
+            if wq is not None and e.model.wall_conduction and w.temperature is not None:
                 values[f"walls/{w.name}/heat_flow"] = float(wq[k])

@@ -24,9 +24,9 @@ class ParticleSeries:
     def sample(self, values: dict, now) -> None:
         e, m = self.engine, now.measured
         thermal = {}
-        if e.thermal:
+        if e.model.thermal:
             thermal["particles/mean_temperature"] = m["mean_temperature"]
-            if e.moisture:
+            if e.model.moisture:
                 thermal["particles/mean_moisture"] = m["mean_moisture"]
                 thermal["particles/evaporated_mass"] = m["evaporated_mass"]
             if e.gas_stream is not None:
@@ -35,7 +35,7 @@ class ParticleSeries:
         values["particles/kinetic_energy"] = m["kinetic_energy"]
         values["particles/lost"] = e.lost
         values.update(thermal)
-        for effect in e.effect_list:
+        for effect in e.model.effect_list:
             # an effect's own series (declared with its keys: SERIES in its settings module)
             if hasattr(effect, "sample"):
                 effect.sample(values, e.count, m)

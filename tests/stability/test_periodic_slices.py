@@ -229,7 +229,7 @@ region = {{ box = {{ min = [-0.028, 0.0, 0.004], max = [0.028, {depth!r}, 0.11] 
 """
     with td.Simulation.from_text(_slab_scene(depth, body), base_dir=str(tmp_path), arch="cpu",
                                  precision="f64") as sim:
-        assert sim.engine.grid.dims[1] == 2        # a two-cell axis: the case being tested
+        assert sim.engine.model.grid.dims[1] == 2        # a two-cell axis: the case being tested
         sim.run()
         sim.engine.rebuild(sim.engine.count)      # the lists as of now, to compare exactly
         listed, _ = listed_pairs(sim)

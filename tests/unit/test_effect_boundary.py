@@ -73,17 +73,30 @@ def test_the_check_catches_each_kind_of_violation(tmp_path):
         assert what in found, what
 
 
-class _FakeEngine:
-    real, dt, grid, state = "f64", 1e-5, "grid", "state"
+class _FakeModel:
+    real, dt, grid = "f64", 1e-5, "grid"
     scene = "the raw scene"
     effect_list = ()
 
+    def effect(self, name):
+        return None
+
+
+class _FakeStep:
+    serial = True
+    scene = "the raw scene"
+
 
 def test_the_context_shows_only_the_model_and_the_state():
-    ctx = EffectContext(_FakeEngine())
-    assert ctx.dt == 1e-5 and ctx.state == "state"
+    ctx = EffectContext(_FakeModel(), "values", {"friction": "table"}, "state", _FakeStep())
+    assert ctx.dt == 1e-5 and ctx.state == "state" and ctx.serial is True
+    assert ctx.table["friction"] == "table" and ctx.broadphase is None
     with pytest.raises(AttributeError, match="not 'scene'"):
-        ctx.scene
+        ctx.scene                    # (the model and the step have one: not shown)
+    with pytest.raises(AttributeError, match="not 'effect_list'"):
+        ctx.effect_list
     with pytest.raises(AttributeError, match="cannot set"):
         ctx.gas_stream = object()
+    ctx.attach("broadphase", "cells")
+    assert ctx.broadphase == "cells"
     assert ctx.effect("drag") is None

@@ -33,7 +33,7 @@ def test_disabled_effects_allocate_nothing(small_scene_text):
                                                   "rolling_friction = 0.05\nmodel = \"epsd\"")
     with td.Simulation.from_text(text) as sim:
         assert sim.engine.pairs.rolling_history is not None
-        assert "rolling_epsd" in sim.engine.effects
+        assert "rolling_epsd" in sim.engine.model.effect_names
 
 
 def test_two_simulations_in_one_process_do_not_interfere(small_scene_text):

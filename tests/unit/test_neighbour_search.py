@@ -42,7 +42,7 @@ interval = 0.005
 @pytest.mark.parametrize("periodic", [[], ["x", "y"], ["z"], ["x", "y", "z"]])
 def test_search_lists_every_pair_within_the_cutoff_once(periodic):
     with td.Simulation.from_text(_box_scene(periodic), arch="cpu", precision="f64") as sim:
-        assert min(sim.engine.grid.dims) >= 3            # no thin axis: the plain stencil
+        assert min(sim.engine.model.grid.dims) >= 3            # no thin axis: the plain stencil
         own, partner = listed_pairs(sim)
         brute = pairs_within(sim, sim.skin)
     assert len(brute) > 300                               # a dense enough box to mean something

@@ -40,7 +40,7 @@ def test_a_free_sphere_moves_as_f_a_t2_over_2_and_the_series_is_m_f_a(tmp_path):
     h5 = tmp_path / "out.h5"
     with taichi_dem.Simulation.from_text(_scene(tmp_path), base_dir=str(tmp_path),
                                          h5=str(h5)) as sim:
-        assert "body_force" in sim.engine.effects
+        assert "body_force" in sim.engine.model.effect_names
         sim.run(0.05)
         t = sim.time
         p = sim.particles()

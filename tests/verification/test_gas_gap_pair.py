@@ -146,11 +146,11 @@ def test_without_gas_gap_a_near_pair_exchanges_nothing(tmp_path):
     # nothing of it is allocated or listed: no margin on the pair reach, no model table
     text = _scene(tmp_path, (R, R), 2.0002 * R, gas=False)
     with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
-        assert sim.engine.pair_margin == 0.0
+        assert sim.engine.model.pair_margin == 0.0
         assert "gas_over_solid" not in sim.engine.table
     text = _scene(tmp_path, (R, R), 2.0002 * R, model="solid_resistance")
     with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
-        assert sim.engine.pair_margin == pytest.approx(LENS)
+        assert sim.engine.model.pair_margin == pytest.approx(LENS)
         assert "gas_over_solid" in sim.engine.table
 
 

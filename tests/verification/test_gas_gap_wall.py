@@ -131,8 +131,8 @@ def test_without_gas_gap_nothing_is_compiled(tmp_path):
     text = _scene(tmp_path, [(0.01, 0.02, 1.05 * R)], PLATE, gas=False, fixed=False)
     with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
         assert "gas_gap_wall" not in {e.name for e in sim.effects}
-        assert sim.engine.gas_gap is False
-        assert sim.engine.mesh.expand == pytest.approx(sim.engine.max_radius + sim.skin)
+        assert "gas_gap_wall" not in sim.engine.model.effect_names
+        assert sim.engine.mesh.expand == pytest.approx(sim.engine.model.max_radius + sim.skin)
         sim.run()
         q = sim.series["bodies/plate/heat_flow"][1:]
     assert np.all(q == 0.0)          # not touching: no spot, and no gas gap

@@ -33,7 +33,7 @@ def _scene(tmp_path, damping=f"[viscous_damping]\ntime_constant = \"{TAU * 1e3:g
 
 def test_a_free_sphere_slows_exponentially(tmp_path):
     with taichi_dem.Simulation.from_text(_scene(tmp_path), base_dir=str(tmp_path)) as sim:
-        assert "viscous_damping" in sim.engine.effects
+        assert "viscous_damping" in sim.engine.model.effect_names
         steps = int(round(2 * TAU / DT))
         sim.step(steps)
         t = steps * DT
