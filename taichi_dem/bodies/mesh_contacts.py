@@ -16,9 +16,7 @@ touched at its edge or vertex). A concave corner (a flight meeting the shell) ke
 faces. When a contact moves on to a neighbouring triangle, it takes the history (every
 value, contacts/history.py) of the contact it replaces.
 
-Why this module is over 800 lines: the triangle binning, the candidate rows carried across
-rebuilds and the per-particle contact detection share the mesh's device arrays; they move
-apart with the model/state/stepper split (issue 30 item 2).
+The bodies' triangles, frames and loads are frames.py's.
 """
 
 import math
@@ -38,7 +36,8 @@ from ..setup.memory import bucket
 from ..engine.values import reader
 from .triangle_images import make_triangle_image
 from ..engine.state import fit_rows, grown_capacity
-from .kinematics import MAX_SCHEDULE, BodyKinematics, triangle_arrays
+from .frames import BodyFrames, BodyLoads, BodyTriangles
+from .kinematics import BodyKinematics
 
 SAME_SURFACE_COS = math.cos(math.radians(30.0))
 # the stored names of the history values per mesh contact (checkpoints know them)
@@ -48,88 +47,44 @@ MESH_HISTORY_NAMES = {"tangential_history": "mesh_history",
 
 @ti.data_oriented
 class MeshContacts:
-    """Device state and kernels of the particle-triangle contacts of one simulation."""
+    """Device state and kernels of the particle-triangle contacts of one simulation.
+
+    The bodies' triangles, frames and loads are its parts (frames.py). Why it still holds
+    46 attributes, over the 40 of docs/architecture.md: the triangle bins (their counts,
+    starts, fill and items, and the items' capacity), the candidate rows per particle (start,
+    count and the previous rebuild's by particle id), the candidate entries with their
+    history and the previous list's (the carried history is matched by triangle id), and the
+    scratch of the candidate search are grown and reallocated together by one rebuild
+    (``rebuild_rows``; checkpoints restore their sizes: run/checkpoint.py) and read together
+    by the fused rebuild (engine/broadphase.py)."""
 
     def __init__(self, engine, kinematics: BodyKinematics):
         self.e = engine
-        self.kin = kinematics
         # what touches the bodies now, for the sensors and the checks (surface_survey.py)
         self.survey = SurfaceSurvey(self)
         bodies = kinematics.bodies
         real = engine.model.real
         s = engine.state
-        tris, owner = triangle_arrays(bodies)
-        self.n_triangles = len(tris)
-        # host copies for the covered area (rigid bodies: areas do not change), m^2
-        self.triangle_area = (0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0],
-                                                            tris[:, 2] - tris[:, 0]), axis=1)
-                              if len(tris) else np.zeros(0))
-        self.triangle_owner = np.asarray(owner, np.int64)
-        self.n_bodies = len(bodies)
         t = self.tree = engine.new_tree()
-        nt, nb, ncell = max(self.n_triangles, 1), max(self.n_bodies, 1), engine.model.grid.cell_capacity
-        self.tri_a = t.add("tri_a", real, nt, vector=True)
-        self.tri_b = t.add("tri_b", real, nt, vector=True)
-        self.tri_c = t.add("tri_c", real, nt, vector=True)
-        self.tri_body = t.add("tri_body", ti.i32, nt)
-        self.tri_normal = t.add("tri_normal", real, nt, vector=True)     # unit, reference frame
-        self.sched_time = t.add("sched_time", real, (nb, MAX_SCHEDULE))
-        self.sched_speed = t.add("sched_speed", real, (nb, MAX_SCHEDULE))
-        self.sched_angle = t.add("sched_angle", real, (nb, MAX_SCHEDULE))
-        self.sched_count = t.add("sched_count", ti.i32, nb)
-        self.axis_point = t.add("axis_point", real, nb, vector=True)
-        self.axis_direction = t.add("axis_direction", real, nb, vector=True)
-        self.body_velocity = t.add("body_velocity", real, nb, vector=True)
-        self.body_material = t.add("body_material", ti.i32, nb)
-        # K of an isothermal body (water-cooled shell); negative = adiabatic or no conduction
-        self.body_temperature = t.add("body_temperature", real, nb)
-        self.heat_sum = t.add("heat_sum", real, nb)
-        # the frame of each body now: x_world = R (x_ref - axis_point) + axis_point + offset
-        self.rotation = ti.Matrix.field(3, 3, real)
-        t._builder.dense(ti.i, nb).place(self.rotation)
-        self.offset = t.add("offset", real, nb, vector=True)
-        self.angular_velocity = t.add("angular_velocity", real, nb, vector=True)
-        # loads summed from the contacts over the current output interval
-        self.force_sum = t.add("force_sum", real, nb, vector=True)
-        self.torque_sum = t.add("torque_sum", real, nb, vector=True)
+        ncell = engine.model.grid.cell_capacity
+        self.triangles = BodyTriangles(t, bodies, real)
+        self.n_triangles = self.triangles.count
+        self.n_bodies = len(bodies)
+        # each body's frame now (x_world = R (x_ref - axis_point) + axis_point + offset) and
+        # the loads its contacts sum (frames.py)
+        self.frames = BodyFrames(t, kinematics, real, engine.model.tables.index,
+                                 engine.model.wall_conduction)
         self.tri_cell_count = t.add("tri_cell_count", ti.i32, ncell)
         self.tri_cell_start = t.add("tri_cell_start", ti.i32, ncell + 1)
         self.tri_cell_fill = t.add("tri_cell_fill", ti.i32, ncell)
-        # each particle's share of the body loads, summed over steps without atomics (two
-        # threads adding into one body's total fight over a cache line: that cost 60 % of the
-        # mesh contact time) and flushed into the totals before particles are reordered
-        self.particle_load_force = t.add("particle_load_force", real, (s.capacity, nb), vector=True)
-        self.particle_load_torque = t.add("particle_load_torque", real, (s.capacity, nb), vector=True)
-        self.particle_load_heat = (t.add("particle_load_heat", real, (s.capacity, nb))
-                                   if engine.model.wall_conduction else None)
+        self.loads = BodyLoads(t, real, self.n_bodies, s.capacity, engine.model.wall_conduction)
         self.mesh_start = t.add("mesh_start", ti.i32, s.capacity + 1)
         self.mesh_count = t.add("mesh_count", ti.i32, s.capacity)
         self.old_start_by_id = t.add("old_mesh_start_by_id", ti.i32, s.capacity)
         self.old_count_by_id = t.add("old_mesh_count_by_id", ti.i32, s.capacity)
         t.finalize()
-        if self.n_triangles:
-            self.tri_a.from_numpy(tris[:, 0].astype(self._np_real()))
-            self.tri_b.from_numpy(tris[:, 1].astype(self._np_real()))
-            self.tri_c.from_numpy(tris[:, 2].astype(self._np_real()))
-            self.tri_body.from_numpy(owner)
-            normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-            normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-            self.tri_normal.from_numpy(normal.astype(self._np_real()))
-        ap = np.zeros((nb, 3)); ad = np.zeros((nb, 3)); bv = np.zeros((nb, 3))
-        mat = np.zeros(nb, np.int32)
-        for k, b in enumerate(bodies):
-            ap[k], ad[k], bv[k] = b.motion.axis_point, b.motion.axis_direction, b.motion.velocity
-            mat[k] = engine.model.tables.index(b.material)
-        self.axis_point.from_numpy(ap.astype(self._np_real()))
-        self.axis_direction.from_numpy(ad.astype(self._np_real()))
-        self.body_velocity.from_numpy(bv.astype(self._np_real()))
-        self.body_material.from_numpy(mat)
-        temps = np.full(nb, -1.0)
-        for k, b in enumerate(bodies):
-            if engine.model.wall_conduction and b.temperature is not None:
-                temps[k] = b.temperature
-        self.body_temperature.from_numpy(temps.astype(self._np_real()))
-        self.upload_schedules()
+        self.triangles.upload()
+        self.frames.upload()
         self.items_tree = None
         self.entries_tree = None
         self.scratch_tree = None
@@ -154,11 +109,8 @@ class MeshContacts:
         return np.float64 if self.e.model.real == ti.f64 else np.float32
 
     def upload_schedules(self):
-        times, speeds, angles, counts = self.kin.schedule_arrays()
-        self.sched_time.from_numpy(times.astype(self._np_real()))
-        self.sched_speed.from_numpy(speeds.astype(self._np_real()))
-        self.sched_angle.from_numpy(angles.astype(self._np_real()))
-        self.sched_count.from_numpy(counts)
+        """The bodies' speed schedules again (frames.py)."""
+        self.frames.upload_schedules()
 
     # --------------------------------------------------------------- allocation
     def _alloc_items(self, capacity):
@@ -203,10 +155,6 @@ class MeshContacts:
             stored = MESH_HISTORY_NAMES.get(name, "mesh_" + name)
             self.history[name] = t.add(stored, real, capacity, vector=vec)
             self.old_history_by_name[name] = t.add("old_" + stored, real, capacity, vector=vec)
-        self.mesh_history = self.history.get("tangential_history")
-        self.old_history = self.old_history_by_name.get("tangential_history")
-        self.rolling_history = self.history.get("rolling_history")
-        self.old_rolling_history = self.old_history_by_name.get("rolling_history")
         t.finalize()
         if saved is not None:
             fields = self.old_fields()
@@ -224,65 +172,13 @@ class MeshContacts:
 
     # --------------------------------------------------------------- kernels
     def _compile_static_kernels(self):
-        m = self
-        nb = self.n_bodies
-
-        @ti.func
-        def frame_of(b, time):
-            """Rotation matrix, offset and angular velocity of body b at ``time``."""
-            count = m.sched_count[b]
-            row = 0
-            for k in range(count):
-                if time >= m.sched_time[b, k]:
-                    row = k
-            speed = m.sched_speed[b, row]
-            angle = m.sched_angle[b, row] + speed * (time - m.sched_time[b, row])
-            axis = m.axis_direction[b]
-            c, s_ = ti.cos(angle), ti.sin(angle)
-            k_ = ti.Matrix([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
-                            [-axis[1], axis[0], 0.0]])
-            rot = ti.Matrix.identity(float, 3) + s_ * k_ + (1.0 - c) * (k_ @ k_)
-            return rot, m.body_velocity[b] * time, speed * axis
-
-        @ti.kernel
-        def update_frames(time: self.e.model.real):
-            ti.loop_config(serialize=True)
-            for b in range(nb):
-                rot, off, omega = frame_of(b, time)
-                m.rotation[b] = rot
-                m.offset[b] = off
-                m.angular_velocity[b] = omega
-
-        @ti.func
-        def set_frames(time):
-            """update_frames inside a loop that is already serial (drivers.run_steps)."""
-            for b in range(nb):
-                rot, off, omega = frame_of(b, time)
-                m.rotation[b] = rot
-                m.offset[b] = off
-                m.angular_velocity[b] = omega
-
-        self.set_frames = set_frames
-        heat_loads = self.particle_load_heat is not None
-
-        @ti.func
-        def flush_loads_body(n, serial_loops: ti.template()):
-            ti.loop_config(serialize=serial_loops)
-            for i in range(n):
-                for b in ti.static(range(nb)):
-                    m.force_sum[b] += m.particle_load_force[i, b]
-                    m.torque_sum[b] += m.particle_load_torque[i, b]
-                    m.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
-                    m.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
-                    if ti.static(heat_loads):
-                        m.heat_sum[b] += m.particle_load_heat[i, b]
-                        m.particle_load_heat[i, b] = 0.0
+        self.frames.compile()
+        flush_loads_body = self.loads.make_flush()
 
         @ti.kernel
         def flush_loads(n: ti.i32, serial_loops: ti.template()):
             flush_loads_body(n, serial_loops)
 
-        self._update_frames = update_frames     # (a few bodies: always serial)
         self._flush_loads = self.e.serial_switch(flush_loads)
         self.bodies["flush_loads"] = flush_loads_body
         self._compile_binning()
@@ -292,12 +188,12 @@ class MeshContacts:
 
     @ti.func
     def world_triangle(self, t):
-        b = self.tri_body[t]
-        rot = self.rotation[b]
-        p = self.axis_point[b]
-        shift = p + self.offset[b]
-        return (rot @ (self.tri_a[t] - p) + shift, rot @ (self.tri_b[t] - p) + shift,
-                rot @ (self.tri_c[t] - p) + shift)
+        b = self.triangles.tri_body[t]
+        rot = self.frames.rotation[b]
+        p = self.frames.axis_point[b]
+        shift = p + self.frames.offset[b]
+        return (rot @ (self.triangles.tri_a[t] - p) + shift, rot @ (self.triangles.tri_b[t] - p) + shift,
+                rot @ (self.triangles.tri_c[t] - p) + shift)
 
     def _compile_binning(self):
         m = self
@@ -476,6 +372,37 @@ class MeshContacts:
         self.e.broadphase.drop_fused_rebuild()
 
     # --------------------------------------------------------------- contact law
+    def make_select_contacts(self):
+        """ti.func (start, end, radius): among the candidate entries start .. end - 1 that
+        touch (status 0), accept the deepest (status 1) and drop (status 2) the others of
+        the same body that lie on the same flat or convex surface (normals within
+        SAME_SURFACE_COS, or not in front of it): one contact per surface, however it is
+        cut into triangles."""
+        m = self
+        same_surface_cos = SAME_SURFACE_COS
+
+        @ti.func
+        def select_contacts(start, end, ri):
+            for _ in range(end - start):
+                best = -1
+                best_overlap = 0.0
+                for k in range(start, end):
+                    if m.mesh_status[k] == 0 and m.mesh_overlap[k] > best_overlap:
+                        best = k
+                        best_overlap = m.mesh_overlap[k]
+                if best < 0:
+                    break
+                m.mesh_status[best] = ti.u8(1)
+                body = m.triangles.tri_body[m.mesh_tri[best]]
+                n_best = m.mesh_normal[best]
+                for k in range(start, end):
+                    if m.mesh_status[k] == 0 and m.triangles.tri_body[m.mesh_tri[k]] == body:
+                        in_front = (m.mesh_point[k] - m.mesh_point[best]).dot(n_best)
+                        if m.mesh_normal[k].dot(n_best) > same_surface_cos or in_front <= 1e-3 * ri:
+                            m.mesh_status[k] = ti.u8(2)
+
+        return select_contacts
+
     def make_particle_contacts(self, triangle_law, surface_law, sphere_surface):
         """ti.func (i, position, velocity, angular velocity, radius, mass, inverse mass,
         inverse inertia, acceleration, material, temperature, dt) -> (force N, torque N m,
@@ -495,8 +422,7 @@ class MeshContacts:
         mesh_history = make_history_io(History, members,
                                        {k: m.history[k + "_history"] for k in members})
         periodic = any(e.model.grid.periodic)
-        heat_loads = self.particle_load_heat is not None
-        same_surface_cos = SAME_SURFACE_COS
+        heat_loads = self.loads.particle_load_heat is not None
         # near-contact heat effects (the gas gap) see each body's nearest surface point within
         # the margin they ask for (one lens per body: the plane closed form stands for the
         # surface there)
@@ -505,6 +431,7 @@ class MeshContacts:
         nb = self.n_bodies
         vec0 = ti.Vector([0.0, 0.0, 0.0])
         split = e.model.split_positions
+        select_contacts = self.make_select_contacts()
 
         @ti.func
         def particle_contacts(i, xi, vi, wi, ri, mass_i, inv_mi, inverse_inertia_i, ai, mi,
@@ -523,9 +450,9 @@ class MeshContacts:
             # is moved into that frame (one rotation) instead of the triangle out of it (three)
             for k in range(start, end):
                 t = m.mesh_tri[k]
-                body = m.tri_body[t]
-                rot = m.rotation[body]
-                pivot = m.axis_point[body]
+                body = m.triangles.tri_body[t]
+                rot = m.frames.rotation[body]
+                pivot = m.frames.axis_point[body]
                 x_world = xi
                 if ti.static(periodic):
                     # the particle's image nearest the whole triangle: a triangle longer than
@@ -536,15 +463,15 @@ class MeshContacts:
                 # the particle and the triangle relative to the body's pivot: with split
                 # positions (f32 far from the origin, engine/precision.py) the differences of
                 # near coordinates are exact and the residual is added to them
-                x_ref = rot.transpose() @ (x_world - pivot - m.offset[body])
+                x_ref = rot.transpose() @ (x_world - pivot - m.frames.offset[body])
                 if ti.static(split):
                     x_ref += rot.transpose() @ residual_i
-                tri_a = m.tri_a[t] - pivot
+                tri_a = m.triangles.tri_a[t] - pivot
                 # a triangle whose plane is farther than r (and the lens) cannot touch (most
                 # candidates)
-                if ti.abs((x_ref - tri_a).dot(m.tri_normal[t])) < ri * ti.static(1.0 + lens):
-                    q, region = closest_point_on_triangle(x_ref, tri_a, m.tri_b[t] - pivot,
-                                                          m.tri_c[t] - pivot)
+                if ti.abs((x_ref - tri_a).dot(m.triangles.tri_normal[t])) < ri * ti.static(1.0 + lens):
+                    q, region = closest_point_on_triangle(x_ref, tri_a, m.triangles.tri_b[t] - pivot,
+                                                          m.triangles.tri_c[t] - pivot)
                     d = x_ref - q
                     dist_sq = d.dot(d)
                     if ti.static(near):
@@ -556,36 +483,20 @@ class MeshContacts:
                         dist = ti.sqrt(dist_sq)
                         m.mesh_overlap[k] = ri - dist
                         m.mesh_normal[k] = rot @ (d / dist)
-                        m.mesh_point[k] = rot @ q + pivot + m.offset[body]
+                        m.mesh_point[k] = rot @ q + pivot + m.frames.offset[body]
                         m.mesh_status[k] = ti.u8(0)
             # deepest first; drop neighbours of the same flat or convex surface
-            for _ in range(end - start):
-                best = -1
-                best_overlap = 0.0
-                for k in range(start, end):
-                    if m.mesh_status[k] == 0 and m.mesh_overlap[k] > best_overlap:
-                        best = k
-                        best_overlap = m.mesh_overlap[k]
-                if best < 0:
-                    break
-                m.mesh_status[best] = ti.u8(1)
-                body = m.tri_body[m.mesh_tri[best]]
-                n_best = m.mesh_normal[best]
-                for k in range(start, end):
-                    if m.mesh_status[k] == 0 and m.tri_body[m.mesh_tri[k]] == body:
-                        in_front = (m.mesh_point[k] - m.mesh_point[best]).dot(n_best)
-                        if m.mesh_normal[k].dot(n_best) > same_surface_cos or in_front <= 1e-3 * ri:
-                            m.mesh_status[k] = ti.u8(2)
+            select_contacts(start, end, ri)
             # the contact law on each accepted contact
             for k in range(start, end):
                 if m.mesh_status[k] == 1:
-                    body = m.tri_body[m.mesh_tri[k]]
+                    body = m.triangles.tri_body[m.mesh_tri[k]]
                     history = mesh_history.load(k)
                     if m.mesh_contact[k] == 0:
                         # a contact moving on to a neighbouring triangle keeps its history
                         for o in range(start, end):
                             if (o != k and m.mesh_contact[o] != 0 and m.mesh_status[o] != 1
-                                    and m.tri_body[m.mesh_tri[o]] == body):
+                                    and m.triangles.tri_body[m.mesh_tri[o]] == body):
                                 history = mesh_history.take(k, o)
                                 m.mesh_contact[o] = ti.u8(0)
                                 break
@@ -593,12 +504,12 @@ class MeshContacts:
                     overlap = m.mesh_overlap[k]
                     # the overlap centre, in the triangle's frame (periodic image of the particle)
                     contact_point = m.mesh_point[k] - 0.5 * overlap * normal
-                    lever_body = contact_point - (m.axis_point[body] + m.offset[body])
-                    wall_velocity = m.body_velocity[body] + m.angular_velocity[body].cross(lever_body)
-                    body_temperature = m.body_temperature[body]
+                    lever_body = contact_point - (m.frames.axis_point[body] + m.frames.offset[body])
+                    wall_velocity = m.frames.body_velocity[body] + m.frames.angular_velocity[body].cross(lever_body)
+                    body_temperature = m.frames.body_temperature[body]
                     c = sphere_surface(normal, overlap, ri, vi, wi, ai, mass_i, inv_mi,
-                                       inverse_inertia_i, mi, m.body_material[body],
-                                       wall_velocity, m.angular_velocity[body],
+                                       inverse_inertia_i, mi, m.frames.body_material[body],
+                                       wall_velocity, m.frames.angular_velocity[body],
                                        body_temperature - temperature_i,
                                        1 if body_temperature >= 0.0 else 0)
                     c.particle = i
@@ -606,13 +517,13 @@ class MeshContacts:
                     if ti.static(heat_loads):
                         heat += out.heat
                         conductance += out.conductance
-                        m.particle_load_heat[i, body] = m.particle_load_heat[i, body] - out.heat
+                        m.loads.particle_load_heat[i, body] = m.loads.particle_load_heat[i, body] - out.heat
                     force += out.force
                     torque += out.torque_i
-                    m.particle_load_force[i, body] = m.particle_load_force[i, body] - out.force
+                    m.loads.particle_load_force[i, body] = m.loads.particle_load_force[i, body] - out.force
                     # about the body's axis: the reaction at the contact point, plus the
                     # rolling resistance's reaction
-                    m.particle_load_torque[i, body] = (m.particle_load_torque[i, body]
+                    m.loads.particle_load_torque[i, body] = (m.loads.particle_load_torque[i, body]
                                                        - lever_body.cross(out.force) + out.torque_j)
                     mesh_history.store(k, history)
                     m.mesh_contact[k] = ti.u8(1)
@@ -622,16 +533,16 @@ class MeshContacts:
             if ti.static(near):
                 # near-contact heat: the law on each body's nearest surface point
                 for bb in ti.static(range(nb)):
-                    body_temperature = m.body_temperature[bb]
+                    body_temperature = m.frames.body_temperature[bb]
                     if body_temperature >= 0.0 and nearest[bb] < ri * ti.static(1.0 + lens):
                         c = sphere_surface(vec0, ri - nearest[bb], ri, vi, wi, ai, mass_i,
-                                           inv_mi, inverse_inertia_i, mi, m.body_material[bb],
+                                           inv_mi, inverse_inertia_i, mi, m.frames.body_material[bb],
                                            vec0, vec0, body_temperature - temperature_i, 1)
                         c.particle = i
                         out, _ = surface_law(c, mesh_history.empty(), dt)
                         heat += out.heat
                         conductance += out.conductance
-                        m.particle_load_heat[i, bb] = m.particle_load_heat[i, bb] - out.heat
+                        m.loads.particle_load_heat[i, bb] = m.loads.particle_load_heat[i, bb] - out.heat
             return force, torque, heat, conductance
 
         return particle_contacts
@@ -686,7 +597,7 @@ class MeshContacts:
 
     # --------------------------------------------------------------- driver
     def update_frames(self, time: float):
-        self._update_frames(time)
+        self.frames.update_frames(time)
 
     def save_rows(self, n: int):
         """Before particles are reordered: remember the rows, flush the particles' loads."""
@@ -695,7 +606,7 @@ class MeshContacts:
 
     def rebuild_rows(self, n: int, time: float):
         """Re-bin the triangles at ``time`` and find each particle's candidate triangles."""
-        self._update_frames(time)
+        self.frames.update_frames(time)
         items = int(self._count_bins())
         if items > self.items_capacity:
             self._alloc_items(bucket(int(items * LIST_GROWTH) + 16))
@@ -719,7 +630,7 @@ class MeshContacts:
     def needs_rebinning(self, time: float) -> bool:
         """True when some body has moved half the skin since its triangles were binned."""
         half = 0.5 * self.e.model.skin
-        return any(self.kin.displacement(k, self.binned_time, time) > half
+        return any(self.frames.kin.displacement(k, self.binned_time, time) > half
                    for k in range(self.n_bodies))
 
     def steps_before_rebinning(self, time: float, dt: float, most: int) -> int:
@@ -743,12 +654,6 @@ class MeshContacts:
         """Mean force (N) and torque about the axis point (N m) per body over the steps since
         the last call; resets the sums. ``n``: particles alive."""
         self._flush_loads(n)
-        steps = max(self.interval_steps, 1)
-        f = self.force_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps
-        t = self.torque_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps
-        q = self.heat_sum.to_numpy().astype(np.float64)[: self.n_bodies] / steps
-        self.force_sum.fill(0.0)
-        self.torque_sum.fill(0.0)
-        self.heat_sum.fill(0.0)
+        f, t, q = self.loads.take(self.interval_steps)
         self.interval_steps = 0
         return f, t, q

@@ -39,7 +39,7 @@ class SurfaceSurvey:
                         for b in ti.static(range(nb)):
                             touches = 0
                             for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
-                                if m.mesh_contact[k] != 0 and m.tri_body[m.mesh_tri[k]] == b:
+                                if m.mesh_contact[k] != 0 and m.triangles.tri_body[m.mesh_tri[k]] == b:
                                     touches = 1
                             if touches != 0:
                                 ti.atomic_add(touching[b], 1)
@@ -78,7 +78,7 @@ class SurfaceSurvey:
             return np.zeros(self.m.n_bodies)
         self._mark_touched(n)
         touched = self.touched.to_numpy()[: self.m.n_triangles] != 0
-        return np.bincount(self.m.triangle_owner[touched], weights=self.m.triangle_area[touched],
+        return np.bincount(self.m.triangles.owner[touched], weights=self.m.triangles.area[touched],
                            minlength=self.m.n_bodies)[: self.m.n_bodies]
 
     def deepest_overlaps(self, n: int) -> np.ndarray:
@@ -106,7 +106,7 @@ class SurfaceSurvey:
                     if s.alive[i] != 0:
                         for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
                             if m.mesh_contact[k] != 0:
-                                ti.atomic_max(deepest[m.tri_body[m.mesh_tri[k]]],
+                                ti.atomic_max(deepest[m.triangles.tri_body[m.mesh_tri[k]]],
                                               m.mesh_overlap[k] / s.radius[i])
             self._deepest_overlap = self.m.e.serial_switch(deepest_overlap)
         self._deepest_overlap(n)

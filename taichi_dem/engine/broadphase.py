@@ -520,7 +520,7 @@ class Broadphase:
             flush_loads, mesh_save_rows, count_bins, fill_bins, mesh_find, compact_and_carry = (
                 mb[k] for k in ("flush_loads", "save_rows", "count_bins", "fill_bins",
                                 "find_candidates", "compact_and_carry"))
-            set_frames, mesh_start = mesh.set_frames, mesh.mesh_start
+            set_frames, mesh_start = mesh.frames.set_frames, mesh.mesh_start
             items_capacity, mesh_width = mesh.items_capacity, mesh.scratch_width
             entries_capacity = mesh.entries_capacity
         SEARCHED, LISTED, DONE = self.SEARCHED, self.LISTED, self.DONE

@@ -121,7 +121,7 @@ class Insertion:
         mesh = e.mesh
         has_mesh = mesh is not None
         n_bodies = mesh.n_bodies if has_mesh else 0
-        heat_loads = has_mesh and mesh.particle_load_heat is not None
+        heat_loads = has_mesh and mesh.loads.particle_load_heat is not None
         flags = e.flags
         drying = e.model.moisture
         compensated = s.compensated
@@ -208,10 +208,10 @@ class Insertion:
                 if ti.static(has_mesh):
                     mesh.mesh_count[i] = 0
                     for b in range(n_bodies):
-                        mesh.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
-                        mesh.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                        mesh.loads.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                        mesh.loads.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
                         if ti.static(heat_loads):
-                            mesh.particle_load_heat[i, b] = 0.0
+                            mesh.loads.particle_load_heat[i, b] = 0.0
             flags[Flag.REBUILD] = 1
 
         return insert

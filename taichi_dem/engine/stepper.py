@@ -36,18 +36,19 @@ import taichi as ti
 from . import backend, transfer
 from .broadphase import Broadphase
 from .model import Model
-from .precision import make_split_add
 from .insertion import Insertion
 from .measure import Measure
 from ..contacts.geometry import contact_types, make_geometry
 from ..contacts.history import history_members, make_history_io
 from ..contacts.law import make_contact_law, margin_fraction
 from ..contacts.planes import PlaneWalls, make_plane_contacts
-from ..effects.base import EffectContext, particle_load
+from ..effects.base import EffectContext
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
 from . import drivers, tuning
 from .tuning import PARALLEL_FROM
 from .drift import make_drift
+from .gather_stage import GatherStage
+from .pair_stage import PairStage, make_temperature_of
 from .values import RuntimeValues
 from .workers import WorkerPool, persistent_workers
 
@@ -239,367 +240,61 @@ class Engine:
         self.minimum_image, self.drift_particle, self._drift = make_drift(self)
 
     def _compile_pair_kernels(self, p: PairState):
+        """The step's ti.funcs and kernels for the pair list ``p``: one factory per contact
+        kind (pairs: pair_stage.py; plane walls: contacts/planes.py; mesh triangles:
+        bodies/mesh_contacts.py), the gather that sums them (gather_stage.py), and the
+        drivers' runs of steps (drivers.py)."""
         s = self.state
-        minimum_image = self.minimum_image
-        real = self.model.real
-        effects = self.model.effect_list
+        model = self.model
+        real = model.real
+        effects = model.effect_list
         # the contact geometry of each kind and the contact law composed from the enabled
         # effects (contacts/): the same law runs on pairs, planes and triangles
-        _, sphere_surface, sphere_sphere_gap, with_motion = make_geometry(real, self.model.thermal)
+        geometry = make_geometry(real, model.thermal)
+        sphere_surface = geometry[1]
         # the history values the enabled effects keep, and one load/store/clear of them per
         # storage: the neighbour entries and the (particle, plane wall) slots
         members = history_members(effects)
         _, _, History = contact_types(real, members)
         pair_history = make_history_io(History, members,
                                        {m: getattr(p, m + "_history") for m in members})
-        pair_law = make_contact_law(effects, "pair", real, self.context)
-        plane_law = make_contact_law(effects, "plane", real, self.context)
-        # a pair is handed to the law while its gap is below the margin an effect asks for
-        pair_margin = self.model.pair_margin
-        pair_heat = self.model.pair_heat
-        n_walls = len(self.model.scene.walls)
-        wall_history = (make_history_io(History, members,
-                                        {m: getattr(s, "wall_" + m + "_history") for m in members})
-                        if n_walls else None)
+        n_walls = len(model.scene.walls)
+        thermal = model.thermal
         wall_force = self.wall_force
-        drift_particle = self.drift_particle
-        thermal = self.model.thermal
         wall_heat = self.wall_heat if thermal else None
-        mesh_contacts = None
+        temperature_of = make_temperature_of(s, thermal)
+        plane_contacts = None
+        if n_walls:
+            wall_history = make_history_io(History, members,
+                                           {m: getattr(s, "wall_" + m + "_history")
+                                            for m in members})
+            plane_contacts = make_plane_contacts(
+                s, self.plane_walls, sphere_surface,
+                make_contact_law(effects, "plane", real, self.context), wall_history,
+                wall_force, wall_heat, thermal, temperature_of,
+                margin_fraction(model.contact_effects, "plane"))
+        mesh_contacts = shields = None
         if self.mesh is not None:
             mesh_contacts = self.mesh.make_particle_contacts(
                 make_contact_law(effects, "triangle", real, self.context),
                 make_contact_law(effects, "surface", real, self.context), sphere_surface)
+            # a plate between two spheres: no pair contact through it
+            shields = self.mesh.make_shields()
         has_mesh = mesh_contacts is not None
-        # a plate between two spheres: no pair contact through it
-        shields = self.mesh.make_shields() if has_mesh else None
-        Load = particle_load(real)
-        particle_effects = tuple(e.particle_func(self.context) for e in self.model.particle_effects)
-        update_temperature = (self.model.effect("temperature").integrate_func(
-                                  self.context, self.model.effect("drying"))
-                              if thermal else None)
+        pairs = PairStage(self, p, geometry, pair_history, temperature_of, shields)
+        gathers = GatherStage(self, p, temperature_of, plane_contacts, mesh_contacts)
+        pair_particle, pair_forces = pairs.pair_particle, pairs.pair_forces
+        gather_particle, gather = gathers.gather_particle, gathers.gather
         vec0 = ti.Vector([0.0, 0.0, 0.0])
-
-        @ti.func
-        def temperature_of(i):
-            t = 0.0 * s.radius[i]
-            if ti.static(thermal):
-                t = s.temperature[i]
-            return t
-
-        plane_contacts = (make_plane_contacts(s, self.plane_walls, sphere_surface, plane_law,
-                                              wall_history, wall_force, wall_heat, thermal,
-                                              temperature_of,
-                                              margin_fraction(self.model.contact_effects, "plane"))
-                          if n_walls else None)
-
-        mobility = self.model.mobility is not None
-        active = self.model.mobility.particle_active if mobility else None
-        # [mobility] "body_frame": the frozen core is carried by the frame's body, so what holds
-        # it there is a load on that body (booked in the gather); its inner contacts cancel in
-        # that sum and are left out of both sides
-        core_internal = mobility and self.model.mobility_frame >= 0
-        # one thread (the serial mode) adds each pair's partner share to the partner directly
-        # (Engine.scatter_ok); [mobility]'s frozen and carried pairs read theirs at the entries
-        scatter_ok = self.scatter_ok
-        split = self.model.split_positions
-
-        @ti.func
-        def pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
-                         temperature_i):
-            """The Contact of particle i (its state passed in) with particle j (``d`` = x_i -
-            x_j, m): the geometry, and the motion when ``touching``. A pair within a heat
-            effect's margin but apart needs no more, and with the gas gap on such pairs are as
-            common as touching ones: its partner's motion is not loaded."""
-            c = sphere_sphere_gap(d, distance_sq, ri, s.radius[j], mi, s.material[j],
-                                  temperature_i, temperature_of(j))
-            if ti.static(pair_margin > 0.0):
-                if touching:
-                    c = with_motion(c, vi, s.velocity[j], wi, s.angular_velocity[j], ai,
-                                    s.acceleration[j], inv_mi, s.inverse_mass[j], inv_ii,
-                                    s.inverse_inertia[j])
-            else:
-                c = with_motion(c, vi, s.velocity[j], wi, s.angular_velocity[j], ai,
-                                s.acceleration[j], inv_mi, s.inverse_mass[j], inv_ii,
-                                s.inverse_inertia[j])
-            return c
-
         pool = self.worker_pool
-        extra_copies = max(pool.copies - 1, 0)
-        copy_force, copy_torque = pool.copy_force, pool.copy_torque
-        copy_heat, copy_conductance = pool.copy_heat, pool.copy_conductance
-
-        def share_adder(first, second, copies_of_first, copies_of_second):
-            """A ti.func (copy, j, a, b) adding a pair's partner share - a to ``first``, b to
-            ``second`` at partner j - in copy ``copy`` of the sums: 0 the serial mode's
-            ``scattered_*``, w > 0 worker w's (only that worker writes it). (``x = x + a``: an
-            augmented assignment would be an atomic add.)"""
-            @ti.func
-            def add(copy, j, a, b):
-                if ti.static(extra_copies > 0):
-                    if copy == 0:
-                        first[j] = first[j] + a
-                        second[j] = second[j] + b
-                    else:
-                        copies_of_first[copy - 1, j] = copies_of_first[copy - 1, j] + a
-                        copies_of_second[copy - 1, j] = copies_of_second[copy - 1, j] + b
-                else:
-                    first[j] = first[j] + a
-                    second[j] = second[j] + b
-            return add
-
-        # force (N) and torque (N m); heat flow (W) and conductance (W/K)
-        add_partner_share = share_adder(s.scattered_force, s.scattered_torque, copy_force,
-                                        copy_torque)
-        add_partner_heat = (share_adder(s.scattered_heat, s.scattered_conductance, copy_heat,
-                                        copy_conductance) if self.model.thermal else None)
-
-        @ti.func
-        def pair_particle(i, dt, full, scatter: ti.template(), copy):
-            """The owned contacts of particle i in one step: their geometry, the contact law,
-            the owner's sums and the partner's shares - stored at the entry (no atomics), or
-            with ``scatter`` added to the partner's sums of copy ``copy`` (add_partner_share:
-            one thread, or worker ``copy`` alone writing that copy).
-            ``full`` = 1 (the step of a rebuild): every pair; 0: [mobility] pairs of two
-            inactive particles keep their force, torque and history (their heat flows through
-            the kept conductance)."""
-            xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
-            ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
-            temperature_i = temperature_of(i)
-            residual_i = vec0
-            if ti.static(split):
-                residual_i = s.position_residual[i]
-            owned_force = vec0
-            owned_torque = vec0
-            owned_heat = 0.0
-            owned_conductance = 0.0
-            frozen_i = False
-            if ti.static(mobility):
-                frozen_i = full == 0 and active[i] == 0
-            inactive_i = False
-            if ti.static(core_internal):
-                inactive_i = active[i] == 0
-            for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
-                j = p.neighbour[k]
-                if ti.static(mobility):
-                    if frozen_i and active[j] == 0:
-                        # both inactive: the contact is frozen as it was at the rebuild
-                        if ti.static(pair_heat):
-                            if p.contact[k] != 0:
-                                h = p.pair_conductance[k]
-                                q = h * (temperature_of(j) - temperature_i)
-                                owned_heat += q
-                                owned_conductance += h
-                                p.partner_heat[k] = -q
-                        continue
-                d = minimum_image(xi - s.position[j])
-                if ti.static(split):
-                    # x_i - x_j of near particles is exact in f32: the residuals make it precise
-                    d += residual_i - s.position_residual[j]
-                rj = s.radius[j]
-                distance_sq = d.dot(d)
-                reach = ri + rj
-                if ti.static(pair_margin > 0.0):
-                    reach += ti.static(pair_margin) * ti.max(ri, rj)
-                within = distance_sq < reach * reach and distance_sq > 0.0
-                if ti.static(has_mesh):
-                    if within:
-                        within = not shields(i, j, d)
-                if within:
-                    # a pair within the margin but apart (heat only): its geometry without the
-                    # motion; touching: the whole contact
-                    touching = True
-                    if ti.static(pair_margin > 0.0):
-                        touching = distance_sq < (ri + rj) * (ri + rj)
-                    c = pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
-                                     temperature_i)
-                    history = pair_history.empty()
-                    if touching:
-                        history = pair_history.load(k)
-                    out, history = pair_law(c, history, dt)
-                    if ti.static(pair_heat):
-                        owned_heat += out.heat
-                        owned_conductance += out.conductance
-                        if ti.static(scatter):
-                            add_partner_heat(copy, j, -out.heat, out.conductance)
-                        else:
-                            p.partner_heat[k] = -out.heat
-                            p.pair_conductance[k] = out.conductance
-                    if c.normal_overlap > 0.0:
-                        inner = False
-                        if ti.static(core_internal):
-                            inner = inactive_i and active[j] == 0
-                        if not inner:
-                            owned_force += out.force
-                            owned_torque += out.torque_i
-                        if ti.static(scatter):
-                            add_partner_share(copy, j, -out.force, out.torque_j)
-                        else:
-                            p.partner_force[k] = -out.force
-                            p.partner_torque[k] = out.torque_j
-                        pair_history.store(k, history)
-                        p.contact[k] = ti.u8(1)
-                    else:
-                        # near, not touching: no force (the gather reads the partner's share
-                        # of touching pairs only) and no spring to carry
-                        if p.contact[k] == 1:
-                            pair_history.clear(k)
-                        p.contact[k] = ti.u8(2)
-                elif p.contact[k] != 0:
-                    # the contact opened: its history is discarded
-                    p.contact[k] = ti.u8(0)
-                    pair_history.clear(k)
-            s.owned_force[i] = owned_force
-            s.owned_torque[i] = owned_torque
-            if ti.static(thermal):
-                s.owned_heat[i] = owned_heat
-                s.conductance[i] = owned_conductance
-
-        @ti.kernel
-        def pair_forces(n: ti.i32, dt: real, full: ti.i32, serial_loops: ti.template()):
-            """pair_particle over the particles; ``serial_loops``: one thread (Engine.serial)."""
-            ti.loop_config(serialize=serial_loops)
-            for i in range(n):
-                pair_particle(i, dt, full, ti.static(serial_loops and scatter_ok), 0)
-
-        # [mobility] "body_frame": what the frame's body supplies to carry an inactive particle
-        book_carried_load = self.model.mobility.make_carried_load(self.context) if core_internal else None
-
-        @ti.func
-        def gather_particle(i, dt, record, then_drift, t_next, scatter: ti.template()):
-            """The rest of particle i's step: its partners' shares through the mirror index
-            (``scatter`` > 0: from its sums of copies 0 .. scatter - 1, added in that order,
-            which it clears - add_partner_share), its plane walls and
-            mesh triangles, the particle effects, the integrate stage and the second half kick;
-            ``then_drift``: the next step's drift to ``t_next`` too. A particle removed since
-            the last rebuild is parked and inert."""
-            scattered_force = vec0
-            scattered_torque = vec0
-            scattered_heat = 0.0
-            scattered_conductance = 0.0
-            if ti.static(scatter > 0):
-                scattered_force = s.scattered_force[i]
-                scattered_torque = s.scattered_torque[i]
-                s.scattered_force[i] = vec0
-                s.scattered_torque[i] = vec0
-                for c in ti.static(range(scatter - 1)):
-                    scattered_force = scattered_force + copy_force[c, i]
-                    scattered_torque = scattered_torque + copy_torque[c, i]
-                    copy_force[c, i] = vec0
-                    copy_torque[c, i] = vec0
-                if ti.static(pair_heat):
-                    scattered_heat = s.scattered_heat[i]
-                    scattered_conductance = s.scattered_conductance[i]
-                    s.scattered_heat[i] = 0.0
-                    s.scattered_conductance[i] = 0.0
-                    for c in ti.static(range(scatter - 1)):
-                        scattered_heat = scattered_heat + copy_heat[c, i]
-                        scattered_conductance = scattered_conductance + copy_conductance[c, i]
-                        copy_heat[c, i] = 0.0
-                        copy_conductance[c, i] = 0.0
-            if s.alive[i] != 0:
-                force = s.owned_force[i]
-                torque = s.owned_torque[i]
-                integrates = True
-                if ti.static(mobility):
-                    integrates = active[i] != 0      # inactive: held or carried, not integrated
-                heat = 0.0           # W into the particle
-                conductance = 0.0    # W/K, for the stability check
-                if ti.static(thermal):
-                    heat = s.owned_heat[i]
-                    conductance = s.conductance[i]
-                if ti.static(scatter > 0):
-                    # (no [mobility] here: every particle integrates)
-                    force += scattered_force
-                    torque += scattered_torque
-                    if ti.static(pair_heat):
-                        heat += scattered_heat
-                        conductance += scattered_conductance
-                elif integrates:
-                    # one pass over the partners' entries for their shares of force and heat
-                    for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
-                        m = p.mirror[k]
-                        if m >= 0:
-                            contact = p.contact[m]
-                            if contact == 1:          # touching (2: near, heat only)
-                                force += p.partner_force[m]
-                                torque += p.partner_torque[m]
-                            if ti.static(pair_heat):
-                                if contact != 0:
-                                    heat += p.partner_heat[m]
-                                    conductance += p.pair_conductance[m]
-                else:
-                    if ti.static(core_internal):
-                        # carried by the frame's body: only the shares of active partners (the
-                        # core's inner contacts cancel in the load booked below)
-                        for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
-                            m = p.mirror[k]
-                            if m >= 0:
-                                if p.contact[m] == 1 and active[p.neighbour[k]] != 0:
-                                    force += p.partner_force[m]
-                                    torque += p.partner_torque[m]
-                    if ti.static(pair_heat):
-                        # held or carried, it still conducts
-                        for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
-                            m = p.mirror[k]
-                            if m >= 0:
-                                if p.contact[m] != 0:
-                                    heat += p.partner_heat[m]
-                                    conductance += p.pair_conductance[m]
-                inv_m = s.inverse_mass[i]
-                if ti.static(n_walls > 0):
-                    # plane walls: the contact law on each particle-plane contact
-                    force, torque, heat, conductance = plane_contacts(
-                        i, dt, record, force, torque, heat, conductance)
-                if ti.static(has_mesh):
-                    if inv_m > 0.0:
-                        mesh_force, mesh_torque, mesh_heat, mesh_conductance = mesh_contacts(
-                            i, s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i],
-                            s.mass[i], inv_m, s.inverse_inertia[i], s.acceleration[i],
-                            s.material[i], temperature_of(i), dt)
-                        force += mesh_force
-                        torque += mesh_torque
-                        heat += mesh_heat
-                        conductance += mesh_conductance
-                # the particle effects: gravity, convection, plug-flow gas, radiation
-                load = Load(acceleration=vec0, heat=heat, conductance=conductance)
-                for effect in ti.static(particle_effects):
-                    load = effect(i, load)
-                if ti.static(thermal):
-                    if s.alive[i] != 0:
-                        # explicit update; stable while dt sum(h) / (m c) < 1 (checked per sample)
-                        update_temperature(i, load.heat, load.conductance, dt)
-                if ti.static(core_internal):
-                    if inv_m > 0.0 and s.alive[i] != 0 and not integrates:
-                        book_carried_load(i, force, torque, load.acceleration)
-                if inv_m > 0.0 and s.alive[i] != 0 and integrates:
-                    a = force * inv_m + load.acceleration
-                    alpha = torque * s.inverse_inertia[i]
-                    s.acceleration[i] = a
-                    s.angular_acceleration[i] = alpha
-                    # (``a = a + b``: an augmented assignment to a field is an atomic add in a
-                    # parallel loop, which Taichi turns back into a plain one only where the
-                    # index is the loop's own - not on the workers' inner loops)
-                    s.velocity[i] = s.velocity[i] + 0.5 * dt * a
-                    s.angular_velocity[i] = s.angular_velocity[i] + 0.5 * dt * alpha
-                if then_drift != 0:
-                    # the next step's first half, fused here to save a pass over the particles
-                    drift_particle(i, dt, t_next)
-
-        @ti.kernel
-        def gather(n: ti.i32, dt: real, record: ti.i32, then_drift: ti.i32, t_next: ti.f64,
-                   serial_loops: ti.template()):
-            ti.loop_config(serialize=serial_loops)
-            for i in range(n):
-                gather_particle(i, dt, record, then_drift, t_next,
-                                ti.static(1 if (serial_loops and scatter_ok) else 0))
+        scatter_ok = self.scatter_ok
 
         self._pair_forces = self.serial_switch(pair_forces)
         self._gather = self.serial_switch(gather)
 
         # runs of steps (serial mode): the cell stage of each effect as a ti.func
         cell_funcs = tuple(e.cell_func(self.context) for e in self.model.cell_effects) if self.runs else ()
-        set_frames = self.mesh.set_frames if has_mesh else None
+        set_frames = self.mesh.frames.set_frames if has_mesh else None
         flags = self.flags
         n_wall_slots = max(n_walls, 1)
 

@@ -135,3 +135,34 @@ def test_simulation_does_not_import_its_observers_at_module_top():
     tree = ast.parse((ROOT / "taichi_dem" / "run" / "simulation.py").read_text())
     top = [n.module for n in tree.body if isinstance(n, ast.ImportFrom) and n.module]
     assert not [m for m in top if m.split(".")[-1] in ("checkpoint", "divergence")], top
+
+
+# docs/architecture.md: no source file over 800 lines, no function over 150, no class holding
+# more than 40 attributes - or its docstring says why ("Why ...")
+MAX_FILE_LINES, MAX_FUNCTION_LINES, MAX_CLASS_ATTRIBUTES = 800, 150, 40
+
+
+def _sources():
+    for folder in PACKAGES:
+        yield from sorted((ROOT / folder).rglob("*.py"))
+
+
+def test_no_file_function_or_class_is_too_big_unless_it_says_why():
+    too_big = []
+    for path in _sources():
+        text = path.read_text()
+        rel = path.relative_to(ROOT)
+        if text.count("\n") > MAX_FILE_LINES and "Why this module is over" not in text:
+            too_big.append(f"{rel}: {text.count(chr(10))} lines")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                lines = node.end_lineno - node.lineno + 1
+                if lines > MAX_FUNCTION_LINES and "Why" not in (ast.get_docstring(node) or ""):
+                    too_big.append(f"{rel}: {node.name} has {lines} lines")
+            elif isinstance(node, ast.ClassDef):
+                stored = {n.attr for n in ast.walk(node) if isinstance(n, ast.Attribute)
+                          and isinstance(n.value, ast.Name) and n.value.id == "self"
+                          and isinstance(n.ctx, ast.Store)}
+                if len(stored) > MAX_CLASS_ATTRIBUTES and "Why" not in (ast.get_docstring(node) or ""):
+                    too_big.append(f"{rel}: {node.name} holds {len(stored)} attributes")
+    assert not too_big, too_big

@@ -230,29 +230,10 @@ class Mobility(Effect):
         mesh = ctx.mesh
         frame = self.frame
         body_frame = frame >= 0
-        # bodies that move (other than the frame's): their candidate contacts make a cell mobile
-        moving = []
-        for b, body in enumerate(self.bodies):
-            m = body.motion
-            if b != frame and (m.speed is not None and any(v != 0 for _, v in m.speed.points)
-                               or any(v != 0 for v in m.velocity)):
-                moving.append(b)
-        moving_flags = tuple(1 if b in moving else 0 for b in range(len(self.bodies)))
-        check_bodies = mesh is not None and len(moving) > 0
+        moving_flags = self.moving_body_flags()
+        check_bodies = mesh is not None and any(moving_flags)
         rigid_velocity = self.make_rigid_velocity(ctx)
-        rigid_spin_ = self.make_rigid_spin(ctx)
-        rigid_frame = frame >= 0
-        centre_of = self.make_rigid_centre(ctx) if rigid_frame else None
-
-        @ti.func
-        def rigid_acceleration(x, t):
-            """The frame's centripetal acceleration at x (m/s^2; constant spin between
-            schedule steps), zero at rest."""
-            a = ti.Vector([0.0, 0.0, 0.0]) * x[0]
-            if ti.static(rigid_frame):
-                w = rigid_spin_(t)
-                a = w.cross(w.cross(x - centre_of(t)))
-            return a
+        rigid_acceleration = self.make_rigid_acceleration(ctx)
         n_blocks = self.n_blocks
         four_thirds_pi = 4.0 / 3.0 * math.pi
 
@@ -295,7 +276,7 @@ class Mobility(Effect):
                                     acceleration += a.dot(a)
                                 if ti.static(check_bodies):
                                     for q in range(mesh.mesh_start[i], mesh.mesh_start[i] + mesh.mesh_count[i]):
-                                        body = mesh.tri_body[mesh.mesh_tri[q]]
+                                        body = mesh.triangles.tri_body[mesh.mesh_tri[q]]
                                         for bb in ti.static(range(len(moving_flags))):
                                             if ti.static(moving_flags[bb]):
                                                 if body == bb:
@@ -363,6 +344,33 @@ class Mobility(Effect):
         rigid_spin = self.make_rigid_spin(ctx)
         self._update = ctx.serial_switch(update)
         self.body_frame = body_frame
+
+    def moving_body_flags(self) -> tuple:
+        """Per body, 1 where it moves and is not the frame's: its candidate contacts make a
+        cell mobile."""
+        flags = []
+        for b, body in enumerate(self.bodies):
+            m = body.motion
+            moves = (m.speed is not None and any(v != 0 for _, v in m.speed.points)
+                     or any(v != 0 for v in m.velocity))
+            flags.append(1 if b != self.frame and moves else 0)
+        return tuple(flags)
+
+    def make_rigid_acceleration(self, ctx):
+        """A ti.func (x, t) -> the frame's centripetal acceleration at x (m/s^2; constant
+        spin between schedule steps), zero without a frame body."""
+        rigid_frame = self.frame >= 0
+        rigid_spin_ = self.make_rigid_spin(ctx)
+        centre_of = self.make_rigid_centre(ctx) if rigid_frame else None
+
+        @ti.func
+        def rigid_acceleration(x, t):
+            a = ti.Vector([0.0, 0.0, 0.0]) * x[0]
+            if ti.static(rigid_frame):
+                w = rigid_spin_(t)
+                a = w.cross(w.cross(x - centre_of(t)))
+            return a
+        return rigid_acceleration
 
     def make_rigid_velocity(self, ctx):
         """ti.func (x, t) -> the frame body's velocity at point x (m/s); zero in "at_rest"."""
@@ -452,13 +460,13 @@ class Mobility(Effect):
         core (N, N m); ``acceleration``: the particle effects' (m/s^2). Booked in the body's
         per-particle load sums, every step as the contacts are."""
         frame = self.frame
-        loads = ctx.mesh
+        frames, loads = ctx.mesh.frames, ctx.mesh.loads
         s = ctx.state
 
         @ti.func
         def book_carried_load(i, force, torque, acceleration):
-            w = loads.angular_velocity[frame]
-            lever = s.position[i] - (loads.axis_point[frame] + loads.offset[frame])
+            w = frames.angular_velocity[frame]
+            lever = s.position[i] - (frames.axis_point[frame] + frames.offset[frame])
             residual = force + s.mass[i] * (acceleration - w.cross(w.cross(lever)))
             loads.particle_load_force[i, frame] = loads.particle_load_force[i, frame] + residual
             loads.particle_load_torque[i, frame] = (loads.particle_load_torque[i, frame]

@@ -1,0 +1,205 @@
+"""Each rigid body's triangles, frame and loads on the device, for the mesh contacts
+(mesh_contacts.py).
+
+``BodyTriangles``: every body's triangles in its reference frame (the vertices at t = 0),
+their body and unit normal, and on the host their areas and owners. ``BodyFrames``: the reference axis and speed schedule of each body (kinematics.py) and its
+frame now - x_world = R (x_ref - axis_point) + axis_point + offset, with its angular velocity
+- computed on the device from the schedule, so that the triangles are never rewritten; its
+material and its wall temperature. ``BodyLoads``: what the contacts load each body with,
+summed per particle without atomics and flushed into per-body totals.
+"""
+import numpy as np
+import taichi as ti
+
+from .kinematics import MAX_SCHEDULE, triangle_arrays
+
+
+class BodyTriangles:
+    """``tri_a``, ``tri_b``, ``tri_c`` (m, reference frame), ``tri_body`` and ``tri_normal``
+    (unit) per triangle on the device; ``area`` (m^2) and ``owner`` (body index) on the host
+    (rigid bodies: they do not change); ``count`` triangles."""
+
+    def __init__(self, tree, bodies, real):
+        """Fields in ``tree`` (a FieldTree, finalised by the caller; then ``upload``)."""
+        self._tris, owner = triangle_arrays(bodies)
+        tris = self._tris
+        self.count = len(tris)
+        self.area = (0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0],
+                                                   tris[:, 2] - tris[:, 0]), axis=1)
+                     if len(tris) else np.zeros(0))
+        self.owner = np.asarray(owner, np.int64)
+        self.real = real
+        t, nt = tree, max(self.count, 1)
+        self.tri_a = t.add("tri_a", real, nt, vector=True)
+        self.tri_b = t.add("tri_b", real, nt, vector=True)
+        self.tri_c = t.add("tri_c", real, nt, vector=True)
+        self.tri_body = t.add("tri_body", ti.i32, nt)
+        self.tri_normal = t.add("tri_normal", real, nt, vector=True)     # unit, reference frame
+
+    def upload(self):
+        """The vertices, owners and normals."""
+        if not self.count:
+            return
+        tris, npf = self._tris, np.float64 if self.real == ti.f64 else np.float32
+        self.tri_a.from_numpy(tris[:, 0].astype(npf))
+        self.tri_b.from_numpy(tris[:, 1].astype(npf))
+        self.tri_c.from_numpy(tris[:, 2].astype(npf))
+        self.tri_body.from_numpy(self.owner.astype(np.int32))
+        normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        self.tri_normal.from_numpy(normal.astype(npf))
+
+
+class BodyFrames:
+    """The bodies' frames: per body ``axis_point`` and ``axis_direction`` (reference), its
+    ``body_velocity`` m/s, ``body_material`` (table index), ``body_temperature`` K (negative:
+    adiabatic, or no wall conduction), the speed schedule ``sched_*``, and now ``rotation``,
+    ``offset`` m and ``angular_velocity`` rad/s; ``update_frames(time)`` (a kernel) and
+    ``set_frames`` (a ti.func for a loop that is already serial) set them."""
+
+    def __init__(self, tree, kinematics, real, material_index, wall_conduction: bool):
+        """Fields in ``tree`` (a FieldTree, finalised by the caller; then ``upload``)."""
+        self.kin = kinematics
+        self.n_bodies = nb = len(kinematics.bodies)
+        self.real = real
+        t, nb = tree, max(nb, 1)
+        self.sched_time = t.add("sched_time", real, (nb, MAX_SCHEDULE))
+        self.sched_speed = t.add("sched_speed", real, (nb, MAX_SCHEDULE))
+        self.sched_angle = t.add("sched_angle", real, (nb, MAX_SCHEDULE))
+        self.sched_count = t.add("sched_count", ti.i32, nb)
+        self.axis_point = t.add("axis_point", real, nb, vector=True)
+        self.axis_direction = t.add("axis_direction", real, nb, vector=True)
+        self.body_velocity = t.add("body_velocity", real, nb, vector=True)
+        self.body_material = t.add("body_material", ti.i32, nb)
+        # K of an isothermal body (water-cooled shell); negative = adiabatic or no conduction
+        self.body_temperature = t.add("body_temperature", real, nb)
+        self.rotation = ti.Matrix.field(3, 3, real)
+        t._builder.dense(ti.i, nb).place(self.rotation)
+        self.offset = t.add("offset", real, nb, vector=True)
+        self.angular_velocity = t.add("angular_velocity", real, nb, vector=True)
+        self._material_index = material_index
+        self._wall_conduction = wall_conduction
+
+    def _np_real(self):
+        return np.float64 if self.real == ti.f64 else np.float32
+
+    def upload(self):
+        """The reference axes, velocities, materials, temperatures and schedules."""
+        bodies, nb = self.kin.bodies, max(self.n_bodies, 1)
+        ap, ad, bv = np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros((nb, 3))
+        mat, temps = np.zeros(nb, np.int32), np.full(nb, -1.0)
+        for k, b in enumerate(bodies):
+            ap[k], ad[k], bv[k] = b.motion.axis_point, b.motion.axis_direction, b.motion.velocity
+            mat[k] = self._material_index(b.material)
+            if self._wall_conduction and b.temperature is not None:
+                temps[k] = b.temperature
+        self.axis_point.from_numpy(ap.astype(self._np_real()))
+        self.axis_direction.from_numpy(ad.astype(self._np_real()))
+        self.body_velocity.from_numpy(bv.astype(self._np_real()))
+        self.body_material.from_numpy(mat)
+        self.body_temperature.from_numpy(temps.astype(self._np_real()))
+        self.upload_schedules()
+
+    def upload_schedules(self):
+        """The speed schedules again (a changed shaft speed: Simulation.set_speed, resume)."""
+        times, speeds, angles, counts = self.kin.schedule_arrays()
+        self.sched_time.from_numpy(times.astype(self._np_real()))
+        self.sched_speed.from_numpy(speeds.astype(self._np_real()))
+        self.sched_angle.from_numpy(angles.astype(self._np_real()))
+        self.sched_count.from_numpy(counts)
+
+    def compile(self):
+        """``update_frames(time)`` (a kernel; a few bodies: always serial) and ``set_frames``
+        (its ti.func, for drivers.run_steps)."""
+        f = self
+        nb = self.n_bodies
+
+        @ti.func
+        def frame_of(b, time):
+            """Rotation matrix, offset and angular velocity of body b at ``time``."""
+            count = f.sched_count[b]
+            row = 0
+            for k in range(count):
+                if time >= f.sched_time[b, k]:
+                    row = k
+            speed = f.sched_speed[b, row]
+            angle = f.sched_angle[b, row] + speed * (time - f.sched_time[b, row])
+            axis = f.axis_direction[b]
+            c, s_ = ti.cos(angle), ti.sin(angle)
+            k_ = ti.Matrix([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
+                            [-axis[1], axis[0], 0.0]])
+            rot = ti.Matrix.identity(float, 3) + s_ * k_ + (1.0 - c) * (k_ @ k_)
+            return rot, f.body_velocity[b] * time, speed * axis
+
+        @ti.kernel
+        def update_frames(time: self.real):
+            ti.loop_config(serialize=True)
+            for b in range(nb):
+                rot, off, omega = frame_of(b, time)
+                f.rotation[b] = rot
+                f.offset[b] = off
+                f.angular_velocity[b] = omega
+
+        @ti.func
+        def set_frames(time):
+            """update_frames inside a loop that is already serial (drivers.run_steps)."""
+            for b in range(nb):
+                rot, off, omega = frame_of(b, time)
+                f.rotation[b] = rot
+                f.offset[b] = off
+                f.angular_velocity[b] = omega
+
+        self.update_frames = update_frames
+        self.set_frames = set_frames
+
+
+class BodyLoads:
+    """What the contacts load the bodies with: per particle and body ``particle_load_force``
+    N, ``particle_load_torque`` N m (about the axis point) and, with wall conduction,
+    ``particle_load_heat`` W, summed over steps without atomics (two threads adding into one
+    body's total fight over a cache line: that cost 60 % of the mesh contact time) and flushed
+    into ``force_sum``, ``torque_sum``, ``heat_sum`` before particles are reordered and at
+    each sample."""
+
+    def __init__(self, tree, real, n_bodies: int, capacity: int, wall_conduction: bool):
+        t, nb = tree, max(n_bodies, 1)
+        self.n_bodies = n_bodies
+        self.heat_sum = t.add("heat_sum", real, nb)
+        self.force_sum = t.add("force_sum", real, nb, vector=True)
+        self.torque_sum = t.add("torque_sum", real, nb, vector=True)
+        self.particle_load_force = t.add("particle_load_force", real, (capacity, nb), vector=True)
+        self.particle_load_torque = t.add("particle_load_torque", real, (capacity, nb),
+                                          vector=True)
+        self.particle_load_heat = (t.add("particle_load_heat", real, (capacity, nb))
+                                   if wall_conduction else None)
+
+    def make_flush(self):
+        """A ti.func (n, serial_loops) adding the first ``n`` particles' loads into the
+        bodies' sums and clearing them."""
+        ld = self
+        nb = self.n_bodies
+        heat_loads = self.particle_load_heat is not None
+
+        @ti.func
+        def flush_loads_body(n, serial_loops: ti.template()):
+            ti.loop_config(serialize=serial_loops)
+            for i in range(n):
+                for b in ti.static(range(nb)):
+                    ld.force_sum[b] += ld.particle_load_force[i, b]
+                    ld.torque_sum[b] += ld.particle_load_torque[i, b]
+                    ld.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                    ld.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                    if ti.static(heat_loads):
+                        ld.heat_sum[b] += ld.particle_load_heat[i, b]
+                        ld.particle_load_heat[i, b] = 0.0
+        return flush_loads_body
+
+    def take(self, steps: int):
+        """Mean force (N), torque (N m) and heat flow (W) per body over ``steps`` steps
+        (flushed already); resets the sums."""
+        steps = max(steps, 1)
+        out = tuple(x.to_numpy().astype(np.float64)[: self.n_bodies] / steps
+                    for x in (self.force_sum, self.torque_sum, self.heat_sum))
+        for x in (self.force_sum, self.torque_sum, self.heat_sum):
+            x.fill(0.0)
+        return out

@@ -1,0 +1,220 @@
+"""The pair stage of a step (stepper.py): each particle's owned neighbour entries, their
+contact geometry (contacts/geometry.py) and the contact law (contacts/law.py) composed from
+the enabled effects; the owner sums its own share, the partner's share is stored at the entry
+(no atomics), or in the serial mode and on the workers added to the partner's sums of one copy
+(``share_adder``). Built once per pair list by ``make_pair_stage``."""
+import taichi as ti
+
+from ..contacts.law import make_contact_law
+
+
+def make_temperature_of(s, thermal: bool):
+    """A ti.func (i) -> particle i's temperature, K (0 without heat transfer)."""
+    @ti.func
+    def temperature_of(i):
+        t = 0.0 * s.radius[i]
+        if ti.static(thermal):
+            t = s.temperature[i]
+        return t
+    return temperature_of
+
+
+def make_share_adder(extra_copies: int):
+    """``share_adder(first, second, copies_of_first, copies_of_second)`` (below), for a
+    worker pool with ``extra_copies`` copies of the sums beyond the first."""
+    def share_adder(first, second, copies_of_first, copies_of_second):
+        """A ti.func (copy, j, a, b) adding a pair's partner share - a to ``first``, b to
+        ``second`` at partner j - in copy ``copy`` of the sums: 0 the serial mode's
+        ``scattered_*``, w > 0 worker w's (only that worker writes it). (``x = x + a``: an
+        augmented assignment would be an atomic add.)"""
+        @ti.func
+        def add(copy, j, a, b):
+            if ti.static(extra_copies > 0):
+                if copy == 0:
+                    first[j] = first[j] + a
+                    second[j] = second[j] + b
+                else:
+                    copies_of_first[copy - 1, j] = copies_of_first[copy - 1, j] + a
+                    copies_of_second[copy - 1, j] = copies_of_second[copy - 1, j] + b
+            else:
+                first[j] = first[j] + a
+                second[j] = second[j] + b
+        return add
+    return share_adder
+
+
+def make_pair_contact(s, geometry, pair_margin: float, temperature_of):
+    """A ti.func building the Contact (contacts/geometry.py) of particle i with j."""
+    _, _, sphere_sphere_gap, with_motion = geometry
+
+    @ti.func
+    def pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
+                     temperature_i):
+        """The Contact of particle i (its state passed in) with particle j (``d`` = x_i -
+        x_j, m): the geometry, and the motion when ``touching``. A pair within a heat
+        effect's margin but apart needs no more, and with the gas gap on such pairs are as
+        common as touching ones: its partner's motion is not loaded."""
+        c = sphere_sphere_gap(d, distance_sq, ri, s.radius[j], mi, s.material[j],
+                              temperature_i, temperature_of(j))
+        if ti.static(pair_margin > 0.0):
+            if touching:
+                c = with_motion(c, vi, s.velocity[j], wi, s.angular_velocity[j], ai,
+                                s.acceleration[j], inv_mi, s.inverse_mass[j], inv_ii,
+                                s.inverse_inertia[j])
+        else:
+            c = with_motion(c, vi, s.velocity[j], wi, s.angular_velocity[j], ai,
+                            s.acceleration[j], inv_mi, s.inverse_mass[j], inv_ii,
+                            s.inverse_inertia[j])
+        return c
+    return pair_contact
+
+
+class PairStage:
+    """The pair stage's ti.func ``pair_particle(i, dt, full, scatter, copy)`` and its kernel
+    ``pair_forces(n, dt, full, serial_loops)``, with the shares' adders the gather reads."""
+
+    def __init__(self, e, p, geometry, pair_history, temperature_of, shields):
+        """``e`` the Engine, ``p`` its PairState; ``geometry`` contacts/geometry.py's
+        make_geometry; ``pair_history`` the history's load/store at the entries;
+        ``shields`` (i, j, d) -> whether a mesh plate lies between them, or None."""
+        s, model = e.state, e.model
+        real = model.real
+        minimum_image = e.minimum_image
+        pair_law = make_contact_law(model.effect_list, "pair", real, e.context)
+        # a pair is handed to the law while its gap is below the margin an effect asks for
+        pair_margin = model.pair_margin
+        pair_heat = model.pair_heat
+        thermal = model.thermal
+        has_mesh = shields is not None
+        mobility = model.mobility is not None
+        active = model.mobility.particle_active if mobility else None
+        # [mobility] "body_frame": the frozen core is carried by the frame's body, so what
+        # holds it there is a load on that body (booked in the gather); its inner contacts
+        # cancel in that sum and are left out of both sides
+        core_internal = mobility and model.mobility_frame >= 0
+        split = model.split_positions
+        vec0 = ti.Vector([0.0, 0.0, 0.0])
+
+        pair_contact = make_pair_contact(s, geometry, pair_margin, temperature_of)
+
+        pool = e.worker_pool
+        share_adder = make_share_adder(max(pool.copies - 1, 0))
+        # force (N) and torque (N m); heat flow (W) and conductance (W/K)
+        add_partner_share = share_adder(s.scattered_force, s.scattered_torque, pool.copy_force,
+                                        pool.copy_torque)
+        add_partner_heat = (share_adder(s.scattered_heat, s.scattered_conductance,
+                                        pool.copy_heat, pool.copy_conductance)
+                            if thermal else None)
+        # one thread (the serial mode) adds each pair's partner share to the partner directly
+        # (Engine.scatter_ok); [mobility]'s frozen and carried pairs read theirs at the entries
+        scatter_ok = e.scatter_ok
+
+        @ti.func
+        def pair_particle(i, dt, full, scatter: ti.template(), copy):
+            """The owned contacts of particle i in one step: their geometry, the contact law,
+            the owner's sums and the partner's shares - stored at the entry (no atomics), or
+            with ``scatter`` added to the partner's sums of copy ``copy`` (add_partner_share:
+            one thread, or worker ``copy`` alone writing that copy).
+            ``full`` = 1 (the step of a rebuild): every pair; 0: [mobility] pairs of two
+            inactive particles keep their force, torque and history (their heat flows through
+            the kept conductance)."""
+            xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
+            ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
+            temperature_i = temperature_of(i)
+            residual_i = vec0
+            if ti.static(split):
+                residual_i = s.position_residual[i]
+            owned_force = vec0
+            owned_torque = vec0
+            owned_heat = 0.0
+            owned_conductance = 0.0
+            frozen_i = False
+            if ti.static(mobility):
+                frozen_i = full == 0 and active[i] == 0
+            inactive_i = False
+            if ti.static(core_internal):
+                inactive_i = active[i] == 0
+            for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
+                j = p.neighbour[k]
+                if ti.static(mobility):
+                    if frozen_i and active[j] == 0:
+                        # both inactive: the contact is frozen as it was at the rebuild
+                        if ti.static(pair_heat):
+                            if p.contact[k] != 0:
+                                h = p.pair_conductance[k]
+                                q = h * (temperature_of(j) - temperature_i)
+                                owned_heat += q
+                                owned_conductance += h
+                                p.partner_heat[k] = -q
+                        continue
+                d = minimum_image(xi - s.position[j])
+                if ti.static(split):
+                    # x_i - x_j of near particles is exact in f32: the residuals make it precise
+                    d += residual_i - s.position_residual[j]
+                rj = s.radius[j]
+                distance_sq = d.dot(d)
+                reach = ri + rj
+                if ti.static(pair_margin > 0.0):
+                    reach += ti.static(pair_margin) * ti.max(ri, rj)
+                within = distance_sq < reach * reach and distance_sq > 0.0
+                if ti.static(has_mesh):
+                    if within:
+                        within = not shields(i, j, d)
+                if within:
+                    # a pair within the margin but apart (heat only): its geometry without the
+                    # motion; touching: the whole contact
+                    touching = True
+                    if ti.static(pair_margin > 0.0):
+                        touching = distance_sq < (ri + rj) * (ri + rj)
+                    c = pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
+                                     temperature_i)
+                    history = pair_history.empty()
+                    if touching:
+                        history = pair_history.load(k)
+                    out, history = pair_law(c, history, dt)
+                    if ti.static(pair_heat):
+                        owned_heat += out.heat
+                        owned_conductance += out.conductance
+                        if ti.static(scatter):
+                            add_partner_heat(copy, j, -out.heat, out.conductance)
+                        else:
+                            p.partner_heat[k] = -out.heat
+                            p.pair_conductance[k] = out.conductance
+                    if c.normal_overlap > 0.0:
+                        inner = False
+                        if ti.static(core_internal):
+                            inner = inactive_i and active[j] == 0
+                        if not inner:
+                            owned_force += out.force
+                            owned_torque += out.torque_i
+                        if ti.static(scatter):
+                            add_partner_share(copy, j, -out.force, out.torque_j)
+                        else:
+                            p.partner_force[k] = -out.force
+                            p.partner_torque[k] = out.torque_j
+                        pair_history.store(k, history)
+                        p.contact[k] = ti.u8(1)
+                    else:
+                        # near, not touching: no force (the gather reads the partner's share
+                        # of touching pairs only) and no spring to carry
+                        if p.contact[k] == 1:
+                            pair_history.clear(k)
+                        p.contact[k] = ti.u8(2)
+                elif p.contact[k] != 0:
+                    # the contact opened: its history is discarded
+                    p.contact[k] = ti.u8(0)
+                    pair_history.clear(k)
+            s.owned_force[i] = owned_force
+            s.owned_torque[i] = owned_torque
+            if ti.static(thermal):
+                s.owned_heat[i] = owned_heat
+                s.conductance[i] = owned_conductance
+
+        @ti.kernel
+        def pair_forces(n: ti.i32, dt: real, full: ti.i32, serial_loops: ti.template()):
+            """pair_particle over the particles; ``serial_loops``: one thread (Engine.serial)."""
+            ti.loop_config(serialize=serial_loops)
+            for i in range(n):
+                pair_particle(i, dt, full, ti.static(serial_loops and scatter_ok), 0)
+        self.pair_particle = pair_particle
+        self.pair_forces = pair_forces
