@@ -47,7 +47,7 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     import taichi as ti
     import taichi_dem as td
-    from taichi_dem.engine import tuning
+    from taichi_dem.setup import tuning
     scene = write_chute_scene(Path(tempfile.mkdtemp()) / a.size, **SIZES[a.size])
 
     def make(copies: bool, chunks=tuning.WORKER_CHUNKS):

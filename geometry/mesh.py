@@ -25,7 +25,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Optional
 
+import math
+
 import numpy as np
+
+
+def rotation_matrix(axis, angle: float) -> np.ndarray:
+    """Rodrigues rotation by ``angle`` rad about the unit ``axis`` (a 3 x 3 array)."""
+    x, y, z = axis
+    c, s = math.cos(angle), math.sin(angle)
+    k = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]], float)
+    return np.eye(3) + s * k + (1 - c) * (k @ k)
 
 # Scene-size sanity: a DEM body larger than this or smaller than that is a unit mistake.
 MAX_EXTENT = 1000.0      # m

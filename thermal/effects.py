@@ -29,7 +29,7 @@ import taichi as ti
 
 from taichi_dem.effects.base import Effect
 from taichi_dem.errors import DivergenceError
-from taichi_dem.effects.regions import region_test
+from taichi_dem.engine.regions import region_test
 from taichi_dem.engine.precision import make_compensated_add
 
 from . import coarse_grained as coarse
@@ -657,3 +657,9 @@ def thermal_effects(scene) -> list:
         out.append(Drying(f"moisture: evaporation at {th.evaporation_temperature:g} K, "
                           f"latent heat {th.latent_heat:g} J/kg", th, compensated))
     return out
+
+
+def build(scene, settings) -> list:
+    """The heat transfer's effects for a scene whose [thermal] reads as ``settings``
+    (scene.thermal), by its section's ``builds`` (effects/registry.py)."""
+    return list(thermal_effects(scene))

@@ -12,7 +12,7 @@ import numpy as np
 import taichi as ti
 
 from taichi_dem.effects.base import Effect
-from taichi_dem.engine.tuning import MOST_SPECIES
+from taichi_dem.setup.tuning import MOST_SPECIES
 
 from . import coarse_grained as coarse
 from . import first_layer
@@ -84,7 +84,7 @@ class _GasGap(Effect):
     (radii from a distribution) every contact integrates (Gauss-Legendre, as in the tests)."""
 
     stage = "contact"
-    MOST_SPECIES = MOST_SPECIES       # (engine/tuning.py)
+    MOST_SPECIES = MOST_SPECIES       # (setup/tuning.py)
 
     def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance",
                  porosity=0.4, coarse_materials=False, free_path=0.0):

@@ -14,9 +14,10 @@ from typing import Any, Optional
 
 from taichi_dem.errors import SceneError
 from taichi_dem.scene import air
-from taichi_dem.scene.keys import Key, Section, register, type_name
+from taichi_dem.scene.keys import (Key, Section, equals, given, none_of, register, type_name,
+                                   unless)
 from taichi_dem.scene.sections.regions import REGION
-from taichi_dem.sensors.series import Series
+from taichi_dem.scene.keys import Series
 
 DRAG_MODELS = ("di_felice", "schiller_naumann")
 GAS_MODELS = ("fixed", "axial_plug_flow")
@@ -86,11 +87,22 @@ GAS = register(Section("thermal.gas", "The gas the particles exchange heat with 
         unit="temperature", default=None, **_P, effect="plug_flow_gas"),
     Key("flow", "choice", "plug flow: entering at axis_point (\"along_axis\") or at the far end",
         default="along_axis", choices=FLOWS, effect="plug_flow_gas"),
-), owner=__name__))
+), owner=__name__, schema_rules=lambda: [
+    # the plug-flow gas's keys, and the fixed gas's, as parse_gas checks them
+    {"if": unless("model", "axial_plug_flow"), "then": none_of(*PLUG_FLOW_KEYS),
+     "else": {"required": list(PLUG_FLOW_REQUIRED),
+              "allOf": [none_of(*FIXED_GAS_ONLY), {"oneOf": [given("flow_area"), given("radius")]}]}},
+]))
 FIXED_GAS_ONLY = ("temperature", "velocity")
 PLUG_FLOW_KEYS = ("axis_point", "axis_direction", "length", "cells", "flow_area", "radius",
                   "mass_flow", "inlet_temperature", "flow")
 PLUG_FLOW_REQUIRED = ("axis_direction", "length", "cells", "mass_flow", "inlet_temperature")
+
+def _absolute_temperature() -> dict:
+    """The JSON Schema of a temperature above 0 K (a number in K or a string with a unit)."""
+    from taichi_dem.scene.schema import quantity
+    return quantity("temperature", 0.0, exclusive_minimum=True)
+
 
 THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run; each part "
                            "switchable", (
@@ -117,7 +129,8 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
     Key("radiation_to", "any", "what the particles see: \"gas\", a wall or body with a "
         "temperature, or a temperature (an enclosure); required with radiation",
         default=None, effect="radiation",
-        schema={"anyOf": [{"type": "string"}, {"type": "number"}]}),
+        schema={"anyOf": [{"type": "string"}, _absolute_temperature()],
+                "x-unit": "K", "x-dimension": "temperature"}),
     Key("radiation_region", "table", "radiation only inside this region (a box or cylinder)",
         default=None, effect="radiation"),
     Key("evaporation_temperature", "quantity", "drying: the water's evaporation temperature",
@@ -160,7 +173,24 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
         "than the mechanics (thermal time = S x simulated time)", unit="dimensionless",
         default=1.0, minimum=1.0, why="it divides heat capacities so that heat moves S times "
         "faster than the mechanics", effect="temperature"),
-), owner=__name__, nested={"gas": GAS, "radiation_region": REGION}))
+), owner=__name__, nested={"gas": GAS, "radiation_region": REGION},
+   builds="taichi_dem.thermal.effects:build",
+   reader=lambda table, parser: parse_thermal(table, parser, parser.sources, parser.walls,
+                                              parser.bodies),
+   schema_rules=lambda: [
+    # the switches and the keys that need them, as parse_thermal checks them
+    {"if": {"anyOf": [given("radiation_to"), given("radiation_region")]},
+     "then": equals("radiation", True)},
+    {"if": equals("radiation", True), "then": given("radiation_to")},
+    {"if": {"anyOf": [given(k) for k in GAS_GAP_KEYS]}, "then": equals("gas_gap", True)},
+    {"if": unless("contact_conduction_model", "steady"), "then": unless("conduction", False)},
+    {"if": given("gas_gap_porosity"),
+     "then": {"properties": {"gas_gap_model": {"enum": list(VORONOI_MODELS)}}}},
+    {"if": {"anyOf": [given("gas_pressure"), given("gas_gap_free_path")]},
+     "then": {"properties": {"gas_gap_model": {"enum": list(WIDENED_MODELS)}}}},
+    {"if": given("gas_gap_min_gap"),
+     "then": unless("gas_gap_model", *WIDENED_MODELS) | {"required": ["gas_gap_model"]}},
+]))
 
 
 @dataclass(frozen=True)

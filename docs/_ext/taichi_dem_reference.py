@@ -7,7 +7,7 @@ Each page is Markdown written from what the code declares, never by hand:
   them) and the mesh builders' parameters (``taichi_dem.geometry.registry``);
 - ``cli.md`` from the argparse parser (``taichi_dem.app.cli._parser()``) and ``cli.EXAMPLES``;
 - ``results.md`` from the results file's declarations: the series (``Series`` objects,
-  ``taichi_dem.recorders.units.declared()``), the frame datasets (``FRAME_DATASETS``), the
+  ``taichi_dem.sensors.units.declared()``), the frame datasets (``FRAME_DATASETS``), the
   residence records (``RESIDENCE_UNITS``) and the root attributes (``ROOT_ATTRIBUTES``) of
   ``taichi_dem.recorders.hdf5``.
 
@@ -275,13 +275,13 @@ def results_page(names: list[str] | None = None) -> str:
     """Every dataset and attribute of a results file (HDF5). ``names`` (a list) receives the
     dataset paths written (``series/time``, ``frames/*/position``, ...)."""
     from taichi_dem.recorders import hdf5
-    from taichi_dem.recorders.units import declared
+    from taichi_dem.sensors.units import declared
 
     names = [] if names is None else names
     out = [HEADER, "",
            "What a run writes into its results file (`--h5`, or `[output] h5`), from the "
            "declarations in the code (`taichi_dem.recorders.hdf5`, "
-           "`taichi_dem.recorders.units.declared()`). Every dataset carries its SI unit in a "
+           "`taichi_dem.sensors.units.declared()`). Every dataset carries its SI unit in a "
            "`units` attribute (`\"1\"`: a count or a ratio). Samples are taken every "
            "`[output] interval`; a killed run keeps what it had written.", "",
            "## Root attributes", ""]

@@ -79,7 +79,7 @@ def run_window(sim, until: float, *, size=(1280, 800), vsync: bool = True,
     if problem:
         raise WindowError(problem)
     import taichi as ti
-    from ..bodies.kinematics import rotation_matrix
+    from taichi_dem.geometry.mesh import rotation_matrix
 
     try:
         window = ti.ui.Window("taichi-dem", tuple(size), vsync=vsync)

@@ -10,15 +10,9 @@ import math
 
 import numpy as np
 
+from taichi_dem.geometry.mesh import rotation_matrix
+
 MAX_SCHEDULE = 64      # speed schedule points per body on the device
-
-
-def rotation_matrix(axis, angle: float) -> np.ndarray:
-    """Rodrigues rotation by ``angle`` rad about the unit ``axis``."""
-    x, y, z = axis
-    c, s = math.cos(angle), math.sin(angle)
-    k = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]], float)
-    return np.eye(3) + s * k + (1 - c) * (k @ k)
 
 
 class BodyKinematics:

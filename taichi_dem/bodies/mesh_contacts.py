@@ -29,7 +29,7 @@ from ..contacts.geometry import contact_types
 from ..contacts.history import history_members, make_history_io
 from ..contacts.law import has_effects, margin_fraction
 from ..effects.mesh_contact import closest_point_on_triangle
-from ..engine.tuning import LIST_GROWTH
+from ..setup.tuning import LIST_GROWTH
 from ..engine.broadphase import exclusive_scan, previous_entry
 from ..engine import transfer
 from ..setup.memory import bucket

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import importlib
 
-from ..scene.keys import effect_sections
+from ..scene.keys import effect_sections, registered
 from ..scene.model import Scene
 from .base import Effect
 from .gravity import Gravity
@@ -32,14 +32,13 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
         effects.append(Effect(f"{len(scene.bodies)} triangle-mesh bodies ({n_tri} triangles): "
                               "the contact law on each particle-triangle contact, loads on "
                               "each body", "mesh_contact", "detect"))
-    # the effects with a section of their own (effects/catalog.py), built by their modules
+    # the effects with a section of their own (scene/catalog.py), built by the function
+    # their section names (imported only for a scene that has the section)
     for path, settings in scene.settings.items():
-        module, _, function = effect_sections()[path].builds.partition(":")
-        effects.extend(getattr(importlib.import_module(module), function)(scene, settings))
+        effects.extend(_built(effect_sections()[path].builds, scene, settings))
     if scene.thermal is not None:
-        # the thermal package registers its effects here, and only here
-        from taichi_dem.thermal.effects import thermal_effects
-        effects.extend(thermal_effects(scene))
+        # the heat transfer's, by [thermal]'s declaration (thermal/settings.py)
+        effects.extend(_built(registered()["thermal"].builds, scene, scene.thermal))
     for f in scene.factories:
         effects.append(Effect(f"factory '{f.name}': {f.material} at "
                               + " then ".join(f"{r * 3.6:g} t/h from {t:g} s"
@@ -56,6 +55,12 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
     if any(f.fixed for f in scene.fills):
         effects.append(Effect("fixed (frozen) particles", "fixed_particles", "integrate"))
     return order_effects(effects)
+
+
+def _built(builds: str, scene: Scene, settings) -> list:
+    """The effect objects the function ``builds`` ("module:function") makes."""
+    module, _, function = builds.partition(":")
+    return list(getattr(importlib.import_module(module), function)(scene, settings))
 
 
 def order_effects(effects) -> tuple[Effect, ...]:

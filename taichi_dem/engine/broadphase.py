@@ -22,7 +22,7 @@ import taichi as ti
 from .grid import GridSpec  # noqa: F401 (re-exported)
 from ..setup.memory import bucket
 from .state import PairState, grown_capacity
-from .tuning import FUSED_AFTER_QUIET_REBUILDS, LIST_GROWTH, SETTLED_ENTRIES_PER_PARTICLE
+from ..setup.tuning import FUSED_AFTER_QUIET_REBUILDS, LIST_GROWTH, SETTLED_ENTRIES_PER_PARTICLE
 from .workers import WORKER_TASK, make_barrier, worker_range
 
 

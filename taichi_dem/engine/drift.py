@@ -5,7 +5,7 @@ skin. [mobility]: inactive particles are held, or carried rigidly by the frame's
 import taichi as ti
 
 from .precision import make_split_add
-from .state import Flag
+from .state import PARKED, Flag
 
 
 def make_drift(e):
@@ -24,7 +24,6 @@ def make_drift(e):
 
     has_process = e.process is not None
     after_drift = e.process.make_funcs(e) if has_process else None
-    from ..process.outlets import PARKED
     mobility = e.model.mobility is not None
     active = e.model.mobility.particle_active if mobility else None
     body_frame = e.model.mobility_frame >= 0

@@ -15,9 +15,9 @@ step's drift fused in) are the step functions, the same ti.funcs in every mode.
 
 import taichi as ti
 
-from . import tuning
+from ..setup import tuning
 from .state import Flag
-from .tuning import STALL_SPINS, STALL_SPINS_PER_PARTICLE, WORKER_CHUNK
+from ..setup.tuning import STALL_SPINS, STALL_SPINS_PER_PARTICLE, WORKER_CHUNK
 from .workers import WORKER_TASK, make_barrier
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import taichi as ti
 
 from ..setup.memory import bucket
-from .tuning import LIST_GROWTH
+from ..setup.tuning import LIST_GROWTH
 
 VEC = 3
 # the moment of inertia of a solid sphere, I = SPHERE_INERTIA m r^2 (2/5)
@@ -42,6 +42,11 @@ class FieldTree:
             self._tree.destroy()
             self._tree = None
         self.fields.clear()
+
+
+# where a removed particle waits until the next rebuild drops it, m on each axis: far from
+# everything, so that it touches nothing (process/outlets.py parks those it removes)
+PARKED = 1.0e9
 
 
 class Flag:

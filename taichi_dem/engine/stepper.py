@@ -30,6 +30,9 @@ created by insertion.py; the neighbour lists are broadphase.py's; the sums at a 
 measure.py's.
 """
 
+from dataclasses import dataclass
+from typing import Callable
+
 import numpy as np
 import taichi as ti
 
@@ -44,8 +47,9 @@ from ..contacts.law import make_contact_law, margin_fraction
 from ..contacts.planes import PlaneWalls, make_plane_contacts
 from ..effects.base import EffectContext
 from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
-from . import drivers, tuning
-from .tuning import PARALLEL_FROM
+from . import drivers
+from ..setup import tuning
+from ..setup.tuning import PARALLEL_FROM
 from .drift import make_drift
 from .gather_stage import GatherStage
 from .pair_stage import PairStage, make_temperature_of
@@ -53,12 +57,28 @@ from .values import RuntimeValues
 from .workers import WorkerPool, persistent_workers
 
 
+@dataclass(frozen=True)
+class EngineParts:
+    """What the layers above the engine supply to it, so that it imports none of them
+    (docs/architecture.md "Layers"): the bodies' host motion (``kinematics``, a
+    bodies/kinematics.py BodyKinematics, or None) and the factories of the mesh contacts
+    (``mesh(engine, kinematics)``: bodies/mesh_contacts.py) and of the process device
+    (``process(engine, tree)``: process/outlets.py). run/simulation.py ``engine_parts``
+    makes them for a scene."""
+    kinematics: object = None
+    mesh: "Callable | None" = None
+    process: "Callable | None" = None
+
+
 class Engine:
     """Owns the device state of one simulation and the kernels that advance it."""
 
-    def __init__(self, model: Model, parallel_from: "int | None" = None):
+    def __init__(self, model: Model, parallel_from: "int | None" = None,
+                 parts: "EngineParts | None" = None):
         """``model``: what the simulation is (model.py, frozen); ``parallel_from``: particles
-        from which a CPU runs the step's loops on all threads."""
+        from which a CPU runs the step's loops on all threads; ``parts``: the bodies' and the
+        process's parts, which a scene with bodies, factories, outlets or flow sensors needs."""
+        parts = parts if parts is not None else EngineParts()
         self.model = model
         scene = model.scene
         tables = model.tables
@@ -118,8 +138,10 @@ class Engine:
             e.allocate(self.context, t)
         self.process = None
         if scene.factories or scene.outlets or has_planes:
-            from ..process.outlets import ProcessDevice
-            self.process = ProcessDevice(self, t)
+            if parts.process is None:
+                raise ValueError("a scene with factories, outlets or flow sensors needs "
+                                 "EngineParts.process (run/simulation.py engine_parts)")
+            self.process = parts.process(self, t)
         t.finalize()
         self.removed_batches: list = []    # removal-log entries drained at rebuilds
         self.before_rebuild = None         # host hook (engine) before a rebuild in advance
@@ -144,11 +166,13 @@ class Engine:
         self.broadphase = Broadphase(self)
         self.context.attach("broadphase", self.broadphase)
         self.mesh = None
+        # the bodies' motion on the host (kinematics.py), and their contacts on the device
+        self.kinematics = parts.kinematics
         if scene.bodies:
-            from ..bodies.kinematics import BodyKinematics
-            from ..bodies.mesh_contacts import MeshContacts
-            self.kinematics = BodyKinematics(scene.bodies)
-            self.mesh = MeshContacts(self, self.kinematics)
+            if parts.mesh is None or parts.kinematics is None:
+                raise ValueError("a scene with bodies needs EngineParts.kinematics and .mesh "
+                                 "(run/simulation.py engine_parts)")
+            self.mesh = parts.mesh(self, self.kinematics)
             self.context.attach("mesh", self.mesh)
         if self.model.mobility is not None:
             self.model.mobility.compile(self.context)

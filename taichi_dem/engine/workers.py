@@ -13,7 +13,7 @@ import sys
 import taichi as ti
 
 from .state import FieldTree
-from .tuning import PROBE_SPINS, WORKER_STALL_LIMIT, WORKER_STALL_WINDOW, WORKER_STALLED_WINDOWS
+from ..setup.tuning import PROBE_SPINS, WORKER_STALL_LIMIT, WORKER_STALL_WINDOW, WORKER_STALLED_WINDOWS
 
 WORKER_TASK = 512       # loop iterations per worker: its one active iteration is alone in its task
 # (Taichi cuts a CPU range-for into tasks of 512 - 1024 iterations - its adaptive block size,

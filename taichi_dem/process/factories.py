@@ -30,7 +30,7 @@ import time as time_module
 
 import numpy as np
 
-from ..bodies.kinematics import rotation_matrix
+from taichi_dem.geometry.mesh import rotation_matrix
 from ..setup.placement import (_Grid, _Triangles, _conflicts, _frame, _local_bounds, _valid,
                                sample_radii)
 

@@ -14,15 +14,14 @@ between two rebuilds; the host drains it at every rebuild and every output sampl
 import numpy as np
 import taichi as ti
 
-from ..effects.regions import region_test
-from ..engine.state import Flag
+from ..engine.regions import region_test
+from ..engine.state import PARKED, Flag
 from ..sensors.mass_flow import PlaneCrossings
 
 EXIT_LOST = -1          # the particle left the domain
 
 # parked position of dead particles: far outside any domain, but finite in f32 so squared
 # distances to it stay finite
-PARKED = 1.0e9
 
 
 class ProcessDevice:

@@ -9,7 +9,7 @@ import h5py
 import numpy as np
 
 from .._version import __version__
-from .units import unit_of
+from ..sensors.units import unit_of
 
 
 def _label(ds, name: str) -> None:

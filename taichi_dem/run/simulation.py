@@ -22,7 +22,7 @@ from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
 from ..effects.base import Effect
 from ..engine import backend, transfer
-from ..engine.tuning import MOST_SPECIES
+from ..setup.tuning import MOST_SPECIES
 from ..errors import DivergenceError, SceneError, StaleSimulationError
 from ..scene.loader import load_scene, parse_scene
 from ..scene.model import Scene
@@ -134,6 +134,19 @@ PLAIN_PROGRESS_S = 10.0
 ETA_WINDOW_S = 20.0
 
 
+def engine_parts(scene: Scene):
+    """What the engine takes from the layers above it for ``scene`` (engine/stepper.py
+    EngineParts): the bodies' kinematics and mesh contacts, the process device."""
+    from ..engine.stepper import EngineParts
+    from ..process.outlets import ProcessDevice
+    kinematics = mesh = None
+    if scene.bodies:
+        from ..bodies.kinematics import BodyKinematics
+        from ..bodies.mesh_contacts import MeshContacts
+        kinematics, mesh = BodyKinematics(scene.bodies), MeshContacts
+    return EngineParts(kinematics=kinematics, mesh=mesh, process=ProcessDevice)
+
+
 class Simulation:
     """One DEM simulation. Units SI throughout (m, kg, s, K, N)."""
 
@@ -178,7 +191,7 @@ class Simulation:
                             float(np.max(radii)), max(capacity, 1),
                             species=_particle_species(scene, placed, self.tables.names),
                             effects=self._effects)
-        self.engine = Engine(model, parallel_from=parallel_from)
+        self.engine = Engine(model, parallel_from=parallel_from, parts=engine_parts(scene))
         small = self.engine.model.grid.too_small_periodic_axes(
             (2.0 + self.engine.model.pair_margin) * float(np.max(radii)) + self.skin)
         if small:     # (_fit_skin_to_periodic_axes makes this unreachable; kept as a guard)

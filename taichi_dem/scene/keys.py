@@ -251,6 +251,9 @@ class Section:
     # with a reader: ``step_problem(settings, dt) -> (key, reason) or None``, why the effect
     # cannot be stepped at ``dt`` s (the scene is refused naming [path].key)
     step_problem: Optional[Callable[[Any, float], Any]] = None
+    # ``schema_rules() -> [JSON Schema, ...]``: the section's conditional keys as its own code
+    # checks them (one key needs another), the ``allOf`` of its schema (scene/schema.py)
+    schema_rules: Optional[Callable[[], list]] = None
 
     def __post_init__(self):
         names = [k.name for k in self.keys]
@@ -307,8 +310,43 @@ class Section:
         return out
 
 
+@dataclass(frozen=True)
+class Series:
+    """One /series name a sensor or an effect writes (sensors/series.py says what each field
+    means; sensors/units.py gathers them): its name pattern, its SI unit ("1": a count or a ratio), what it is and
+    the shape of one sample ("": a number; "(3,)": a vector; the dataset adds the samples
+    axis in front)."""
+    name: str
+    unit: str
+    description: str
+    shape: str = ""
+    interval: str = ""
+    weight: str = ""
+
+
 # every declared section, by path, filled by ``register`` when the declaring module loads
 _REGISTRY: dict[str, Section] = {}
+
+
+# JSON Schema fragments for a section's conditional keys (Section.schema_rules)
+def given(*names: str) -> dict:
+    """The table gives every one of ``names``."""
+    return {"required": list(names)}
+
+
+def none_of(*names: str) -> dict:
+    """The table gives none of ``names``."""
+    return {"not": {"anyOf": [given(n) for n in names]}}
+
+
+def equals(key: str, *values) -> dict:
+    """The table gives ``key`` as one of ``values``."""
+    return {"properties": {key: {"enum": list(values)}}, "required": [key]}
+
+
+def unless(key: str, *values) -> dict:
+    """The table gives ``key`` as another value than ``values``, or not at all (default)."""
+    return {"not": equals(key, *values)}
 
 
 def register(section: Section) -> Section:

@@ -18,11 +18,10 @@ import re
 import tomllib
 from pathlib import Path
 
-from taichi_dem.thermal.settings import parse_thermal
 
-from ..effects import catalog as _catalog  # noqa: F401 (registers the effects' sections)
+from . import catalog as _catalog  # noqa: F401 (registers the effects' sections)
 from ..errors import SceneError
-from .keys import effect_sections, suggest as _suggest
+from .keys import effect_sections, registered, suggest as _suggest
 from .model import Scene
 from .sections.common import Reader, decode_utf8 as _decode_utf8, refuse_control_characters
 from .sections.materials import MaterialSections
@@ -33,7 +32,7 @@ from .sections.simulation import SimulationSections
 from .sections.surfaces import SurfaceSections
 
 # the sections this module reads itself; every effect section with a reader of its own
-# (effects/catalog.py) is accepted too
+# (scene/catalog.py) is accepted too
 BUILT_IN_SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls",
                      "bodies", "factories", "outlets", "sensors", "thermal",
                      "output")
@@ -145,7 +144,10 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
         self.check_particle_total(simulation, fills, factories)
         sources = tuple(fills) + factories
         self.check_coverage(interactions, sources, walls, bodies)
-        thermal = (parse_thermal(doc["thermal"], self, sources, walls, bodies)
+        # [thermal] first: the other effects' sections may read it (the drag of its gas);
+        # its reader is declared with its keys (thermal/settings.py)
+        self.simulation, self.sources, self.walls, self.bodies = simulation, sources, walls, bodies
+        thermal = (registered()["thermal"].reader(doc["thermal"], self)
                    if "thermal" in doc else None)
         self.check_coarse_grained(thermal, sources, walls, bodies)
         self.check_consistency(doc, simulation, output, sources, walls, bodies, thermal)
@@ -155,7 +157,6 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
                     raise self.err(f"{f.key}.moisture", "drying needs heat transfer: add a "
                                                         "[thermal] section (and a gas to dry in)")
         # every other effect's section, read by its own settings module (scene/keys.py)
-        self.simulation, self.sources, self.walls, self.bodies = simulation, sources, walls, bodies
         self.thermal = thermal
         settings = {}
         for path, section in effect_sections().items():

@@ -12,9 +12,6 @@ from typing import Any, Optional
 
 import numpy as np
 
-# the effects' own settings, declared with their keys where the effect lives
-from taichi_dem.thermal.settings import GasSettings, ThermalSettings  # noqa: F401
-
 Vec3 = tuple[float, float, float]
 
 
@@ -417,7 +414,8 @@ class Scene:
     walls: tuple[PlaneWall, ...] = ()
     bodies: tuple["Body", ...] = ()
     output: Output = field(default_factory=Output)
-    thermal: Optional[ThermalSettings] = None
+    # [thermal] as thermal/settings.py reads it (its ThermalSettings), or None
+    thermal: Optional["ThermalSettings"] = None  # noqa: F821
     factories: tuple[Factory, ...] = ()
     outlets: tuple[Outlet, ...] = ()
     sensors: tuple[Sensor, ...] = ()

@@ -50,7 +50,8 @@ from taichi_dem.geometry import registry as _builders
 from taichi_dem.geometry.builders import (BUILDERS, COMMON, KINDS as BUILDER_KINDS,
                                          PARAMETER_RANGES, REQUIRED as BUILDER_REQUIRED)
 
-from .keys import REQUIRED, Key, Section, effect_sections, registered
+from .keys import (REQUIRED, Key, Section, effect_sections, equals, given, none_of, registered,
+                   unless)
 from .units import DIMENSIONS, MAX_MAGNITUDE, MIN_MAGNITUDE, quantity_pattern, units_for
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
@@ -216,36 +217,16 @@ _STRUCTURED = {
                                                              quantity("time", 0.0)),
     ("domain", "min"): lambda _: _domain_corner(),
     ("domain", "max"): lambda _: _domain_corner(),
-    ("thermal", "radiation_to"): lambda _: {"anyOf": [
-        {"type": "string"}, quantity("temperature", 0.0, exclusive_minimum=True)],
-        "x-unit": "K", "x-dimension": "temperature"},
 }
 
 
-def _given(*names: str) -> dict:
-    return {"required": list(names)}
-
-
-def _none_of(*names: str) -> dict:
-    return {"not": {"anyOf": [_given(n) for n in names]}}
-
-
-def _is(key: str, *values) -> dict:
-    """The table gives ``key`` as one of ``values``."""
-    return {"properties": {key: {"enum": list(values)}}, "required": [key]}
-
-
-def _unless(key: str, *values) -> dict:
-    """The table gives ``key`` as another value than ``values``, or not at all (default)."""
-    return {"not": _is(key, *values)}
+_given, _none_of, _is, _unless = given, none_of, equals, unless
 
 
 def _rules() -> dict[str, list[dict]]:
     """Conditional keys of a table, as the sections' code checks them: section path -> the
     ``allOf`` rules of its schema."""
     from taichi_dem.scene.sections.process import RANDOM_ONLY_KEYS, SENSOR_KEYS, SHEET_ONLY_KEYS
-    from taichi_dem.thermal.settings import (FIXED_GAS_ONLY, GAS_GAP_KEYS, PLUG_FLOW_KEYS,
-                                             PLUG_FLOW_REQUIRED, VORONOI_MODELS, WIDENED_MODELS)
     fill_keys = ("count", "region", "radius")
     h5 = rf"\.[hH]5${_END}|\.[hH][dD][fF]5${_END}"
     nonzero = {"anyOf": [{"type": "number", "exclusiveMinimum": 0},
@@ -281,31 +262,6 @@ def _rules() -> dict[str, list[dict]]:
         ],
         "sensors[]": sensors,
         "region": [{"minProperties": 1, "maxProperties": 1}],
-        "thermal.gas": [
-            {"if": _unless("model", "axial_plug_flow"), "then": _none_of(*PLUG_FLOW_KEYS),
-             "else": {"required": list(PLUG_FLOW_REQUIRED),
-                      "allOf": [_none_of(*FIXED_GAS_ONLY),
-                                {"oneOf": [_given("flow_area"), _given("radius")]}]}},
-        ],
-        "thermal": [
-            {"if": {"anyOf": [_given("radiation_to"), _given("radiation_region")]},
-             "then": _is("radiation", True)},
-            {"if": _is("radiation", True), "then": _given("radiation_to")},
-            {"if": {"anyOf": [_given(k) for k in GAS_GAP_KEYS]}, "then": _is("gas_gap", True)},
-            {"if": _unless("contact_conduction_model", "steady"),
-             "then": _unless("conduction", False)},
-            {"if": _given("gas_gap_porosity"),
-             "then": {"properties": {"gas_gap_model": {"enum": list(VORONOI_MODELS)}}}},
-            {"if": {"anyOf": [_given("gas_pressure"), _given("gas_gap_free_path")]},
-             "then": {"properties": {"gas_gap_model": {"enum": list(WIDENED_MODELS)}}}},
-            {"if": _given("gas_gap_min_gap"), "then": _unless("gas_gap_model", *WIDENED_MODELS)
-             | {"required": ["gas_gap_model"]}},
-        ],
-        "mobility": [
-            {"if": _is("mode", "body_frame"), "then": _given("body")},
-            {"if": _given("body"), "then": _is("mode", "body_frame")},
-        ],
-        "gas": [_given("velocity")],
         "materials.*": [
             {"if": {"anyOf": [_given("surface_slope"), _given("microhardness")]},
              "then": {"required": ["surface_slope", "microhardness", "surface_roughness"],
@@ -380,6 +336,9 @@ def section_schema(section: Section, sections: dict[str, Section]) -> dict:
     if required:
         out["required"] = required
     rules = _rules().get(section.path)
+    if section.schema_rules is not None:
+        # a section's own (an effect's: thermal/settings.py, effects/*/settings.py)
+        rules = (rules or []) + list(section.schema_rules())
     if rules:
         out["allOf"] = rules
     return out
@@ -481,7 +440,7 @@ def builder_schema() -> dict:
 
 
 # where each built-in top-level section is declared (an array of tables "x[]", named tables
-# "x.*"); an effect's own sections (effects/catalog.py) are added as they are
+# "x.*"); an effect's own sections (scene/catalog.py) are added as they are
 _TOP = {"simulation": "simulation", "domain": "domain", "output": "output",
         "materials": "materials.*", "interactions": "interactions[]", "particles": "particles[]",
         "walls": "walls[]", "bodies": "bodies[]", "factories": "factories[]",

@@ -25,7 +25,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..recorders.units import declaration
+from .units import declaration
 
 
 @functools.lru_cache(maxsize=4096)

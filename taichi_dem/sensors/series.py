@@ -3,7 +3,7 @@
 The sensors' and the run's series are declared here; an effect's own series are declared in
 its settings module (``SERIES`` in effects/drag/settings.py, thermal/settings.py), beside its
 scene keys. The results file gives every series dataset a ``units`` attribute from these
-(recorders/units.py gathers the declarations; a name none matches gets none, and
+(sensors/units.py gathers the declarations; a name none matches gets none, and
 tests/unit/test_series_units.py fails on it). Plain Python (no Taichi).
 
 A name is a pattern: ``*`` stands for one name segment (a body's, a wall's, a sensor's).
@@ -18,21 +18,8 @@ interval, pooled by the sensor that writes it.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-
-@dataclass(frozen=True)
-class Series:
-    """One series: its name pattern, its SI unit ("1": a count or a ratio), what it is and
-    the shape of one sample ("": a number; "(3,)": a vector; the dataset adds the samples
-    axis in front)."""
-    name: str
-    unit: str
-    description: str
-    shape: str = ""
-    interval: str = ""
-    weight: str = ""
-
+# (the declaration itself is data, beside the scene keys: effects declare series too)
+from ..scene.keys import Series  # noqa: F401
 
 SERIES = (
     Series("time", "s", "simulated time of the sample"),

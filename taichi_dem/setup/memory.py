@@ -50,7 +50,7 @@ def estimated_device_bytes(slots: int, precision: str) -> int:
     is allocated with (SETTLED_ENTRIES_PER_PARTICLE per slot, in a bucket; more than
     LIST_ENTRIES_PER_PARTICLE with the growth headroom) of 3 ints and 5 vectors each; and
     CELLS_PER_PARTICLE grid cells of 2 ints."""
-    from ..engine.tuning import LIST_GROWTH, SETTLED_ENTRIES_PER_PARTICLE
+    from .tuning import LIST_GROWTH, SETTLED_ENTRIES_PER_PARTICLE
     real_bytes = 8 if precision == "f64" else 4
     per_particle = (6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes
     per_entry = 3 * 4 + 5 * 3 * real_bytes

@@ -54,7 +54,7 @@ def test_every_command_and_option_is_on_the_page(ref):
 
 def test_results_page_names_every_dataset_with_its_unit(ref):
     from taichi_dem.recorders import hdf5
-    from taichi_dem.recorders.units import declared
+    from taichi_dem.sensors.units import declared
     written = []
     page = ref.results_page(written)
     assert "frames/*/position" in written

@@ -166,3 +166,32 @@ def test_no_file_function_or_class_is_too_big_unless_it_says_why():
                 if len(stored) > MAX_CLASS_ATTRIBUTES and "Why" not in (ast.get_docstring(node) or ""):
                     too_big.append(f"{rel}: {node.name} holds {len(stored)} attributes")
     assert not too_big, too_big
+
+
+def package_of(module: str) -> str:
+    """The top-level part of taichi_dem a module belongs to ("engine", "scene", "errors")."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "(root)"
+
+
+def test_packages_import_one_way():
+    """docs/architecture.md "Layers": the packages of taichi_dem (engine, scene, effects,
+    thermal, ...) import each other without a cycle, so that each stands on a floor above
+    everything it imports. (The effects' settings modules and their builders are found by
+    discovery and by their sections' declarations, scene/catalog.py and effects/registry.py:
+    no import names them.)"""
+    packages: dict[str, set[str]] = {}
+    why: dict[tuple[str, str], str] = {}
+    for module, imported in import_graph().items():
+        a = package_of(module)
+        packages.setdefault(a, set())
+        for other in imported:
+            b = package_of(other)
+            if a != b:
+                packages[a].add(b)
+                packages.setdefault(b, set())
+                why.setdefault((a, b), f"{module} -> {other}")
+    found = cycles(packages)
+    assert not found, "packages that import each other in a loop: " + "; ".join(
+        " <-> ".join(c) + " (" + ", ".join(why[(x, y)] for x in c for y in c if (x, y) in why)
+        + ")" for c in found)

@@ -127,7 +127,7 @@ def test_claiming_workers_equal_the_parallel_kernels_bit_for_bit(monkeypatch):
     parallel kernels do: each particle's sums are added in the same order whichever worker
     takes it, so in the heap (many particles receive two or more partners' shares) the state
     is the parallel kernels' bit for bit, through pouring, impacts and rebuilds."""
-    from taichi_dem.engine import tuning
+    from taichi_dem.setup import tuning
     monkeypatch.setattr(tuning, "WORKER_COPIES", False)
     text = heap_text()
     workers = run(text, 0, 3000, workers=True)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from taichi_dem.recorders.units import declared, describe, unit_of
+from taichi_dem.sensors.units import declared, describe, unit_of
 
 ROOT = Path(__file__).resolve().parents[2]
 WRITERS = [ROOT / "taichi_dem" / "sensors" / n for n in

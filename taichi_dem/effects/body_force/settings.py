@@ -7,8 +7,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...errors import SceneError
-from ...scene.keys import REQUIRED, Key, Section, register, type_name
-from ...sensors.series import Series
+from ...scene.keys import REQUIRED, Key, Section, Series, register, type_name
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ from typing import Optional
 
 from ...errors import SceneError
 from ...scene import air
-from ...scene.keys import Key, Section, register, type_name
+from ...scene.keys import Key, Section, given, register, type_name
 
 MODELS = ("di_felice", "schiller_naumann")
 
@@ -24,11 +24,12 @@ SECTION = register(Section("gas", "A gas that drags the particles (one-way coupl
         "Schiller-Naumann (a dilute particle)", default="di_felice", choices=MODELS),
 ), owner=__name__, reader=lambda table, parser: read(table, parser),
    derive=lambda parser: derive(parser), builds="taichi_dem.effects.drag.effect:build",
-   speed_bound=lambda scene, settings: carried_speed(settings)))
+   speed_bound=lambda scene, settings: carried_speed(settings),
+   schema_rules=lambda: [given("velocity")]))
 
 
 # the series this effect writes (sensors/series.py)
-from ...sensors.series import Series  # noqa: E402
+from ...scene.keys import Series  # noqa: E402
 
 SERIES = (Series("gas/drag_force", "N", "the gas's pull on all particles in the last step",
                  "(3,)"),)

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from typing import Any, Optional
 
 from ...errors import SceneError
-from ...scene.keys import AUTO, Key, Section, register, suggest, type_name
+from ...scene.keys import AUTO, Key, Section, equals, given, register, suggest, type_name
 
 MODES = ("at_rest", "body_frame")
 # "auto" threshold: this fraction of g d_max, (m/s)^2 (effect.py says why)
@@ -36,7 +36,10 @@ SECTION = register(Section("mobility", "Skip the contacts and the integration of
     Key("body", "string", "mode \"body_frame\": the body whose rigid motion the bed follows "
         "(a drum's shell)", default=None),
 ), owner=__name__, reader=lambda table, parser: read(table, parser),
-   builds="taichi_dem.effects.mobility.effect:build"))
+   builds="taichi_dem.effects.mobility.effect:build", schema_rules=lambda: [
+    {"if": equals("mode", "body_frame"), "then": given("body")},
+    {"if": given("body"), "then": equals("mode", "body_frame")},
+]))
 
 
 @dataclass(frozen=True)

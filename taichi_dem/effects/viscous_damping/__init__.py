@@ -5,6 +5,6 @@ it is not physics of the granular flow, so it is off unless a scene has [viscous
 ``settings.py``: the [viscous_damping] keys and ``DampingSettings`` (plain Python);
 ``effect.py``: the ``ViscousDamping`` effect (a particle stage; Taichi), loaded on first use.
 An effect is its package and its tests (tests/verification/test_viscous_damping.py);
-effects/catalog.py finds it.
+scene/catalog.py finds it.
 """
 from .settings import SECTION, DampingSettings  # noqa: F401

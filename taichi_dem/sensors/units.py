@@ -1,11 +1,11 @@
 """The unit of every /series name: the sensors' declarations (sensors/series.py) and the
-effects' (``SERIES`` in their settings modules, effects/catalog.py). Plain Python."""
+effects' (``SERIES`` in their settings modules, scene/catalog.py). Plain Python."""
 from __future__ import annotations
 
 import fnmatch
 
-from ..effects import catalog
-from ..sensors.series import SERIES, Series
+from ..scene import catalog
+from .series import SERIES, Series
 
 
 def declared() -> tuple[Series, ...]:

@@ -4,7 +4,7 @@ size are read at run time under ``name``, so a moved outlet or radiation region 
 nothing; without, they are compiled in."""
 import taichi as ti
 
-from ..engine.values import reader
+from .values import reader
 
 
 def region_test(region, values=None, name: str = "region"):

@@ -1,15 +1,18 @@
-"""The settings modules of the effects that have scene keys of their own (plain Python, no
-Taichi), found, not listed: every package under ``taichi_dem/effects/`` with a ``settings``
+"""The scene's catalog of the sections effects declare: the settings modules of the effects
+that have scene keys of their own (plain Python, no Taichi), found, not listed: every package under ``taichi_dem/effects/`` with a ``settings``
 module, and the heat transfer's (``taichi_dem.thermal.settings``). Importing this registers
 their sections (scene/keys.py) with the loader and the schema; a new effect package is found
 here without an edit.
 
 Each module declares its Section(s) and its ``SERIES`` (the series its effect writes, with
-their units: recorders/units.py). One whose whole top-level section it reads itself gives the
+their units: sensors/units.py). One whose whole top-level section it reads itself gives the
 Section a ``reader`` (the loader keeps the result in ``Scene.settings``), and a ``builds``
 function making the effect objects (effects/registry.py): the drag's [gas] (also derived from
-a [thermal.gas] with ``drag``), [mobility], [viscous_damping]. [thermal] predates that and
-keeps its own Scene field (``scene.thermal``).
+a [thermal.gas] with ``drag``), [mobility], [viscous_damping]. [thermal] is read the same way
+but kept in its own Scene field (``scene.thermal``), first: the others may read it.
+
+The settings modules are imported by discovery (importlib), not named: they stand on the
+scene's floor of the layers (docs/architecture.md "Layers"), beside their effects' kernels.
 """
 from __future__ import annotations
 
@@ -22,10 +25,14 @@ from types import ModuleType
 _THERMAL = "taichi_dem.thermal.settings"
 
 
+# where the effect packages live (found by discovery: the scene's layer names no effect)
+_EFFECTS = "taichi_dem.effects"
+
+
 def _effect_packages() -> list[str]:
     """The effect packages under taichi_dem/effects/ that have a settings module, by name."""
-    here = Path(__file__).parent
-    return sorted(f"{__package__}.{m.name}.settings" for m in pkgutil.iter_modules([str(here)])
+    here = Path(__file__).resolve().parent.parent / "effects"
+    return sorted(f"{_EFFECTS}.{m.name}.settings" for m in pkgutil.iter_modules([str(here)])
                   if m.ispkg and (here / m.name / "settings.py").exists())
 
 
