@@ -149,7 +149,8 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
         "0.4 with the \"schlunder\" model, whose packed beds it brings within 10 % of "
         "Zehner-Bauer-Schlünder; 0.2 with the others)", unit="dimensionless", default=0.2,
         minimum=0.0, maximum=1.0, exclusive_minimum=True,
-        why="at most 1: a lens one radius thick", effect="gas_gap"),
+        why="at most 1: a lens one radius thick", effect="gas_gap",
+        default_words='0.4 with gas_gap_model = "schlunder", else 0.2'),
     Key("gas_gap_min_gap", "quantity", "gaps narrower than this count as it (the roughness "
         "scale)", unit="length", default=1.0e-6, **_P, effect="gas_gap"),
     Key("gas_gap_pairs", "boolean", "the gas gap between particles too (with conduction on)",

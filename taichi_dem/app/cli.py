@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import json
 import math
 import os
 import sys
@@ -74,6 +75,9 @@ def _parser() -> argparse.ArgumentParser:
     _common_outputs(rs)
     d = sub.add_parser("demo", help="run a bundled demo (no NAME: list them)")
     d.add_argument("name", nargs="?", help="the demo to run (leave out to list them)")
+    d.add_argument("--copy", metavar="DIR", default=None,
+                   help="copy the demo's (or a tutorial's) scene file into DIR to edit, and the "
+                        "files it names beside it; run nothing")
     _common_outputs(d)
     b = sub.add_parser("bench", help="the chute performance benchmark")
     b.add_argument("--steps", type=int, default=1000, help="time steps per timed run (default 1000)")
@@ -127,7 +131,8 @@ EXAMPLES = {
     "check": ["taichi-dem check drum.toml", "taichi-dem check drum.toml --preview drum.png",
               "taichi-dem check --builders"],
     "resume": ["taichi-dem resume out/pile.checkpoint.h5 --until 1.0"],
-    "demo": ["taichi-dem demo", "taichi-dem demo pile", "taichi-dem demo paddle_cooler --until 10 --no-plots"],
+    "demo": ["taichi-dem demo", "taichi-dem demo pile", "taichi-dem demo paddle_cooler --until 10 --no-plots",
+             "taichi-dem demo first_drum --copy ."],
     "bench": ["taichi-dem bench --steps 500", "taichi-dem bench --copies 0.25 --precision f64"],
     "sweep": ["taichi-dem sweep drum.toml --set \"bodies.0.speed=2 rpm,6 rpm\" --seeds 2 --out sweep",
               "taichi-dem sweep drum.toml --set simulation.dt=2e-5,4e-5 --scheduler tcp://10.0.0.5:8786"],
@@ -167,7 +172,6 @@ QUIET_IMPORT = ("check", "schema", "machine", "map", "export")
 def _main(argv=None) -> int:
     args = _parser().parse_args(argv)
     if args.command in QUIET_IMPORT:
-        import os
         os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "False")
     try:
         if args.command == "check":
@@ -209,6 +213,11 @@ def _main(argv=None) -> int:
         return _fail(str(err), 2)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)
+    except BrokenPipeError:
+        # stdout piped into a reader that stopped (`taichi-dem plot ... | head`): not an error;
+        # later writes (and the flush at exit) go nowhere instead of raising again
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     return 0
 
 
@@ -221,9 +230,13 @@ def cmd_schema(args) -> int:
     else:
         lines = []
         for path, node in schema.every_key():
-            default = "required" if node.get("x-required") else node.get("default", "")
+            default = ("required" if node.get("x-required")
+                       else node.get("x-default", node.get("default", "")))
+            choices = node.get("enum")
+            allowed = (" (one of: " + ", ".join(json.dumps(c) for c in choices) + ")"
+                       if choices else "")
             lines.append(f"{path:52s} {node.get('x-unit', ''):10s} {str(default):20s} "
-                         f"{node.get('description', '')}")
+                         f"{node.get('description', '')}{allowed}")
         text = "\n".join(lines)
     try:
         print(text)
@@ -540,13 +553,39 @@ def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> in
         sim.close()
         return _fail(str(err), 3)
     except KeyboardInterrupt:
-        if sim.checkpointer.last_good is not None:
-            sim.checkpointer.save(sim.checkpointer.last_good)
-            print(f"taichi-dem: the state at t = {sim.checkpointer.last_good.time:.6g} s is in "
-                  f"{sim.checkpointer.path}", file=sys.stderr)
-        raise
+        return _interrupted(sim, args, label, until, h5, recorder, t0, time0, steps0)
     if sim.checkpointer.interval:
         sim.checkpointer.save(sim=sim)       # the final state, to continue with `resume`
+    _report(sim, args, h5, rrd, recorder, summary, t0, time0, steps0)
+    sim.close()
+    if h5 and getattr(args, "plots", None):
+        _write_plots(h5)
+    return 0
+
+
+def _interrupted(sim, args, label: str, until: float, h5, recorder, t0: float, time0: float,
+                 steps0: int) -> int:
+    """Ctrl-C during a run: the summary so far, the state checkpointed where it can be resumed,
+    the results file closed (its .xdmf written); exit 130. A second Ctrl-C stops at once."""
+    print(f"taichi-dem: interrupted at t = {sim.time:.6g} s of {until:g} s", file=sys.stderr)
+    try:
+        sim.sample_now()                     # the series and a frame at the moment it stopped
+        ck = sim.checkpointer
+        if ck.path:
+            ck.save(sim=sim)
+            print(f"taichi-dem: the state at t = {sim.time:.6g} s is in {ck.path}; continue "
+                  f"with: taichi-dem resume {ck.path}"
+                  + (f" --until {until:g}" if args.until is not None else ""), file=sys.stderr)
+        _report(sim, args, h5, None, recorder, None, t0, time0, steps0)
+    finally:
+        sim.close()                          # (closes the results file: its .xdmf is written)
+    return 130
+
+
+def _report(sim, args, h5, rrd, recorder, summary, t0: float, time0: float, steps0: int):
+    """The run's summary on stdout: time, rate, particles, wall forces, body torques, the
+    demo's own figures (``summary``), where the results and checkpoints went."""
+    scene = sim.scene
     wall = time.perf_counter() - t0
     s = sim.series
     steps = sim.step_count - steps0
@@ -580,10 +619,6 @@ def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> in
         print(f"rerun: {recorder.samples} samples in {recorder.wall_seconds:.2f} s wall "
               f"({recorder.wall_seconds / max(wall, 1e-9):.1%} of the run)"
               + (f" -> {rrd}" if rrd else ""))
-    sim.close()
-    if h5 and getattr(args, "plots", None):
-        _write_plots(h5)
-    return 0
 
 
 def _write_plots(h5: str) -> None:
@@ -604,12 +639,19 @@ def _write_plots(h5: str) -> None:
 def cmd_demo(args) -> int:
     from . import demos
     if not args.name:
-        print("demos (taichi-dem demo NAME; scenes in demos/):")
+        print("demos (taichi-dem demo NAME; taichi-dem demo NAME --copy DIR: its scene to edit):")
         for name in demos.DEMOS:
             print(f"  {name:16s} {demos.get(name).description}")
+        print("tutorial scenes (taichi-dem demo NAME --copy DIR; docs: Tutorials):")
+        for name, path in demos.tutorial_scenes().items():
+            print(f"  {name:16s} {demos.first_line(path)}")
         return 0
+    if args.copy is not None:
+        return _copy_scene(args.name, Path(args.copy))
     if args.name not in demos.DEMOS:
-        return _fail(f"demo '{args.name}' not found; available: {', '.join(demos.DEMOS)}")
+        hint = (f"; '{args.name}' is a tutorial's scene: taichi-dem demo {args.name} --copy DIR"
+                if args.name in demos.tutorial_scenes() else "")
+        return _fail(f"demo '{args.name}' not found; available: {', '.join(demos.DEMOS)}{hint}")
     demo = demos.get(args.name)
     if not demo.path.exists():
         return _fail(f"{demo.path}: the scene of demo '{args.name}' is missing (run from a "
@@ -619,6 +661,26 @@ def cmd_demo(args) -> int:
     if args.plots is None:
         args.plots = True        # cheap next to the run; `--no-plots` skips them
     return cmd_run(args, str(demo.path), summary=demo.summary, setup=demo.attach)
+
+
+def _copy_scene(name: str, folder: Path) -> int:
+    """``taichi-dem demo NAME --copy DIR``: the scene file of a demo or tutorial into DIR, with
+    the files it names that lie beside it (CSV fills, STL meshes); nothing is overwritten."""
+    from . import demos
+    try:
+        made = demos.copy_scene(name, folder)
+    except FileExistsError as e:
+        return _fail(f"{e.filename}: exists already; not overwritten (remove it, or copy into "
+                     f"another folder)")
+    except KeyError:
+        names = list(demos.DEMOS) + list(demos.tutorial_scenes())
+        return _fail(f"demo '{name}' not found; available: {', '.join(names)}")
+    except OSError as e:
+        return _fail(f"{folder}: cannot copy into it ({e.strerror or e})")
+    for source, target in made:
+        print(f"copied {source.name} to {target}")
+    print(f"run it: taichi-dem run {made[0][1]}", file=sys.stderr)
+    return 0
 
 
 # ---------------------------------------------------------------------------------- bench

@@ -13,6 +13,7 @@ with a ``[[sensors]] kind = "mass_flow"`` whose name the demo gives in ``SENSOR`
 from __future__ import annotations
 
 import math
+import shutil
 import tomllib
 from pathlib import Path
 from typing import Optional
@@ -38,6 +39,56 @@ def _length(value) -> float:
 
 def _gravity(sim) -> float:
     return float(np.linalg.norm(sim.scene.simulation.gravity))
+
+
+def first_line(path: Path) -> str:
+    """What a scene file shows: its first line, a comment."""
+    return path.read_text().splitlines()[0].lstrip("# ").strip() if path.exists() else ""
+
+
+def tutorial_scenes() -> dict[str, Path]:
+    """The tutorials' scene files (demos/tutorials/), by name (the file's stem)."""
+    return {p.stem: p for p in sorted((DEMOS_DIR / "tutorials").glob("*.toml"))}
+
+
+def _named_files(scene: Path) -> list[Path]:
+    """The files a scene names by a relative path inside its own folder (fills, meshes), as
+    paths relative to that folder."""
+    home = scene.parent.resolve()
+    found: list[Path] = []
+
+    def walk(value):
+        if isinstance(value, dict):
+            for v in value.values():
+                walk(v)
+        elif isinstance(value, list):
+            for v in value:
+                walk(v)
+        elif isinstance(value, str) and value and not Path(value).is_absolute():
+            candidate = (home / value).resolve()
+            if (candidate.is_file() and candidate != scene.resolve()
+                    and home in candidate.parents):
+                relative = candidate.relative_to(home)
+                if relative not in found:
+                    found.append(relative)
+    walk(tomllib.loads(scene.read_text()))
+    return found
+
+
+def copy_scene(name: str, folder: Path) -> list[tuple[Path, Path]]:
+    """Copy the scene of demo or tutorial ``name`` (KeyError: no such) into ``folder`` (made
+    if missing), with the files it names inside its folder; [(source, target), ...], the
+    scene first. FileExistsError (nothing copied) when a target exists."""
+    scene = get(name).path if name in DEMOS else tutorial_scenes()[name]
+    pairs = [(scene, folder / scene.name)] + [(scene.parent / rel, folder / rel)
+                                              for rel in _named_files(scene)]
+    for _, target in pairs:
+        if target.exists():
+            raise FileExistsError(17, "exists", str(target))
+    for src, target in pairs:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(src, target)
+    return pairs
 
 
 class Demo:

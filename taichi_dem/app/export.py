@@ -6,7 +6,9 @@ opens its frames in ParaView (recorders/xdmf.py).
   one column per component, ``name[0]`` ...); the header names each column with its unit,
   ``bodies/drum/axial_torque [N m]``.
 - ``--frame K``: one row per particle of frame K (negative counts from the last: -1 the last),
-  a column per dataset (``position[0]`` ...); the frame's time is in the first line, a comment.
+  a plain header, then the frame's number and time (``frame``, ``time [s]``) and a column per
+  dataset (``position[0] [m]`` ...), the material by its name; the default file is
+  ``<results stem>_frame<N>.csv``, N the frame's own number (also for -1).
 
 Refusals (exit 2, ``file: key: reason``): a file that is not a results file, a frame that is
 not there. Pure h5py and the standard library's csv.
@@ -67,19 +69,29 @@ def export_series(h5_path, out) -> int:
     return rows
 
 
-def export_frame(h5_path, index: int, out) -> int:
-    """Write frame ``index`` (negative: from the last) of ``h5_path`` as CSV; returns the
-    particles written."""
+def frame_number(h5_path, index: int) -> int:
+    """The number of frame ``index`` (negative: from the last) of ``h5_path``; SceneError
+    when the file holds no such frame."""
     import h5py
     with h5py.File(h5_path, "r") as f:
         if "frames" not in f or not len(f["frames"]):
             raise SceneError(str(h5_path), "frames", "the results file holds no particle frames")
         keys = sorted(f["frames"], key=int)
-        if not -len(keys) <= index < len(keys):
-            raise SceneError(str(h5_path), f"frames/{index}",
-                             f"no such frame: the file holds {len(keys)} (0 - {len(keys) - 1}, "
-                             f"or -1 for the last)")
-        frame = f["frames"][keys[index]]
+    if not -len(keys) <= index < len(keys):
+        raise SceneError(str(h5_path), f"frames/{index}",
+                         f"no such frame: the file holds {len(keys)} (0 - {len(keys) - 1}, "
+                         f"or -1 for the last)")
+    return int(keys[index])
+
+
+def export_frame(h5_path, index: int, out) -> int:
+    """Write frame ``index`` (negative: from the last) of ``h5_path`` as CSV; returns the
+    particles written."""
+    import h5py
+    number = frame_number(h5_path, index)
+    with h5py.File(h5_path, "r") as f:
+        frame = f["frames"][str(number)]
+        names = [str(m) for m in f.attrs.get("materials", [])]
         time = float(frame.attrs.get("time", float("nan")))
         order = [n for n in ("id", "position", "velocity", "angular_velocity", "radius",
                              "temperature", "mass", "moisture", "material") if n in frame]
@@ -89,12 +101,17 @@ def export_frame(h5_path, index: int, out) -> int:
         order = [n for n in order if isinstance(frame[n], h5py.Dataset)
                  and (count is None or (frame[n].shape and frame[n].shape[0] == count))]
         header, columns = _columns(frame, order)
-    out.write(f"# frame {keys[index]}, time {time!r} s\n")
-    writer = csv.writer(out)
-    writer.writerow(header)
     count = len(columns[0]) if columns else 0
+    if "material" in header and names:
+        # the material by its name (the frames hold its index into the root's ``materials``)
+        k = header.index("material")
+        columns[k] = np.array([names[int(m)] if 0 <= int(m) < len(names) else str(int(m))
+                               for m in columns[k]], dtype=object)
+    writer = csv.writer(out)
+    writer.writerow(["frame", "time [s]"] + header)
     for i in range(count):
-        writer.writerow([repr(c[i].item()) for c in columns])
+        writer.writerow([str(number), repr(time)]
+                        + [c[i] if c.dtype == object else repr(c[i].item()) for c in columns])
     return count
 
 
@@ -134,7 +151,8 @@ def cmd_export(args) -> int:
     if args.out == "-":
         stream, target = sys.stdout, None
     else:
-        suffix = "_series.csv" if args.series else f"_frame{args.frame}.csv"
+        suffix = ("_series.csv" if args.series
+                  else f"_frame{frame_number(path, args.frame)}.csv")
         target = Path(args.out) if args.out else path.with_name(path.stem + suffix)
         stream = open(target, "w", newline="")
     try:

@@ -378,31 +378,34 @@ class Simulation:
         block = max(self.output_every, 1)
         shown = -1.0
         recent = [(0.0, self.time)]
-        while done < steps:
-            k = min(block, steps - done)
-            self.step(k)
-            done += k
-            particle_steps += k * self.engine.count
-            wall = _time.perf_counter() - t0
-            recent.append((wall, self.time))
-            while len(recent) > 2 and wall - recent[1][0] > ETA_WINDOW_S:
-                recent.pop(0)
-            if wall - shown < every and done < steps:
-                continue
-            shown = wall
-            rate = particle_steps / wall if wall > 0 else 0.0
-            (w0, s0) = recent[0]
-            sim_rate = (self.time - s0) / (wall - w0) if wall > w0 else 0.0
-            eta = (until - self.time) / sim_rate if sim_rate > 0 else float("nan")
-            line = (f"  t = {self.time:8.4f} s   wall {wall:7.1f} s   "
-                    f"{rate / 1e6:6.2f} M particle-steps/s   ETA {eta:6.1f} s")
-            if tty:
-                print("\r" + line, end="", file=sys.stderr, flush=True)
-            else:
-                print(line, file=sys.stderr, flush=True)
-        if tty:
-            print(file=sys.stderr)
-        self.progress_particle_steps = particle_steps
+        try:
+            while done < steps:
+                k = min(block, steps - done)
+                self.step(k)
+                done += k
+                particle_steps += k * self.engine.count
+                wall = _time.perf_counter() - t0
+                recent.append((wall, self.time))
+                while len(recent) > 2 and wall - recent[1][0] > ETA_WINDOW_S:
+                    recent.pop(0)
+                if wall - shown < every and done < steps:
+                    continue
+                shown = wall
+                rate = particle_steps / wall if wall > 0 else 0.0
+                (w0, s0) = recent[0]
+                sim_rate = (self.time - s0) / (wall - w0) if wall > w0 else 0.0
+                eta = (until - self.time) / sim_rate if sim_rate > 0 else float("nan")
+                line = (f"  t = {self.time:8.4f} s   wall {wall:7.1f} s   "
+                        f"{rate / 1e6:6.2f} M particle-steps/s   ETA {eta:6.1f} s")
+                if tty:
+                    print("\r" + line, end="", file=sys.stderr, flush=True)
+                else:
+                    print(line, file=sys.stderr, flush=True)
+        finally:
+            # (also when interrupted: the next message starts on a line of its own)
+            if tty and shown >= 0:
+                print(file=sys.stderr, flush=True)
+            self.progress_particle_steps = particle_steps
 
     def sample_now(self) -> bool:
         """Take an output sample at the current time unless the last one was taken here (True

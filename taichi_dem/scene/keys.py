@@ -83,6 +83,7 @@ class Key:
     ``maximum`` bound the SI value (``exclusive_*`` for open ends); ``why`` says what the
     bound means, in the error. ``auto``: "auto" is also accepted (the owner resolves it).
     ``effect``: the effect the key configures, where a section serves several.
+    ``default_words``: the default as it applies, where another key changes it.
     """
     name: str
     kind: str
@@ -98,6 +99,8 @@ class Key:
     auto: bool = False
     effect: str = ""
     schema: Optional[dict] = None
+    # the default in words where it depends on another key (shown instead of ``default``)
+    default_words: str = ""
 
     def __post_init__(self):
         assert self.kind in KINDS, self.kind
@@ -199,7 +202,10 @@ class Key:
         raise SceneError(file, key, f"must {verb} {text}, got {shown}{why}")
 
     def default_text(self) -> str:
-        """The default in words, for references ("required", "off/derived", a value)."""
+        """The default in words, for references ("required", "off/derived", a value, or
+        ``default_words`` where it depends on another key)."""
+        if self.default_words:
+            return self.default_words
         d = self.default
         if d is REQUIRED:
             return "required"

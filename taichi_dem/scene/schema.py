@@ -316,6 +316,8 @@ def key_schema(key: Key, sections: dict[str, Section], owner: Section) -> dict:
     out["description"] = key.description
     if key.default is not None and key.default is not REQUIRED:
         out["default"] = _json_default(key.default)
+    if key.default_words:
+        out["x-default"] = key.default_words        # (where another key changes it)
     if key.unit or key.kind == "direction":
         out["x-unit"] = key.si_unit
         out["x-dimension"] = key.unit or "dimensionless"

@@ -31,8 +31,42 @@ def test_demo_listing_names_every_demo():
     r = subprocess.run([sys.executable, "-m", "taichi_dem", "demo"], capture_output=True, text=True,
                        cwd=ROOT, timeout=120)
     assert r.returncode == 0
-    lines = [ln.split()[0] for ln in r.stdout.splitlines()[1:] if ln.strip()]
+    listing = r.stdout.splitlines()
+    split = next(k for k, ln in enumerate(listing) if ln.startswith("tutorial scenes"))
+    lines = [ln.split()[0] for ln in listing[1:split] if ln.strip()]
     assert lines == list(demos.DEMOS)
+    # and the tutorials' scenes, which come with the package (--copy)
+    assert [ln.split()[0] for ln in listing[split + 1:] if ln.strip()] == ["first_drum",
+                                                                          "hot_cooler"]
     r = subprocess.run([sys.executable, "-m", "taichi_dem", "demo", "no_such_demo"],
                        capture_output=True, text=True, cwd=ROOT, timeout=120)
     assert r.returncode == 2 and "available" in r.stderr
+
+
+def test_a_scene_is_copied_out_to_edit_and_nothing_is_overwritten(tmp_path, capsys):
+    """``taichi-dem demo NAME --copy DIR`` (a wheel user has no demos/ folder): the scene as
+    the package holds it, which then checks; a second copy refuses and leaves the first."""
+    from taichi_dem.app.cli import main
+    assert main(["demo", "first_drum", "--copy", str(tmp_path / "mine")]) == 0
+    copied = tmp_path / "mine" / "first_drum.toml"
+    assert copied.read_text() == demos.tutorial_scenes()["first_drum"].read_text()
+    assert main(["check", str(copied)]) == 0
+    copied.write_text(copied.read_text() + "\n# my edit\n")
+    capsys.readouterr()
+    assert main(["demo", "first_drum", "--copy", str(tmp_path / "mine")]) == 2
+    assert "exists already" in capsys.readouterr().err
+    assert copied.read_text().endswith("# my edit\n")
+    assert main(["demo", "pile", "--copy", str(tmp_path)]) == 0
+    assert (tmp_path / "pile.toml").read_text() == demos.get("pile").path.read_text()
+    assert main(["demo", "no_such_scene", "--copy", str(tmp_path)]) == 2
+
+
+def test_a_copy_takes_the_files_the_scene_names(tmp_path):
+    """A scene's CSV fill (or STL mesh) beside it is copied with it, under the same name."""
+    folder = tmp_path / "pkg"
+    folder.mkdir()
+    (folder / "beads.csv").write_text("x,y,z,radius\n0,0,0,0.01\n")
+    scene = folder / "s.toml"
+    scene.write_text('[[particles]]\nmaterial = "glass"\nfile = "beads.csv"\n'
+                     'note = "not/a/file"\n')
+    assert demos._named_files(scene) == [__import__("pathlib").Path("beads.csv")]

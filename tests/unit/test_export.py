@@ -49,11 +49,11 @@ def test_series_as_csv_with_units(results, tmp_path):
 def test_the_last_frame_as_csv(results):
     buf = io.StringIO()
     assert export.export_frame(results, -1, buf) == 2
-    lines = buf.getvalue().splitlines()
-    assert lines[0] == "# frame 1, time 1.0 s"
-    rows = list(csv.reader(lines[1:]))
-    assert rows[0] == ["id", "position[0] [m]", "position[1] [m]", "position[2] [m]", "radius"]
-    assert [float(x) for x in rows[2]] == [7, 1.0, 2.0, 4.0, 0.02]
+    rows = list(csv.reader(buf.getvalue().splitlines()))
+    # a plain header (no comment line): the frame's number and time on every row
+    assert rows[0] == ["frame", "time [s]", "id", "position[0] [m]", "position[1] [m]",
+                       "position[2] [m]", "radius"]
+    assert [float(x) for x in rows[2]] == [1, 1.0, 7, 1.0, 2.0, 4.0, 0.02]
 
 
 @pytest.mark.parametrize("args, words", [
@@ -208,4 +208,18 @@ def test_bodies_at_their_poses_in_frames_and_in_vtks_xdmf_reader(tmp_path):
     # the CSV of a frame keeps to the particles (the bodies' group is not a column)
     buf = io.StringIO()
     assert export.export_frame(h5, -1, buf) == len(positions)
-    assert "material" in buf.getvalue().splitlines()[1]
+    assert "material" in buf.getvalue().splitlines()[0]
+
+
+def test_frame_csv_names_materials_and_its_file_the_frame(results, tmp_path):
+    """The material by its name (the frames hold an index into the root's ``materials``), and
+    the default file named by the frame's own number, also when asked for as -1."""
+    with h5py.File(results, "a") as f:
+        f.attrs["materials"] = ["ash", "steel"]
+        for k in ("0", "1"):
+            f["frames"][k].create_dataset("material", data=np.array([1, 0], np.int32))
+    assert main(["export", str(results), "--frame", "-1"]) == 0
+    written = results.with_name("run_frame1.csv")
+    rows = list(csv.reader(written.read_text().splitlines()))
+    k = rows[0].index("material")
+    assert [r[k] for r in rows[1:]] == ["steel", "ash"]

@@ -94,3 +94,11 @@ def test_wheel_outside_the_checkout_runs_a_demo(tmp_path):
                          cwd=work, env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
     assert (work / "o" / "pile.h5").exists() and (work / "o" / "pile.xdmf").exists()
+    # the tutorials' scenes come with the wheel: a copy to edit, which checks
+    assert "taichi_dem/demos/tutorials/first_drum.toml" in names
+    copy = subprocess.run([sys.executable, "-m", "taichi_dem", "demo", "hot_cooler", "--copy", "."],
+                          cwd=work, env=env, capture_output=True, text=True, timeout=120)
+    assert copy.returncode == 0 and (work / "hot_cooler.toml").exists(), copy.stderr
+    check = subprocess.run([sys.executable, "-m", "taichi_dem", "check", "hot_cooler.toml"],
+                           cwd=work, env=env, capture_output=True, text=True, timeout=300)
+    assert check.returncode == 0, check.stderr[-2000:]
