@@ -8,8 +8,13 @@ with every other per-particle dataset as a point attribute (scalars: temperature
 moisture, material, id; 3-vectors: velocity, angular_velocity), named with its unit
 ("temperature [K]"). A file with bodies (/bodies/<name>: the meshes) gets, at each time, a
 spatial collection of the particles' grid and one triangle grid per body at its pose: the posed
-vertices of the frame for a body that moves, the scene's vertices for one that does not. The
-data stay in the HDF5 file, referenced by its name relative to the XDMF file: keep the two side
+vertices of the frame for a body that moves, the scene's vertices for one that does not. A
+frame without particles (a factory-fed scene before its first insertion) cannot be a grid of
+zero points: VTK's XDMF reader (ParaView's) fails on its geometry ("Error in Update() of
+Geometry") and drops the block. Such a file describes every frame as a spatial collection
+holding a "particles" grid, and an empty frame's "particles" as an empty collection, which
+reads as an empty block of the same name (tests/unit/test_export.py). The data stay in the
+HDF5 file, referenced by its name relative to the XDMF file: keep the two side
 by side. Standard library XML and h5py only.
 """
 from __future__ import annotations
@@ -86,6 +91,12 @@ def write_xdmf(h5_path, xdmf_path=None) -> tuple[Path, int]:
             raise SceneError(str(h5_path), "frames", "the results file holds no particle frames "
                                                      "(a run writes them when it has an HDF5 results file)")
         keys = sorted(f["frames"], key=int)
+        meshes = f["bodies"] if "bodies" in f else None
+        # every frame as a collection holding "particles" when bodies come along, or when some
+        # frame has no particle (its "particles" an empty collection: module docstring)
+        collections = meshes is not None or any(
+            "position" in f["frames"][k] and f["frames"][k]["position"].shape[0] == 0
+            for k in keys)
         for key in keys:
             frame = f["frames"][key]
             if "position" not in frame:
@@ -93,16 +104,19 @@ def write_xdmf(h5_path, xdmf_path=None) -> tuple[Path, int]:
                                                                          "needs the positions")
             count = frame["position"].shape[0]
             time = repr(float(frame.attrs.get("time", float(key))))
-            meshes = f["bodies"] if "bodies" in f else None
-            if meshes is None:
+            if not collections:
                 grid = ET.SubElement(series, "Grid", Name=f"frame {key}", GridType="Uniform")
                 ET.SubElement(grid, "Time", Value=time)
             else:
                 at = ET.SubElement(series, "Grid", Name=f"frame {key}", GridType="Collection",
                                    CollectionType="Spatial")
                 ET.SubElement(at, "Time", Value=time)
-                for name in sorted(meshes):
+                for name in sorted(meshes) if meshes is not None else ():
                     _body_grid(at, h5_name, f, name, key)
+                if count == 0:
+                    ET.SubElement(at, "Grid", Name="particles", GridType="Collection",
+                                  CollectionType="Spatial")
+                    continue
                 grid = ET.SubElement(at, "Grid", Name="particles", GridType="Uniform")
             ET.SubElement(grid, "Topology", TopologyType="Polyvertex",
                           NumberOfElements=str(count), NodesPerElement="1")

@@ -223,3 +223,41 @@ def test_frame_csv_names_materials_and_its_file_the_frame(results, tmp_path):
     rows = list(csv.reader(written.read_text().splitlines()))
     k = rows[0].index("material")
     assert [r[k] for r in rows[1:]] == ["steel", "ash"]
+
+
+def test_a_frame_before_the_first_particle_reads_as_an_empty_block(tmp_path):
+    """A factory-fed run's first frames hold no particle: VTK's XDMF reader (ParaView's)
+    failed on a grid of zero points ("Error in Update() of Geometry") and dropped the block.
+    Now every time step reads without an error, with a "particles" block, empty at first."""
+    import vtk
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
+    from vtkmodules.vtkIOXdmf2 import vtkXdmfReader
+    from taichi_dem.recorders.xdmf import write_xdmf
+    h5 = tmp_path / "fed.h5"
+    with h5py.File(h5, "w") as f:
+        for k, n in enumerate((0, 0, 3)):
+            g = f.create_group(f"frames/{k}")
+            g.attrs["time"] = 0.5 * k
+            g.create_dataset("position", data=np.arange(3 * n, dtype=float).reshape(n, 3))
+            g.create_dataset("radius", data=np.full(n, 0.01))
+    xdmf, frames = write_xdmf(h5)
+    assert frames == 3
+    log = tmp_path / "vtk.log"
+    window = vtk.vtkFileOutputWindow()
+    window.SetFileName(str(log))
+    vtk.vtkOutputWindow.SetInstance(window)
+    reader = vtkXdmfReader()
+    reader.SetFileName(str(xdmf))
+    reader.UpdateInformation()
+    steps = reader.GetOutputInformation(0).Get(vtkStreamingDemandDrivenPipeline.TIME_STEPS())
+    assert list(steps) == [0.0, 0.5, 1.0]
+    counts = []
+    for t in steps:
+        reader.UpdateTimeStep(t)
+        block = _block(reader.GetOutputDataObject(0), "particles")
+        counts.append(block.GetNumberOfPoints())
+    assert counts == [0, 0, 3]
+    np.testing.assert_array_equal(vtk_to_numpy(block.GetPoints().GetData()),
+                                  np.arange(9.0).reshape(3, 3))
+    assert not log.exists() or "ERROR" not in log.read_text(), log.read_text()
