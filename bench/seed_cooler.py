@@ -263,7 +263,7 @@ def size_paragraph(out: Path, holdup: int = 60) -> str:
 def table(columns: list, walls: dict | None) -> str:
     """The seed's table with a column of ours for each (title, results) of ``columns``: the
     calibrated ash's, then the free-rolling ash's (issue 44)."""
-    header = ["quantity", "seed 001 (EDEM, 15 mm spheres)"] + [c for c, _ in columns]
+    header = ["quantity", "the paper (EDEM, 15 mm spheres)"] + [c for c, _ in columns]
     by_column = [{q: (s, o) for q, s, o in _rows(r)} for _, r in columns]
     order = []
     for rows in by_column:
@@ -277,7 +277,7 @@ def table(columns: list, walls: dict | None) -> str:
         lines += ["", "map wall times on this machine: " + ", ".join(
             f"{d} {w / 60:.1f} min" for d, w in walls.items())]
     lines += ["", "Errors: one standard deviation from the maps' noise (re-marches). "
-              "Calibrated ash: seed 001's fly ash fitted by `taichi-dem calibrate` to its eight "
+              "Calibrated ash: the paper's fly ash fitted by `taichi-dem calibrate` to its eight "
               "heaps (Table 2, 38.0 +- 0.8 deg; constant torque, rolling friction 1.38 ash-ash "
               "and 1.5 ash-steel, docs/calibration/). Free-rolling ash: the first maps' rolling "
               "friction 0.05 (EPSD), whose heap stands at ~20 deg. What the precision, the "

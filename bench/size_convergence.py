@@ -192,7 +192,7 @@ def table(out: Path) -> dict:
               "answers": {}}
     L = ["# The seed's original cooler against the sphere size", "",
          "The one-row slice of the original design at 5 deg, 6 s per point, each size on the ash "
-         "calibrated at that size against seed 001's eight heaps (below). Steady means +- "
+         "calibrated at that size against the rotary-cooler paper's eight heaps (below). Steady means +- "
          "standard error. "
          f"Converged: the step from 15 to 10 mm within {CONVERGED_SIGMAS:g} standard errors "
          "(both maps' combined), and the value (the 10 mm one, its error the larger of its "
