@@ -111,6 +111,10 @@ def _parser() -> argparse.ArgumentParser:
     from . import export
     ex = sub.add_parser("export", help="a results file's series or one particle frame as CSV")
     export.add_arguments(ex)
+    from . import analyse
+    an = sub.add_parser("analyse", help="profiles in bins, particle tracks, residence records "
+                                        "and a video, from a results file's frames")
+    analyse.add_arguments(an)
     from . import calibrate
     calibrate.add_parser(sub)
     p.epilog = "examples:\n  taichi-dem demo pile\n  taichi-dem check my_drum.toml\n" \
@@ -150,6 +154,11 @@ EXAMPLES = {
     "export": ["taichi-dem export out/pile.h5 --series --out pile_series.csv",
                "taichi-dem export out/pile.h5 --frame -1 --out last_frame.csv",
                "taichi-dem export out/pile.h5 --xdmf   # then open out/pile.xdmf in ParaView"],
+    "analyse": ["taichi-dem analyse out/paddle_cooler.h5 profile --axis x --bins 20 --from 40 --plot profile.png",
+                "taichi-dem analyse out/drum.h5 profile --axis y --origin 0 0 0 --radial 0.1 --bins 10 --material glass",
+                "taichi-dem analyse out/pile.h5 track --ids 3 17 --out tracks.csv",
+                "taichi-dem analyse out/paddle_cooler.h5 residence --out residence.csv",
+                "taichi-dem analyse out/pile.h5 video --view xz --out pile.gif"],
     "calibrate": ["taichi-dem calibrate demos/calibration/fly_ash_seed001.toml --out calibration --workers 2",
                   "taichi-dem calibrate spec.toml --out cal --scheduler tcp://10.0.0.5:8786"],
 }
@@ -166,7 +175,7 @@ def main(argv=None) -> int:
 
 
 # commands whose stdout is a report to read or parse: Taichi's import banner stays off it
-QUIET_IMPORT = ("check", "schema", "machine", "map", "export")
+QUIET_IMPORT = ("check", "schema", "machine", "map", "export", "analyse")
 
 
 def _main(argv=None) -> int:
@@ -204,6 +213,9 @@ def _main(argv=None) -> int:
         if args.command == "export":
             from .export import cmd_export
             return cmd_export(args)
+        if args.command == "analyse":
+            from .analyse import cmd_analyse
+            return cmd_analyse(args)
         if args.command == "calibrate":
             from .calibrate import run as cmd_calibrate
             return cmd_calibrate(args)
