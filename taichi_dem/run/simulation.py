@@ -134,6 +134,29 @@ PLAIN_PROGRESS_S = 10.0
 ETA_WINDOW_S = 20.0
 
 
+def eta_seconds(remaining: float, wall_per_particle_second: float, count: float,
+                count_rate: float, limit: float) -> float:
+    """Wall seconds left for ``remaining`` s of simulated time (issue 48 item 3): the recent
+    cost of one particle for one simulated second (wall s per particle per simulated s) times
+    the particle-seconds still to come, with the count growing at its recent ``count_rate``
+    (particles per simulated s: a machine filling from its factories) up to ``limit`` (the
+    slots the scene may fill), and never below today's count. A filling machine's cost grows
+    with its hold-up, which an ETA from the recent simulated-time rate alone missed (1.75x
+    too optimistic while the cooler filled)."""
+    if not remaining > 0:
+        return 0.0
+    rate = max(count_rate, 0.0)
+    if rate > 0 and count < limit:
+        full = (limit - count) / rate            # simulated s until the slots are full
+        if full < remaining:
+            particle_seconds = count * full + 0.5 * rate * full ** 2 + limit * (remaining - full)
+        else:
+            particle_seconds = count * remaining + 0.5 * rate * remaining ** 2
+    else:
+        particle_seconds = count * remaining
+    return wall_per_particle_second * particle_seconds
+
+
 def engine_parts(scene: Scene):
     """What the engine takes from the layers above it for ``scene`` (engine/stepper.py
     EngineParts): the bodies' kinematics and mesh contacts, the process device."""
@@ -377,7 +400,7 @@ class Simulation:
         t0 = _time.perf_counter()
         block = max(self.output_every, 1)
         shown = -1.0
-        recent = [(0.0, self.time)]
+        recent = [(0.0, self.time, 0.0, float(self.engine.count))]
         try:
             while done < steps:
                 k = min(block, steps - done)
@@ -385,16 +408,22 @@ class Simulation:
                 done += k
                 particle_steps += k * self.engine.count
                 wall = _time.perf_counter() - t0
-                recent.append((wall, self.time))
+                recent.append((wall, self.time, particle_steps * self.dt, float(self.engine.count)))
                 while len(recent) > 2 and wall - recent[1][0] > ETA_WINDOW_S:
                     recent.pop(0)
                 if wall - shown < every and done < steps:
                     continue
                 shown = wall
                 rate = particle_steps / wall if wall > 0 else 0.0
-                (w0, s0) = recent[0]
-                sim_rate = (self.time - s0) / (wall - w0) if wall > w0 else 0.0
-                eta = (until - self.time) / sim_rate if sim_rate > 0 else float("nan")
+                # the ETA from the recent cost per particle and simulated second, and the
+                # count's recent growth (eta_seconds)
+                (w0, s0, ps0, n0) = recent[0]
+                cost = ((wall - w0) / (particle_steps * self.dt - ps0)
+                        if particle_steps * self.dt > ps0 else float("nan"))
+                growth = ((self.engine.count - n0) / (self.time - s0) if self.time > s0
+                          else 0.0)
+                eta = eta_seconds(until - self.time, cost, float(self.engine.count), growth,
+                                  float(self.engine.model.particle_limit))
                 line = (f"  t = {self.time:8.4f} s   wall {wall:7.1f} s   "
                         f"{rate / 1e6:6.2f} M particle-steps/s   ETA {eta:6.1f} s")
                 if tty:
