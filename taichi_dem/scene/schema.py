@@ -234,7 +234,7 @@ def _rules() -> dict[str, list[dict]]:
     sensors = []
     for kind, allowed in SENSOR_KEYS.items():
         need = {"mass_flow": ("plane",), "residence_time": ("from", "to"),
-                "contact_count": ("body",)}[kind]
+                "contact_count": ("body",), "contact_statistics": ()}[kind]
         sensors.append({"if": _is("kind", kind),
                         "then": {"propertyNames": {"enum": list(allowed)},
                                  "required": ["name", *need]}})

@@ -50,6 +50,9 @@ def build_sensors(sim) -> dict:
             out["residence"] = ResidenceTimes(scene, sim.accounts)
         if "contact_count" in kinds:
             out["contacts"] = ContactCounts(scene, sim.engine)
+    if "contact_statistics" in kinds:
+        from .contact_statistics import ContactStatistics
+        out["contact_statistics"] = ContactStatistics(scene, sim.engine)
     if sim.factories is not None:
         out["factories"] = sim.factories
         out["mass"] = ParticleMass(sim.engine)

@@ -53,6 +53,17 @@ SERIES = (
     Series("sensors/*/crossings", "1", "particles that crossed the plane in the interval",
            interval="total"),
     Series("sensors/*/contact_count", "1", "particles touching the body"),
+    *(s for kind, words in (("particle", "particle-particle"), ("wall", "particle-wall"),
+                            ("body", "particle-body"))
+      for s in (Series(f"sensors/*/{kind}/contacts", "1", f"{words} contacts now"),
+                Series(f"sensors/*/{kind}/normal_force_mean", "N", f"{words}: the mean Hertz "
+                       "normal force of the contacts now (from their overlaps)"),
+                Series(f"sensors/*/{kind}/normal_force_p90", "N", f"{words}: its 90th percentile"),
+                Series(f"sensors/*/{kind}/normal_force_max", "N", f"{words}: its largest"),
+                Series(f"sensors/*/{kind}/normal_speed_mean", "m/s", f"{words}: the mean relative "
+                       "normal speed of the contacts now"),
+                Series(f"sensors/*/{kind}/normal_speed_p90", "m/s", f"{words}: its 90th percentile"),
+                Series(f"sensors/*/{kind}/normal_speed_max", "m/s", f"{words}: its largest"))),
     Series("sensors/*/count", "1", "residence records closed in the interval", interval="total"),
     Series("sensors/*/mean", "s", "residence time, mean over the interval's records",
            interval="records"),

@@ -18,7 +18,7 @@ FACTORY_PATTERNS = ("random", "sheet")
 SHEET_ONLY_KEYS = ("face", "jitter")          # pattern = "sheet" only
 RANDOM_ONLY_KEYS = ("region", "sizes", "interval")   # pattern = "random" only
 MAX_SHEET_JITTER = 0.25                       # of the diameter
-SENSOR_KINDS = ("mass_flow", "residence_time", "contact_count")
+SENSOR_KINDS = ("mass_flow", "residence_time", "contact_count", "contact_statistics")
 _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
 _SCHEDULE = {"anyOf": [{"type": ["number", "string"]}, {"type": "array"}]}
 
@@ -62,7 +62,8 @@ OUTLET = register(Section("outlets[]", "A region that removes the particles ente
     Key("region", "table", "{ box = ... } or { cylinder = ... }", default=REQUIRED),
 ), owner=__name__, nested={"region": REGION}))
 SENSOR = register(Section("sensors[]", "A sensor, [[sensors]]: mass flow through a plane, "
-                          "residence time from a factory to an outlet, contact counts on a body", (
+                          "residence time from a factory to an outlet, contact counts on a body, contact "
+                          "statistics per pair kind", (
     Key("kind", "choice", "what it measures", default=REQUIRED, choices=SENSOR_KINDS),
     Key("name", "string", "its name (the series' prefix)", default=REQUIRED),
     Key("plane", "table", "mass_flow: the plane { point, normal }", default=None),
@@ -75,7 +76,8 @@ SENSOR = register(Section("sensors[]", "A sensor, [[sensors]]: mass flow through
 ), owner=__name__, nested={"plane": PLANE, "box": BOX}))
 SENSOR_KEYS = {"mass_flow": ("kind", "name", "plane", "radius", "box"),
                "residence_time": ("kind", "name", "from", "to"),
-               "contact_count": ("kind", "name", "body")}
+               "contact_count": ("kind", "name", "body"),
+               "contact_statistics": ("kind", "name")}
 
 
 class ProcessSections:
@@ -316,7 +318,7 @@ class ProcessSections:
                                           f"{_suggest(kind, SENSOR_KINDS)}allowed: {', '.join(SENSOR_KINDS)}")
         allowed = SENSOR_KEYS[kind]
         required = {"mass_flow": ("plane",), "residence_time": ("from", "to"),
-                    "contact_count": ("body",)}[kind]
+                    "contact_count": ("body",), "contact_statistics": ()}[kind]
         self.check_keys(t, key, allowed, required=("name",) + required)
         kw: dict[str, Any] = {"key": key, "name": self.name(t, key), "kind": kind}
         if kind == "mass_flow":
@@ -345,7 +347,7 @@ class ProcessSections:
                 raise self.err(f"{key}.to", f"no outlet named '{dst}'; outlets: "
                                             f"{', '.join(names) or 'none'}")
             kw["source"], kw["target"] = src, dst
-        else:
+        elif kind == "contact_count":
             body = self.string(t["body"], f"{key}.body")
             names = [b.name for b in bodies]
             if body not in names:
