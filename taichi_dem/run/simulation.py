@@ -135,25 +135,23 @@ ETA_WINDOW_S = 20.0
 
 
 def eta_seconds(remaining: float, wall_per_particle_second: float, count: float,
-                count_rate: float, limit: float) -> float:
+                count_rate: float, limit: float, horizon: float = math.inf) -> float:
     """Wall seconds left for ``remaining`` s of simulated time (issue 48 item 3): the recent
     cost of one particle for one simulated second (wall s per particle per simulated s) times
-    the particle-seconds still to come, with the count growing at its recent ``count_rate``
-    (particles per simulated s: a machine filling from its factories) up to ``limit`` (the
-    slots the scene may fill), and never below today's count. A filling machine's cost grows
-    with its hold-up, which an ETA from the recent simulated-time rate alone missed (1.75x
-    too optimistic while the cooler filled)."""
+    the particle-seconds still to come. The count grows at its recent ``count_rate``
+    (particles per simulated s: a machine filling from its factories) for ``horizon`` more
+    simulated seconds at most, and never past ``limit`` (the slots the scene may fill), then
+    stays; it never falls below today's. A filling machine's cost grows with its hold-up, which
+    an ETA from the recent simulated-time rate alone missed (1.75x too optimistic while the
+    cooler filled); growing to the end of the run instead overshot 15x in its first seconds,
+    as outlets balance the feed long before the slots are full."""
     if not remaining > 0:
         return 0.0
     rate = max(count_rate, 0.0)
-    if rate > 0 and count < limit:
-        full = (limit - count) / rate            # simulated s until the slots are full
-        if full < remaining:
-            particle_seconds = count * full + 0.5 * rate * full ** 2 + limit * (remaining - full)
-        else:
-            particle_seconds = count * remaining + 0.5 * rate * remaining ** 2
-    else:
-        particle_seconds = count * remaining
+    grows = min(remaining, max(horizon, 0.0), (limit - count) / rate if rate > 0 else 0.0)
+    grows = max(grows, 0.0)
+    top = count + rate * grows
+    particle_seconds = count * grows + 0.5 * rate * grows ** 2 + top * (remaining - grows)
     return wall_per_particle_second * particle_seconds
 
 
@@ -422,8 +420,10 @@ class Simulation:
                         if particle_steps * self.dt > ps0 else float("nan"))
                 growth = ((self.engine.count - n0) / (self.time - s0) if self.time > s0
                           else 0.0)
+                # (the count keeps growing for as long again as it has been simulated: a
+                # machine fills in a time of the order of its run so far)
                 eta = eta_seconds(until - self.time, cost, float(self.engine.count), growth,
-                                  float(self.engine.model.particle_limit))
+                                  float(self.engine.model.particle_limit), horizon=self.time)
                 line = (f"  t = {self.time:8.4f} s   wall {wall:7.1f} s   "
                         f"{rate / 1e6:6.2f} M particle-steps/s   ETA {eta:6.1f} s")
                 if tty:

@@ -36,10 +36,13 @@ def test_the_eta_learns_from_the_filling():
     particle-seconds to come, the count growing at its recent rate up to the scene's slots.
     100 particles at 0.01 s per particle-second, 10 s to go: 10 s at a constant count; growing
     by 10 per s, 1,000 + 10 x 10^2 / 2 = 1,500 particle-seconds: 15 s (an ETA from the recent
-    simulated-time rate said 10); full at 150 slots after 5 s: 500 + 125 + 750 = 1,375: 13.75 s."""
+    simulated-time rate said 10); full at 150 slots after 5 s: 500 + 125 + 750 = 1,375: 13.75 s.
+    The growth stops after ``horizon`` simulated seconds (the run's own length so far)."""
     from taichi_dem.run.simulation import eta_seconds
     assert eta_seconds(10.0, 0.01, 100, 0.0, 1e9) == pytest.approx(10.0)
     assert eta_seconds(10.0, 0.01, 100, 10.0, 1e9) == pytest.approx(15.0)
     assert eta_seconds(10.0, 0.01, 100, 10.0, 150) == pytest.approx(13.75)
     assert eta_seconds(10.0, 0.01, 100, -5.0, 1e9) == pytest.approx(10.0)   # draining: today's
     assert eta_seconds(0.0, 0.01, 100, 10.0, 1e9) == 0.0
+    # growing for 4 s more only: 1,000 + 10 x 16 / 2 + 140 x 6 - 100 x 6 = 1,320: 13.2 s
+    assert eta_seconds(10.0, 0.01, 100, 10.0, 1e9, horizon=4.0) == pytest.approx(13.2)
