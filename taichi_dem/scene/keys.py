@@ -380,6 +380,8 @@ def material_section(section: Section) -> Section:
     extra = material_keys()
     for k in extra:
         assert k.name not in section, f"{k.name}: an effect's material key is a built-in one"
+        # (required only where its effect is on: the loader cannot know that per material)
+        assert not k.required, f"{k.name}: an effect's material key needs a default"
     return replace(section, keys=section.keys + extra) if extra else section
 
 

@@ -10,7 +10,9 @@ the material pair, R* = r_i r_j / (r_i + r_j), or r against a wall or a body), t
 law's elastic part; its damping part, proportional to the normal speed given beside it, is
 left out. Particle pairs and walls are found from the positions now (the neighbour list holds
 every pair within the skin); body contacts are those the mesh contacts hold from the last
-step. Read-only, on the host (numpy), and only in a scene that asks for it.
+step. Fixed particles (a fill with ``fixed = true``) exert no force on a wall or on each other
+and are left out there, as the step leaves them out. Read-only, on the host (numpy), and only
+in a scene that asks for it.
 """
 from __future__ import annotations
 
@@ -55,12 +57,13 @@ class ContactStatistics:
     def _particles(self):
         e, s = self.engine, self.engine.state
         n = e.count
-        x, v, r, material, alive = (a[:n] for a in transfer.read(
-            [s.position, s.velocity, s.radius, s.material, s.alive]))
+        x, v, r, material, alive, inverse_mass = (a[:n] for a in transfer.read(
+            [s.position, s.velocity, s.radius, s.material, s.alive, s.inverse_mass]))
+        # (a fixed particle: inverse mass 0)
         return (x.astype(float), v.astype(float), r.astype(float), material.astype(int),
-                alive != 0)
+                alive != 0, inverse_mass > 0)
 
-    def _pairs(self, x, v, r, material, alive):
+    def _pairs(self, x, v, r, material, alive, moving):
         e, s = self.engine, self.engine.state
         n = len(x)
         if e.pairs is None or n == 0:
@@ -78,7 +81,8 @@ class ContactStatistics:
                 d[:, a] -= grid.span[a] * np.round(d[:, a] / grid.span[a])
         distance = np.linalg.norm(d, axis=1)
         overlap = r[i] + r[j] - distance
-        touching = (overlap > 0) & (distance > 0) & alive[i] & alive[j]
+        touching = ((overlap > 0) & (distance > 0) & alive[i] & alive[j]
+                    & (moving[i] | moving[j]))
         i, j, d, distance, overlap = i[touching], j[touching], d[touching], distance[touching], overlap[touching]
         normal = d / distance[:, None]
         radius = r[i] * r[j] / (r[i] + r[j])
@@ -86,18 +90,18 @@ class ContactStatistics:
         speed = np.einsum("ij,ij->i", v[i] - v[j], normal)
         return force, speed
 
-    def _walls(self, x, v, r, material, alive):
+    def _walls(self, x, v, r, material, alive, moving):
         forces, speeds = [np.zeros(0)], [np.zeros(0)]
         for point, normal, wall_material in self.walls:
             distance = (x - point) @ normal
             overlap = r - distance
-            touching = (overlap > 0) & alive
+            touching = (overlap > 0) & alive & moving
             forces.append(hertz_normal_force(self.youngs_eff[material[touching], wall_material],
                                              r[touching], overlap[touching]))
             speeds.append(v[touching] @ normal)
         return np.concatenate(forces), np.concatenate(speeds)
 
-    def _bodies(self, x, v, r, material, alive):
+    def _bodies(self, x, v, r, material, alive, moving):
         e = self.engine
         mesh = e.mesh
         n = len(x)

@@ -4,7 +4,9 @@ exactly in the initial state (no gravity, f64: the state at t = 0 is the placed 
 
 Two spheres of radius r overlap by d = 2e-5 m (R* = r/2); a third sphere sits on a plane wall,
 overlapping it by 1e-5 m (R* = r) and moving into it at 0.1 m/s; a fourth rests on a box body
-(a steel plate) and is read after one step, by the overlap the mesh contacts hold. Each force
+(a steel plate) and is read after one step, by the overlap the mesh contacts hold. Two
+fixed spheres overlapping each other and the wall exert no force (the step leaves them out)
+and are not counted. Each force
 agrees with Hertz to round-off (the overlaps are differences of coordinates near 1e-2 m:
 relative 1e-10 in f64), and a wrong E*, R* or exponent errs by order 1.
 """
@@ -30,6 +32,9 @@ def _scene(tmp_path):
             + h.material("glass", 2500.0, E, NU) + h.material("steel", 7800.0, E_STEEL, NU_STEEL)
             + h.all_interactions(["glass", "steel"])
             + h.csv_fill(tmp_path, "beads.csv", "glass", positions, R, velocities=velocities)
+            + h.csv_fill(tmp_path, "fixed.csv", "glass", [[-0.03, 0.0, R - 1e-5],
+                                                           [-0.03 + gap, 0.0, R - 1e-5]], R)
+            .replace("[[particles]]\n", "[[particles]]\nfixed = true\n")
             + h.wall("floor", [0, 0, 0], [0, 0, 1], "steel")
             + '[[sensors]]\nkind = "contact_statistics"\nname = "contacts"\n')
 
