@@ -23,9 +23,13 @@ def make_contact_law(effects, kind: str, real, engine):
     scene's enabled effects (effects/); those declaring ``kind`` in their ``kinds`` take part."""
     assert kind in KINDS
     _, Response, _ = contact_types(real)
-    mechanical = tuple(e.contact_func(engine) for e in effects
+    def func(e):
+        # (an effect whose work differs by contact kind, e.g. counting per kind, is told it)
+        return e.contact_func(engine, kind) if e.per_kind else e.contact_func(engine)
+
+    mechanical = tuple(func(e) for e in effects
                        if e.stage == "contact" and kind in e.kinds and e.mechanical)
-    heat = tuple(e.contact_func(engine) for e in effects
+    heat = tuple(func(e) for e in effects
                  if e.stage == "contact" and kind in e.kinds and not e.mechanical)
     vec0 = ti.Vector([0.0, 0.0, 0.0])
 

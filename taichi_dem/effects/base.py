@@ -114,6 +114,8 @@ class Effect:
     before: tuple[str, ...] = ()
     kinds: tuple[str, ...] = ()
     mechanical = False
+    # a contact effect whose ti.func depends on the kind: contact_func(ctx, kind)
+    per_kind = False
     margin = 0.0
     particle_fields: dict = {}
     contact_fields: dict = {}

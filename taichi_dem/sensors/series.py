@@ -63,7 +63,22 @@ SERIES = (
                 Series(f"sensors/*/{kind}/normal_speed_mean", "m/s", f"{words}: the mean relative "
                        "normal speed of the contacts now"),
                 Series(f"sensors/*/{kind}/normal_speed_p90", "m/s", f"{words}: its 90th percentile"),
-                Series(f"sensors/*/{kind}/normal_speed_max", "m/s", f"{words}: its largest"))),
+                Series(f"sensors/*/{kind}/normal_speed_max", "m/s", f"{words}: its largest"),
+                Series(f"sensors/*/{kind}/collisions", "1", f"{words} collisions begun in the "
+                       "interval (counted at each contact's first touching step)",
+                       interval="total"),
+                Series(f"sensors/*/{kind}/collision_rate", "1/s", f"{words}: collisions "
+                       "begun per second over the interval", interval="mean"),
+                Series(f"sensors/*/{kind}/impact_speed_mean", "m/s", f"{words}: the mean "
+                       "impact speed (relative normal speed as a collision begins) of the "
+                       "interval's collisions", interval="weighted", weight="collisions"),
+                Series(f"sensors/*/{kind}/impact_speed_p10", "m/s", f"{words}: its 10th "
+                       "percentile (within a bin, 12 %)"),
+                Series(f"sensors/*/{kind}/impact_speed_p50", "m/s", f"{words}: its median"),
+                Series(f"sensors/*/{kind}/impact_speed_p90", "m/s", f"{words}: its 90th "
+                       "percentile"),
+                Series(f"sensors/*/{kind}/impact_speed_max", "m/s", f"{words}: the largest "
+                       "impact speed in the interval"))),
     Series("sensors/*/count", "1", "residence records closed in the interval", interval="total"),
     Series("sensors/*/mean", "s", "residence time, mean over the interval's records",
            interval="records"),
