@@ -144,9 +144,12 @@ def cmd_export(args) -> int:
         raise SceneError(str(path), "", "not an HDF5 results file") from None
     if args.xdmf:
         from ..recorders.xdmf import write_xdmf
+        from ..recorders.paraview import write_paraview_script
         target, frames = write_xdmf(path, None if args.out in (None, "-") else args.out)
-        print(f"wrote {target} ({frames} frames; open it in ParaView beside {path.name})",
-              file=sys.stderr)
+        view = write_paraview_script(path, target)
+        print(f"wrote {target} ({frames} frames; open it in ParaView beside {path.name})"
+              + (f" and {view.name} (in ParaView: File > Load State; or `python {view.name} "
+                 "--png view.png` with VTK)" if view else ""), file=sys.stderr)
         return 0
     if args.out == "-":
         stream, target = sys.stdout, None

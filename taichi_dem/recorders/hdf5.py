@@ -198,15 +198,21 @@ class HDF5Recorder:
 
     def close(self):
         """Close the file; with frames in it, write its XDMF description beside it (same
-        stem, .xdmf: ParaView opens the frames from it, recorders/xdmf.py)."""
+        stem, .xdmf: ParaView opens the frames from it, recorders/xdmf.py) and the ParaView
+        view script (<stem>_paraview.py: spheres and bodies, recorders/paraview.py)."""
         if self.file:
             frames = self.frame_count
             self.file.close()
             self.file = None
             if frames:
                 from ..errors import SceneError
+                from .paraview import write_paraview_script
                 from .xdmf import write_xdmf
                 try:
-                    write_xdmf(self.path)
+                    xdmf, _ = write_xdmf(self.path)
                 except SceneError as err:      # a file of the user's where ours would go
                     print(f"taichi-dem: warning: no XDMF written: {err}", file=sys.stderr)
+                else:
+                    # the ParaView view beside it (spheres, bodies); a file of the user's
+                    # of that name is left alone
+                    write_paraview_script(self.path, xdmf)
