@@ -198,8 +198,8 @@ def main(argv=None):
                 p = s.particles()
                 st["thetas"].append(analysis.bed_surface(p["position"][:, 1], p["position"][:, 2],
                                                          p["radius"], 2 * R_P)[0])
-                if s.engine.model.mobility is not None:
-                    st["inactive"].append(s.engine.model.mobility.statistics()["inactive_particles"]
+                if s.engine.model.effect("mobility") is not None:
+                    st["inactive"].append(s.engine.model.effect("mobility").statistics()["inactive_particles"]
                                           / s.particle_count)
                 if args.progress:
                     print(f"  {v:18s} t = {s.time:.3f} s  wall {st['wall']:.1f} s  inactive "

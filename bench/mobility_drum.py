@@ -47,8 +47,8 @@ def run(variant: str) -> dict:
             thetas.append(analysis.bed_surface(p["position"][:, 1], p["position"][:, 2],
                                                p["radius"], 2 * R_P)[0])
         torque = float(np.mean(sim.series["bodies/drum/axial_torque"][first:]))
-        inactive = (sim.engine.model.mobility.statistics()["inactive_particles"] / sim.particle_count
-                    if sim.engine.model.mobility is not None else 0.0)
+        inactive = (sim.engine.model.effect("mobility").statistics()["inactive_particles"] / sim.particle_count
+                    if sim.engine.model.effect("mobility") is not None else 0.0)
     return dict(torque=torque, theta=math.degrees(float(np.mean(thetas))), inactive=inactive,
                 wall=wall)
 

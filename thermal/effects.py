@@ -504,9 +504,12 @@ class Temperature(Effect):
             print(f"taichi-dem: warning: at t = {sim.time:.4g} s dt sum(h)/(m c) = {ratio:.3g}: "
                   f"the temperature update is near its stability limit (1)", file=sys.stderr)
 
-    def integrate_func(self, ctx, drying_effect):
-        """ti.func (i, heat W, conductance W/K, dt s): the particle's new temperature (and
-        moisture, when drying)."""
+    def integrate_func(self, ctx):
+        """ti.func (i, load, dt s): the particle's new temperature from the load's heat (W)
+        and its conductance (W/K, kept for the stability check), and its moisture when the
+        scene dries (the drying effect's constants): explicit, stable while
+        dt sum(h) / (m c) < 1 (``check``, per sample)."""
+        drying_effect = ctx.effect("drying")
         s = ctx.state
         real = ctx.real
         compensated = self.compensated
@@ -562,7 +565,11 @@ class Temperature(Effect):
                 s.temperature[i] = s.temperature[i] + dt * heat * s.inverse_thermal_mass[i]
             s.conductance[i] = conductance
 
-        return update_temperature
+        @ti.func
+        def integrate(i, load, dt):
+            update_temperature(i, load.heat, load.conductance, dt)
+
+        return integrate
 
 
 def thermal_effects(scene) -> list:

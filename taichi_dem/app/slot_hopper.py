@@ -110,7 +110,7 @@ def settled_speedup(bed_csv, *, steps=400, repeats=3, **kw):
         for _ in range(repeats):
             for m in (False, True):
                 times[m].append(_stepping_time(sims[m], steps))
-        st = sims[True].engine.model.mobility.statistics()
+        st = sims[True].engine.model.effect("mobility").statistics()
         frac = st["inactive_particles"] / max(sims[True].particle_count, 1)
         return float(np.median(times[False])), float(np.median(times[True])), frac
     finally:
@@ -130,8 +130,8 @@ def discharge(bed_csv, *, mobility, end_time, **kw):
     inactive = []
 
     def count_inactive(sim, values):
-        if sim.engine.model.mobility is not None:
-            inactive.append(sim.engine.model.mobility.statistics()["inactive_particles"])
+        if sim.engine.model.effect("mobility") is not None:
+            inactive.append(sim.engine.model.effect("mobility").statistics()["inactive_particles"])
     with Simulation.from_text(text, base_dir=str(base)) as sim:
         sim.add_observer(count_inactive)
         sim.step(1)

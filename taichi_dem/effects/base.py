@@ -116,6 +116,11 @@ class Effect:
     mechanical = False
     # a contact effect whose ti.func depends on the kind: contact_func(ctx, kind)
     per_kind = False
+    # an effect that holds particles still between rebuilds, or carries them with the frame of
+    # body ``carrier_body`` (>= 0): it owns the flag ``particle_active`` and the hooks of
+    # engine/holding.py (make_rigid_drift, make_rigid_velocity, make_carried_load)
+    holds_particles = False
+    carrier_body = -1
     margin = 0.0
     particle_fields: dict = {}
     contact_fields: dict = {}
@@ -139,6 +144,14 @@ class Effect:
     def allocate(self, ctx, tree) -> None:
         """Allocate what the effect holds beyond its declared fields (e.g. a gas stream)."""
 
+    def prepare(self, ctx) -> None:
+        """Compile what needs the engine's parts (the broadphase's cells, the mesh), once
+        they are built (ctx.broadphase, ctx.mesh)."""
+
+    def after_rebuild(self, ctx, n: int, time: float) -> None:
+        """Work after each neighbour-list rebuild, before the step that follows (``n``
+        particle slots, at ``time`` s); only effects that override it are called."""
+
     def check(self, sim, measured: dict) -> None:
         """A stability check at every output sample (``measured``: Engine.measure()): raise
         taichi_dem.DivergenceError to stop the run, or warn. Effects that have one override
@@ -149,6 +162,13 @@ class Effect:
         every contact, so its first half step's acceleration is the sum of the effects that
         act on a free particle (gravity, a body force). A ti.func ``(i, load) -> load`` as
         ``particle_func``'s, or None (this effect gives a free particle nothing)."""
+        return None
+
+    def integrate_func(self, ctx):
+        """The integrate stage's update of a particle's own state from its load (after the
+        contacts and the particle stage): a ti.func ``(i, load, dt)`` (``load`` as
+        ``particle_func``'s: heat W, conductance W/K; dt s), or None (the default: an effect
+        whose integration another one runs, or the engine's velocity Verlet)."""
         return None
 
     def contact_func(self, ctx):

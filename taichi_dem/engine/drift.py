@@ -1,7 +1,7 @@
 """The first half of a velocity Verlet step, per particle (engine/stepper.py): the half kick,
 the drift, the wrap across periodic faces, the removal of particles that left the domain or
 entered an outlet, and the flag that asks for a rebuild once a particle has moved half the
-skin. [mobility]: inactive particles are held, or carried rigidly by the frame's body."""
+skin. Held particles (engine/holding.py) stay, or are carried rigidly by a body's frame."""
 import taichi as ti
 
 from .precision import make_split_add
@@ -24,11 +24,10 @@ def make_drift(e):
 
     has_process = e.process is not None
     after_drift = e.process.make_funcs(e) if has_process else None
-    mobility = e.model.mobility is not None
-    active = e.model.mobility.particle_active if mobility else None
-    body_frame = e.model.mobility_frame >= 0
-    rigid_drift = e.model.mobility.make_rigid_drift(e.context) if body_frame else None
-    rigid_velocity = e.model.mobility.make_rigid_velocity(e.context) if body_frame else None
+    holding = e.holding
+    holds, particle_moves = holding.any, holding.moves
+    body_frame = holding.carried
+    rigid_drift, rigid_velocity = holding.rigid_drift, holding.rigid_velocity
     # positions with residuals (engine/precision.py: f32 far from the origin)
     split = e.model.split_positions
     split_add = make_split_add(real) if split else None
@@ -39,12 +38,12 @@ def make_drift(e):
         """First half of a velocity Verlet step for particle i: half kick, then drift.
         A particle that leaves the domain (or enters an outlet) is removed: marked dead
         and parked far away until the next rebuild drops it. ``t_new``: time after the
-        step, s. [mobility]: an inactive particle is held ("at_rest") or carried rigidly
-        by the frame's body ("body_frame")."""
+        step, s. A held particle (engine/holding.py) stays, or is carried rigidly by a
+        body's frame."""
         moves = s.inverse_mass[i] > 0.0 and s.alive[i] != 0
         frozen = False
-        if ti.static(mobility):
-            frozen = active[i] == 0
+        if ti.static(holds):
+            frozen = not particle_moves(i)
             if ti.static(not body_frame):
                 if frozen:
                     moves = False

@@ -62,15 +62,17 @@ class GatherStage:
         thermal = model.thermal
         n_walls = len(model.scene.walls)
         has_mesh = mesh_contacts is not None
-        mobility = model.mobility is not None
-        active = model.mobility.particle_active if mobility else None
-        core_internal = mobility and model.mobility_frame >= 0
-        # [mobility] "body_frame": what the frame's body supplies to carry an inactive particle
-        book_carried_load = model.mobility.make_carried_load(ctx) if core_internal else None
+        holding = e.holding                  # held particles (engine/holding.py)
+        holds, particle_moves = holding.any, holding.moves
+        core_internal = holding.carried
+        # carried by a body's frame: what that body supplies to carry a held particle
+        book_carried_load = holding.carried_load
         Load = particle_load(real)
         particle_effects = tuple(x.particle_func(ctx) for x in model.particle_effects)
-        update_temperature = (model.effect("temperature").integrate_func(
-                                  ctx, model.effect("drying")) if thermal else None)
+        # the integrate stage's updates of a particle's own state from its load (its
+        # temperature and moisture from the heat), in step order
+        integrators = tuple(f for f in (x.integrate_func(ctx) for x in model.effect_list
+                                        if x.stage == "integrate") if f is not None)
         drift_particle = e.drift_particle
         pool = e.worker_pool
         take_scattered = make_take_scattered(s, pool, pair_heat)
@@ -91,15 +93,15 @@ class GatherStage:
                 force = s.owned_force[i]
                 torque = s.owned_torque[i]
                 integrates = True
-                if ti.static(mobility):
-                    integrates = active[i] != 0      # inactive: held or carried, not integrated
+                if ti.static(holds):
+                    integrates = particle_moves(i)         # held or carried: not integrated
                 heat = 0.0           # W into the particle
                 conductance = 0.0    # W/K, for the stability check
                 if ti.static(thermal):
                     heat = s.owned_heat[i]
                     conductance = s.conductance[i]
                 if ti.static(scatter > 0):
-                    # (no [mobility] here: every particle integrates)
+                    # (no held particles here: every particle integrates)
                     force += scattered_force
                     torque += scattered_torque
                     if ti.static(pair_heat):
@@ -125,7 +127,7 @@ class GatherStage:
                         for k in range(s.row_start[i] + s.row_owned[i], s.row_start[i] + s.row_count[i]):
                             m = p.mirror[k]
                             if m >= 0:
-                                if p.contact[m] == 1 and active[p.neighbour[k]] != 0:
+                                if p.contact[m] == 1 and particle_moves(p.neighbour[k]):
                                     force += p.partner_force[m]
                                     torque += p.partner_torque[m]
                     if ti.static(pair_heat):
@@ -155,10 +157,9 @@ class GatherStage:
                 load = Load(acceleration=vec0, heat=heat, conductance=conductance)
                 for effect in ti.static(particle_effects):
                     load = effect(i, load)
-                if ti.static(thermal):
-                    if s.alive[i] != 0:
-                        # explicit update; stable while dt sum(h) / (m c) < 1 (checked per sample)
-                        update_temperature(i, load.heat, load.conductance, dt)
+                if s.alive[i] != 0:
+                    for integrate in ti.static(integrators):
+                        integrate(i, load, dt)
                 if ti.static(core_internal):
                     if inv_m > 0.0 and s.alive[i] != 0 and not integrates:
                         book_carried_load(i, force, torque, load.acceleration)

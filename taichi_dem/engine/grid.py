@@ -1,6 +1,6 @@
 """The cell grid over the domain, and the one place cells are numbered and stepped across
-periodic faces (``GridSpec``): the neighbour search (broadphase.py), the drag's voidage
-(effects/drag/) and the mobility cells (effects/mobility/) all use it."""
+periodic faces (``GridSpec``): the neighbour search (broadphase.py) and the effects that
+keep their own cells (a voidage per cell, coarser blocks of cells) all use it."""
 import math
 
 import numpy as np
@@ -76,11 +76,11 @@ class GridSpec:
         (number -> coordinates) and ``neighbour(v, offset)`` (offset 0..26 of the 3 x 3 x 3
         block around v -> (the neighbour's number, inside: 0 beyond a closed face), wrapped
         on periodic axes). ``dims``: cells per axis of a coarser grid over the same domain
-        and periodic axes (the mobility cells), default this grid's. (The neighbour search
+        and periodic axes (an effect's blocks of cells), default this grid's. (The neighbour search
         unrolls its own stencil, with thin periodic axes handled: Broadphase.)"""
         if dims is None:
             dims_of = self.layout_funcs()[4]
-        else:       # another grid's (the mobility cells): compiled in
+        else:       # another grid's (an effect's blocks): compiled in
             fixed = ti.Vector([int(x) for x in dims])
 
             @ti.func

@@ -127,8 +127,7 @@ class Insertion:
         compensated = s.compensated
         real = e.model.real
         _, split_f64 = make_compensated_add(real)
-        mobility = e.model.mobility is not None
-        active = e.model.mobility.particle_active if mobility else None
+        release = e.holding.release          # (engine/holding.py; nothing without it)
         C = InsertColumn
         # what effects keep per particle beyond what is inserted (a coarse-grained particle's
         # wall-contact clock): zero, not what a removed particle left in the slot
@@ -174,8 +173,7 @@ class Insertion:
                     load = start_of(i, load)
                 s.acceleration[i] = load.acceleration
                 s.angular_acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
-                if ti.static(mobility):
-                    active[i] = 1     # until the rebuild this insertion flags judges it
+                release(i)            # moves until the rebuild this insertion flags judges it
                 if ti.static(process):
                     s.serial[i] = ints[q, 2]
                     s.origin[i] = ints[q, 3]

@@ -132,13 +132,8 @@ class Model:
         return "wall_conduction" in self.effect_names
 
     @property
-    def mobility(self):
-        """[mobility]'s effect (effects/mobility/): inactive particles skip their mutual
-        contacts and their integration; or None."""
-        return self.effect("mobility")
-
-    @property
-    def mobility_frame(self) -> int:
-        """The body whose frame carries inactive particles ("body_frame" mobility), or -1."""
-        m = self.mobility
-        return m.frame if m is not None else -1
+    def rebuild_effects(self) -> tuple:
+        """The effects with work after each neighbour-list rebuild (Effect.after_rebuild)."""
+        from ..effects.base import Effect
+        return tuple(x for x in self.effect_list
+                     if type(x).after_rebuild is not Effect.after_rebuild)

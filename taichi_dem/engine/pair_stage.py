@@ -86,12 +86,13 @@ class PairStage:
         pair_heat = model.pair_heat
         thermal = model.thermal
         has_mesh = shields is not None
-        mobility = model.mobility is not None
-        active = model.mobility.particle_active if mobility else None
-        # [mobility] "body_frame": the frozen core is carried by the frame's body, so what
+        holding = e.holding
+        holds, particle_moves = holding.any, holding.moves
+        # held particles carried by a body's frame (engine/holding.py): the frozen core is
+        # carried by the frame's body, so what
         # holds it there is a load on that body (booked in the gather); its inner contacts
         # cancel in that sum and are left out of both sides
-        core_internal = mobility and model.mobility_frame >= 0
+        core_internal = holding.carried
         split = model.split_positions
         vec0 = ti.Vector([0.0, 0.0, 0.0])
 
@@ -106,7 +107,7 @@ class PairStage:
                                         pool.copy_heat, pool.copy_conductance)
                             if thermal else None)
         # one thread (the serial mode) adds each pair's partner share to the partner directly
-        # (Engine.scatter_ok); [mobility]'s frozen and carried pairs read theirs at the entries
+        # (Engine.scatter_ok); held particles' frozen and carried pairs read theirs at the entries
         scatter_ok = e.scatter_ok
 
         @ti.func
@@ -115,8 +116,8 @@ class PairStage:
             the owner's sums and the partner's shares - stored at the entry (no atomics), or
             with ``scatter`` added to the partner's sums of copy ``copy`` (add_partner_share:
             one thread, or worker ``copy`` alone writing that copy).
-            ``full`` = 1 (the step of a rebuild): every pair; 0: [mobility] pairs of two
-            inactive particles keep their force, torque and history (their heat flows through
+            ``full`` = 1 (the step of a rebuild): every pair; 0: pairs of two
+            held particles (engine/holding.py) keep their force, torque and history (their heat flows through
             the kept conductance)."""
             xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
             ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
@@ -129,16 +130,16 @@ class PairStage:
             owned_heat = 0.0
             owned_conductance = 0.0
             frozen_i = False
-            if ti.static(mobility):
-                frozen_i = full == 0 and active[i] == 0
+            if ti.static(holds):
+                frozen_i = full == 0 and not particle_moves(i)
             inactive_i = False
             if ti.static(core_internal):
-                inactive_i = active[i] == 0
+                inactive_i = not particle_moves(i)
             for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                 j = p.neighbour[k]
-                if ti.static(mobility):
-                    if frozen_i and active[j] == 0:
-                        # both inactive: the contact is frozen as it was at the rebuild
+                if ti.static(holds):
+                    if frozen_i and not particle_moves(j):
+                        # both held: the contact is frozen as it was at the rebuild
                         if ti.static(pair_heat):
                             if p.contact[k] != 0:
                                 h = p.pair_conductance[k]
@@ -183,7 +184,7 @@ class PairStage:
                     if c.normal_overlap > 0.0:
                         inner = False
                         if ti.static(core_internal):
-                            inner = inactive_i and active[j] == 0
+                            inner = inactive_i and not particle_moves(j)
                         if not inner:
                             owned_force += out.force
                             owned_torque += out.torque_i

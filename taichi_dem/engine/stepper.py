@@ -51,6 +51,7 @@ from . import drivers
 from ..setup import tuning
 from ..setup.tuning import PARALLEL_FROM
 from .drift import make_drift
+from .holding import Holding
 from .gather_stage import GatherStage
 from .pair_stage import PairStage, make_temperature_of
 from .values import RuntimeValues
@@ -95,10 +96,10 @@ class Engine:
         self.runs = self.threads is not None and all(hasattr(e, "cell_func")
                                                      for e in self.model.cell_effects)
         # the serial mode's pair stage adds partner shares to the partner directly, with no
-        # gather through the mirror index (one thread: no race); [mobility] keeps the entries
-        # (its frozen pairs re-use their stored shares). The mirror is still built at every
+        # gather through the mirror index (one thread: no race); held particles keep the
+        # entries (their frozen pairs re-use their stored shares). The mirror is still built at every
         # rebuild: a checkpoint of a serial run restores into a parallel one (or a GPU)
-        self.scatter_ok = model.mobility is None
+        self.scatter_ok = not any(x.holds_particles for x in model.effect_list)
         self.trees: list[FieldTree] = []
         # scene values the kernels read at run time (values.py): made first, so their place
         # is the same in every simulation; the grid's layout and the skin are read from them
@@ -174,8 +175,9 @@ class Engine:
                                  "(run/simulation.py engine_parts)")
             self.mesh = parts.mesh(self, self.kinematics)
             self.context.attach("mesh", self.mesh)
-        if self.model.mobility is not None:
-            self.model.mobility.compile(self.context)
+        for x in self.model.effect_list:
+            x.prepare(self.context)         # (what needs the broadphase and the mesh)
+        self.holding = Holding(self.model.effect_list, self.context)
         self._compile_particle_kernels()
         self.count = 0                     # slots in use
         self._measure = None               # (measure.py, compiled on first use)
@@ -327,7 +329,7 @@ class Engine:
             """What step j of a run (at ``t``, s; ``last`` of the run) needs before its pair
             stage, done by the thread ``leader`` marks: the wall loads zeroed when this step
             books them, the bodies' frames set. Returns (record, full): whether the step books
-            the wall loads, whether it follows a rebuild ([mobility])."""
+            the wall loads, whether it follows a rebuild (held particles' pairs are judged then)."""
             record = 0
             if last and record_last != 0:
                 record = 1
@@ -360,8 +362,8 @@ class Engine:
         self.choose_loop_mode(n)
         self.flags[Flag.REBUILD] = 0          # (set by the insertion of the initial fill)
         self.count = self.broadphase.rebuild(n)
-        if self.model.mobility is not None:
-            self.model.mobility.update(self.context, self.count, self.time)
+        for x in self.model.rebuild_effects:
+            x.after_rebuild(self.context, self.count, self.time)
         if self.serial and self.runs:
             # one step of no length in the kernel the runs use (nothing else to compile)
             self._run_steps(self.count, 0.0, self.time, 0.0, 1, 1, 0, 0)
@@ -387,8 +389,8 @@ class Engine:
         self.choose_loop_mode(n)
         self.count = self.broadphase.rebuild(n)
         self.flags[Flag.DEAD_IN_SLOTS] = 0
-        if self.model.mobility is not None:
-            self.model.mobility.update(self.context, self.count, self.time)
+        for x in self.model.rebuild_effects:
+            x.after_rebuild(self.context, self.count, self.time)
 
     def advance(self, steps: int, record_last: bool = False):
         """Advance ``steps`` time steps of ``self.model.dt``: in runs of steps per launch in the

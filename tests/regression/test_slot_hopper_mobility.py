@@ -47,7 +47,7 @@ def test_slot_hopper_flow_with_and_without_mobility(tmp_path):
     text = sh.scene_text(phase="fill", end_time=0.25, mobility=True, **geometry)
     with td.Simulation.from_text(text) as sim:
         sim.run()
-        stats = sim.engine.model.mobility.statistics()
+        stats = sim.engine.model.effect("mobility").statistics()
         sh.write_bed(sim, tmp_path / "bed.csv")
         n = sim.particle_count
     assert n == COUNT

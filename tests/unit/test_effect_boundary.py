@@ -17,7 +17,7 @@ EFFECT_MODULES = sorted(set((ROOT / "taichi_dem" / "effects").rglob("*.py"))
     ROOT / "thermal" / "effects.py"]
 # the methods through which the engine calls an effect: their first argument is the context
 HOOKS = {"allocate", "upload", "contact_func", "particle_func", "integrate_func", "cell_func",
-         "after_pairs", "compile", "update", "make_rigid_drift", "make_rigid_velocity",
+         "after_pairs", "compile", "update", "prepare", "after_rebuild", "make_rigid_drift", "make_rigid_velocity",
          "make_rigid_centre", "make_rigid_spin", "frame_reach", "fraction_within",
          "_compile_cells", "_tabulate", "_allocate_tables", "_ratios", "_upload_volumes"}
 

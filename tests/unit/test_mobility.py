@@ -66,7 +66,7 @@ def test_auto_threshold_needs_gravity():
 def test_off_means_absent():
     with td.Simulation.from_text(small()) as sim:
         e = sim.engine
-        assert e.model.mobility is None and "mobility" not in e.model.effect_names
+        assert e.model.effect("mobility") is None and "mobility" not in e.model.effect_names
         names = {n for t in e.trees for n in t.fields}
         assert not any(n.startswith("mobility") or n == "particle_active" for n in names)
     with td.Simulation.from_text(small("\n[mobility]\n")) as sim:
@@ -79,7 +79,7 @@ def numpy_status(engine, p):
     """The status of every mobility cell recomputed on the host from the particles (positions,
     velocities, radii), with the rules of effects/mobility.py; returns (status by cell,
     temperature by cell, block of each particle)."""
-    g, m = engine.model.grid, engine.model.mobility
+    g, m = engine.model.grid, engine.model.effect("mobility")
     st = engine.model.scene.settings["mobility"]
     cells = np.clip(np.floor((p["position"] - g.lo) / np.asarray(g.cell_size)).astype(int), 0,
                     np.asarray(g.dims) - 1)
@@ -156,7 +156,7 @@ solid_fraction_threshold = 0.3
 
 
 def block_of(engine, x):
-    g, m = engine.model.grid, engine.model.mobility
+    g, m = engine.model.grid, engine.model.effect("mobility")
     cells = np.clip(np.floor((x - g.lo) / np.asarray(g.cell_size)).astype(int), 0,
                     np.asarray(g.dims) - 1)
     return cells * np.asarray(m.blocks) // np.asarray(g.dims)
@@ -179,7 +179,7 @@ def test_status_matches_a_host_recomputation(tmp_path):
     write(x, v)
     with td.Simulation.from_text(text, base_dir=str(tmp_path)) as sim:
         g = sim.engine.model.grid
-        assert sim.engine.model.mobility.blocks == (7, 7, 7) and g.dims == (13, 13, 13)
+        assert sim.engine.model.effect("mobility").blocks == (7, 7, 7) and g.dims == (13, 13, 13)
         ax = g.lo[0] + (np.arange(13) + 0.5) * g.cell_size[0]
         x = np.array(np.meshgrid(ax, ax, ax, indexing="ij")).reshape(3, -1).T
         v = np.zeros_like(x)
@@ -194,14 +194,14 @@ def test_status_matches_a_host_recomputation(tmp_path):
         e = sim.engine
         p = sim.particles()
         status, temp, block = numpy_status(e, p)
-        assert np.allclose(e.model.mobility.block_temperature.to_numpy(), temp, rtol=1e-9, atol=1e-15)
-        assert np.array_equal(e.model.mobility.block_status.to_numpy(), status)
+        assert np.allclose(e.model.effect("mobility").block_temperature.to_numpy(), temp, rtol=1e-9, atol=1e-15)
+        assert np.array_equal(e.model.effect("mobility").block_status.to_numpy(), status)
         assert {0, 1, 2, 3} <= set(status.tolist())       # every status occurs
         assert status[(2 * 7 + 3) * 7 + 0] == 0 and status[0] == 2
         order = np.argsort(e.state.particle_id.to_numpy()[:e.count])
-        flags = e.model.mobility.particle_active.to_numpy()[:e.count][order]
+        flags = e.model.effect("mobility").particle_active.to_numpy()[:e.count][order]
         assert np.array_equal(flags, (status[block] != 0).astype(int))
-        stats = e.model.mobility.statistics()
+        stats = e.model.effect("mobility").statistics()
         assert stats["inactive_particles"] == int(np.sum(status[block] == 0))
 
 
@@ -219,7 +219,7 @@ def test_a_frozen_bed_still_loads_its_floor():
     with td.Simulation.from_text(text) as sim:
         sim.run(until=0.5)
         sim.engine.rebuild(sim.engine.count)        # judge the settled bed now
-        st = sim.engine.model.mobility.statistics()
+        st = sim.engine.model.effect("mobility").statistics()
         assert st["inactive_particles"] > 0.1 * sim.particle_count, st
         before = sim.particles()
         sim.run(until=0.5 + sim.scene.output.interval)
@@ -228,7 +228,7 @@ def test_a_frozen_bed_still_loads_its_floor():
         sim.run(until=sim.time + sim.scene.output.interval)
         after = sim.particles()
         order = np.argsort(sim.engine.state.particle_id.to_numpy()[:sim.engine.count])
-        inactive = sim.engine.model.mobility.particle_active.to_numpy()[:sim.engine.count][order] == 0
+        inactive = sim.engine.model.effect("mobility").particle_active.to_numpy()[:sim.engine.count][order] == 0
         assert np.array_equal(before["position"][inactive], after["position"][inactive])
         weight = float(np.sum(after["mass"])) * 9.81
         floor = float(sim.series["walls/floor/force"][-1][2])
@@ -314,12 +314,12 @@ def test_body_frame_carries_a_bed_that_turns_with_its_drum(tmp_path, mode):
 
         def flags():
             order = np.argsort(e.state.particle_id.to_numpy()[:n])
-            return e.model.mobility.particle_active.to_numpy()[:n][order] == 0
+            return e.model.effect("mobility").particle_active.to_numpy()[:n][order] == 0
         always &= flags()
         if mode == "at_rest":
-            assert e.model.mobility.statistics()["inactive_particles"] == 0
+            assert e.model.effect("mobility").statistics()["inactive_particles"] == 0
             return
-        assert always.mean() > 0.05, e.model.mobility.statistics()
+        assert always.mean() > 0.05, e.model.effect("mobility").statistics()
         for _ in range(20):
             sim.step(50)
             always &= flags()
@@ -380,7 +380,7 @@ conduction = true
     for mobility in ("", "[mobility]\ngranular_temperature_threshold = 1e-6\nsolid_fraction_threshold = 0.2\n"):
         with td.Simulation.from_text(text + mobility, base_dir=str(tmp_path)) as sim:
             if mobility:
-                m = sim.engine.model.mobility
+                m = sim.engine.model.effect("mobility")
                 assert m.statistics()["inactive_particles"] == n ** 3, (m.statistics(), m.blocks, m.block_solid_fraction.to_numpy(), m.block_temperature.to_numpy().max(), m.block_mean_speed_sq.to_numpy().max())
             sim.step(300)
             p = sim.particles()
@@ -411,7 +411,7 @@ def test_body_frame_books_what_carries_the_core_on_the_drum(tmp_path):
         for _ in range(5):
             sim.step(1)
             order = np.argsort(e.state.particle_id.to_numpy()[:n])
-            inactive = e.model.mobility.particle_active.to_numpy()[:n][order] == 0
+            inactive = e.model.effect("mobility").particle_active.to_numpy()[:n][order] == 0
             p = sim.particles()
             m, x = p["mass"][inactive], p["position"][inactive]
             expected.append(float(np.sum(m * -9.81 * x[:, 0])))
@@ -437,7 +437,7 @@ def test_body_frame_reach_is_dropped_when_the_body_does_not_enclose_the_bed(tmp_
         'mesh = { builder = "box", min = [-0.005, -0.005, -0.004], max = [0.005, 0.005, -0.002] }')
     assert 'builder = "box"' in text
     with td.Simulation.from_text(text, base_dir=str(tmp_path)) as sim:
-        m = sim.engine.model.mobility
+        m = sim.engine.model.effect("mobility")
         assert not m.reach_in_use
         assert not np.any(m.block_beyond.to_numpy())
         np.testing.assert_allclose(m.block_volume.to_numpy(), m.plain_volume, rtol=1e-6)

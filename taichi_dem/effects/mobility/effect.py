@@ -85,6 +85,7 @@ class Mobility(Effect):
     ``particle_active`` flag per particle (1 active, 0 inactive), refreshed by ``update``."""
 
     name, stage = "mobility", "detect"
+    holds_particles = True      # (engine/holding.py: the step reads particle_active)
 
     def __init__(self, description: str, settings, bodies=()):
         super().__init__(description)
@@ -94,6 +95,11 @@ class Mobility(Effect):
         # "body_frame": the index of the body whose rigid motion the bed follows, else -1
         self.frame = ([b.name for b in self.bodies].index(settings.body)
                       if settings.mode == "body_frame" else -1)
+
+    @property
+    def carrier_body(self) -> int:
+        """The body whose frame carries the inactive particles ("body_frame"), or -1."""
+        return self.frame
 
     # ------------------------------------------------------------------ layout
     def layout(self, grid):
@@ -205,7 +211,7 @@ class Mobility(Effect):
         return out
 
     # ------------------------------------------------------------------ kernels
-    def compile(self, ctx):
+    def prepare(self, ctx):
         """The status kernel; needs the broadphase's cell ranges (and the mesh's candidate
         lists when the scene has bodies). ``self.frame``: the frame body's index
         or -1."""
@@ -474,7 +480,9 @@ class Mobility(Effect):
         return book_carried_load
 
     # ------------------------------------------------------------------ driver
-    def update(self, ctx, n: int, time: float):
+    def after_rebuild(self, ctx, n: int, time: float):
+        """Judge every particle: its ``particle_active`` flag for the steps to the next
+        rebuild."""
         self._update(n, time)
         if self.reach_in_use and int(self.counts[4]) > 0:
             # a particle centre beyond the frame body's reach: the body does not enclose the
