@@ -22,6 +22,7 @@ integrate stage:
 """
 from __future__ import annotations
 
+import math
 import sys
 
 import numpy as np
@@ -467,6 +468,51 @@ class Drying(Effect):
 
     def allocate(self, ctx, tree):
         self.evaporated = tree.add("evaporated", ti.f64, 1)      # kg since the start
+        self.sums = tree.add("moisture_sums", ti.f64, 2)          # kg water, kg dry solid
+
+    def inserted_values(self, ctx):
+        """An inserted particle's moisture (kg water per kg dry solid), in f64 where a
+        residual keeps what f32 cannot (engine/precision.py)."""
+        s, real = ctx.state, ctx.real
+        compensated = "moisture_residual" in self.particle_fields
+        _, split_f64 = make_compensated_add(real)
+
+        @ti.func
+        def moisture(i, value):
+            if ti.static(compensated):
+                x_part, x_rest = split_f64(value)
+                s.moisture[i] = x_part
+                s.moisture_residual[i] = x_rest
+            else:
+                s.moisture[i] = ti.cast(value, real)
+
+        return [("moisture", moisture)]
+
+    def measure_funcs(self, ctx):
+        """At a sample: mean_moisture (kg water per kg dry solid, NaN without particles) and
+        evaporated_mass (kg since the start)."""
+        s, sums = ctx.state, self.sums
+        compensated = "moisture_residual" in self.particle_fields
+
+        @ti.func
+        def reset():
+            sums[0] = 0.0
+            sums[1] = 0.0
+
+        @ti.func
+        def particle(i):
+            water = ti.cast(s.moisture[i], ti.f64)
+            if ti.static(compensated):
+                water += s.moisture_residual[i]
+            sums[0] += ti.cast(s.mass[i], ti.f64) * water
+            sums[1] += ti.cast(s.mass[i], ti.f64)
+
+        def read(arrays):
+            (water, dry), evaporated = arrays
+            return {"mean_moisture": float(water / dry) if dry else math.nan,
+                    "evaporated_mass": float(evaporated[0])}
+
+        return reset, particle, [self.sums, self.evaporated], read
 
 
 class Temperature(Effect):
@@ -487,6 +533,67 @@ class Temperature(Effect):
                                 "inverse_thermal_mass": (False, "real")}
         if compensated:
             self.particle_fields["temperature_residual"] = (False, "f64")
+
+    def allocate(self, ctx, tree):
+        # f64 sums at a sample (an f32 sum of m c T at 723 K would round a heat balance away):
+        # sum m c T (J), sum m c (J/K), the largest dt sum(h)/(m c), a non-finite flag
+        self.sums = tree.add("temperature_sums", ti.f64, 4)
+
+    def inserted_values(self, ctx):
+        """An inserted particle's temperature (K; in f64 where a residual keeps what f32
+        cannot, engine/precision.py) and its 1 / (m c) (1/(J/K))."""
+        s, real = ctx.state, ctx.real
+        compensated = self.compensated
+        _, split_f64 = make_compensated_add(real)
+
+        @ti.func
+        def temperature(i, value):
+            if ti.static(compensated):
+                t_part, t_rest = split_f64(value)
+                s.temperature[i] = t_part
+                s.temperature_residual[i] = t_rest
+            else:
+                s.temperature[i] = ti.cast(value, real)
+
+        @ti.func
+        def inverse_thermal_mass(i, value):
+            s.inverse_thermal_mass[i] = ti.cast(value, real)
+
+        return [("temperature", temperature), ("inverse_thermal_mass", inverse_thermal_mass)]
+
+    def measure_funcs(self, ctx):
+        """At a sample: thermal_energy (sum m c T, J), mean_temperature (K, NaN without
+        particles), thermal_step_ratio (the largest dt sum(h)/(m c), dt the thermal step S x
+        dt: ``check`` reads it), and a NaN or overflowed temperature as non_finite."""
+        s, sums = ctx.state, self.sums
+        compensated = self.compensated
+        dt_step = ctx.dt * self.time_scale
+
+        @ti.func
+        def reset():
+            for k in ti.static(range(4)):
+                sums[k] = 0.0
+
+        @ti.func
+        def particle(i):
+            thermal_mass = 1.0 / ti.cast(s.inverse_thermal_mass[i], ti.f64)
+            temperature = ti.cast(s.temperature[i], ti.f64)
+            if ti.static(compensated):
+                temperature += s.temperature_residual[i]
+            sums[0] += thermal_mass * temperature
+            sums[1] += thermal_mass
+            ti.atomic_max(sums[2], ti.cast(dt_step * s.conductance[i] * s.inverse_thermal_mass[i],
+                                           ti.f64))
+            if not (s.temperature[i] > 0.0 and s.temperature[i] < 1e30):
+                sums[3] = 1.0
+
+        def read(arrays):
+            energy, thermal_mass, ratio, bad = arrays[0]
+            return {"thermal_energy": float(energy),
+                    "mean_temperature": float(energy / thermal_mass) if thermal_mass else math.nan,
+                    "thermal_step_ratio": float(ratio), "non_finite": bool(bad > 0)}
+
+        return reset, particle, [self.sums], read
 
     def check(self, sim, measured: dict) -> None:
         """The explicit update T += dt sum(Q)/(m c) is stable while dt sum(h)/(m c) < 1 for

@@ -15,6 +15,9 @@ layout, /series/... and /residence/...):
                                    (kg/s, per output interval) and the masses fed,
                                    removed and inside (kg)
 ``contacts.png``                   contact-count sensors
+``collisions_<sensor>.png``        contact-statistics sensors, per pair kind: the
+                                   contacts' normal force (N), the collision rate (1/s)
+                                   and the collisions' impact speeds (m/s)
 ``temperatures.png``               mean particle temperature, each outlet's (of what it
                                    removed in the interval) and the gas leaving (K)
 ``moisture.png``                   drying: mean and outlet moisture (kg/kg), evaporated
@@ -288,6 +291,41 @@ def contact_figure(r: Results) -> Optional[Figure]:
                   [Panel("particles touching a body", "time, s", "particles", lines)])
 
 
+_PAIR_KINDS = (("particle", "particle-particle"), ("wall", "particle-wall"),
+               ("body", "particle-body"))
+
+
+def contact_statistics_figures(r: Results) -> list[Figure]:
+    """Per contact-statistics sensor: the normal force of the contacts now (mean and 90th
+    percentile, N), the collisions begun per second, and their impact speeds (median and
+    90th percentile, m/s), one line per pair kind that had any contact or collision."""
+    out = []
+    for name in r.names("sensors"):
+        base = f"sensors/{name}"
+        if f"{base}/particle/contacts" not in r.series:
+            continue
+        force, rate, speed = [], [], []
+        for kind, words in _PAIR_KINDS:
+            get = (lambda stat: r.get(f"{base}/{kind}/{stat}"))
+            contacts, collisions = get("contacts"), get("collisions")
+            if contacts is not None and np.any(contacts > 0):
+                force.append(Line(f"{words}, mean", r.t, get("normal_force_mean")))
+                force.append(Line(f"{words}, 90 %", r.t, get("normal_force_p90"), "--", 0.9))
+            if collisions is not None and np.any(collisions > 0):
+                rate.append(Line(words, r.t, get("collision_rate")))
+                speed.append(Line(f"{words}, median", r.t, get("impact_speed_p50")))
+                speed.append(Line(f"{words}, 90 %", r.t, get("impact_speed_p90"), "--", 0.9))
+        panels = [Panel("normal force of the contacts now", "time, s", "force, N", force),
+                  Panel("collisions begun per second", "time, s", "rate, 1/s", rate),
+                  Panel("impact speed (relative normal speed as a collision begins)", "time, s",
+                        "speed, m/s", speed)]
+        panels = [p for p in panels if p.lines]
+        if panels:
+            out.append(Figure(f"collisions_{_safe(name)}", f"Contact statistics '{name}'",
+                              panels))
+    return out
+
+
 def temperature_figure(r: Results) -> Optional[Figure]:
     """Mean particle temperature, each outlet's (what it removed in the interval; gaps where
     nothing left) and the plug-flow gas leaving the domain, K (right axis C)."""
@@ -433,7 +471,7 @@ def figures(r: Results) -> list[Figure]:
     """Every figure the results file has the series for, in reading order."""
     out: list[Figure] = []
     for make in (particles_figure, wall_figure, body_figures, residence_figures, mass_flow_figure,
-                 contact_figure, temperature_figure, moisture_figure, gas_profile_figure,
+                 contact_figure, contact_statistics_figures, temperature_figure, moisture_figure, gas_profile_figure,
                  heat_flow_figure, energy_balance_figure):
         got = make(r)
         out.extend(got if isinstance(got, list) else [got] if got is not None else [])

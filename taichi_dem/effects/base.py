@@ -171,6 +171,23 @@ class Effect:
         whose integration another one runs, or the engine's velocity Verlet)."""
         return None
 
+    def inserted_values(self, ctx):
+        """The values this effect gives an inserted particle from the arrays the fill or a
+        factory hands the insertion (engine/insertion.py): a list of (array name, ti.func
+        ``(i, value)`` writing the f64 ``value`` into particle i's state). An effect that
+        gives any sets all its particle fields (the others are zeroed for a new particle).
+        [] by default."""
+        return []
+
+    def measure_funcs(self, ctx):
+        """What the effect adds to the state's sums at an output sample (engine/measure.py),
+        or None: ``(reset, particle, fields, read)``: ti.funcs ``reset()`` and
+        ``particle(i)`` (for every live particle, reducing by atomics into the effect's own
+        fields), the ``fields`` the host reads after the kernel, and ``read(arrays) -> dict``
+        of the measured values from their host copies (``"non_finite": True`` joins the
+        engine's flag)."""
+        return None
+
     def contact_func(self, ctx):
         raise NotImplementedError(f"{self.name} is not a contact effect")
 

@@ -7,7 +7,6 @@ import numpy as np
 import taichi as ti
 
 from ..effects.base import particle_load
-from .precision import make_compensated_add
 from .state import SPHERE_INERTIA, Flag
 
 
@@ -15,8 +14,8 @@ class InsertColumn:
     """Columns of the f64 array Insertion.insert hands its kernel."""
     POSITION, VELOCITY, ANGULAR_VELOCITY = 0, 3, 6
     RADIUS, MASS, INVERSE_MASS, INVERSE_INERTIA, BIRTH_TIME = 9, 10, 11, 12, 13
-    TEMPERATURE, INVERSE_THERMAL_MASS, MOISTURE = 14, 15, 16
-    SIZE = 17
+    # then one column per value the effects give an inserted particle (inserted_values)
+    SIZE = 14
 
 
 class Insertion:
@@ -33,8 +32,9 @@ class Insertion:
         a rebuild; returns the new count of slots in use. ``arrays``: position, velocity (n,3)
         m, m/s; radius m, mass kg, material (index), key (slot keys not in use) (n,);
         optional: angular_velocity (n,3) rad/s, fixed (n,) bool (held in place: no inverse
-        mass), serial, origin (-1: the initial fill), birth_time s; temperature K and
-        inverse_thermal_mass 1/(J/K) when thermal; moisture kg/kg when drying. The state must
+        mass), serial, origin (-1: the initial fill), birth_time s; and the values the
+        enabled effects give an inserted particle (Effect.inserted_values: temperature K and
+        inverse_thermal_mass 1/(J/K) with heat, moisture kg/kg when drying). The state must
         be at a whole step (between ``advance`` calls), or mid-step before a rebuild (drifted,
         forces pending: the ``before_rebuild`` hook) with velocities at t - dt/2 like the
         other particles'."""
@@ -48,7 +48,8 @@ class Insertion:
         # dozen steps paid ~0.3 ms for thirteen); f64 columns, rounded to the device's
         # precision in the kernel (the temperature and moisture keep f64 where an f64
         # residual holds what f32 cannot, engine/precision.py)
-        reals = np.zeros((k, C.SIZE), np.float64)
+        names = self.value_names()
+        reals = np.zeros((k, C.SIZE + len(names)), np.float64)
         radius = np.asarray(arrays["radius"], np.float64)
         mass = np.asarray(arrays["mass"], np.float64)
         movable = ~np.asarray(arrays.get("fixed", np.zeros(k, bool)), bool)
@@ -63,9 +64,9 @@ class Insertion:
         reals[:, C.INVERSE_MASS] = np.where(movable, 1.0 / mass, 0.0)
         reals[:, C.INVERSE_INERTIA] = np.where(
             movable, 1.0 / (SPHERE_INERTIA * mass * radius ** 2), 0.0)
-        for name, column in (("birth_time", C.BIRTH_TIME), ("temperature", C.TEMPERATURE),
-                             ("inverse_thermal_mass", C.INVERSE_THERMAL_MASS),
-                             ("moisture", C.MOISTURE)):
+        if "birth_time" in arrays:
+            reals[:, C.BIRTH_TIME] = arrays["birth_time"]
+        for column, name in enumerate(names, C.SIZE):
             if name in arrays:
                 reals[:, column] = arrays[name]
         key = np.asarray(arrays["key"], np.int64)
@@ -77,6 +78,15 @@ class Insertion:
             self._insert = self.e.serial_switch(self._compile_insert())
         self._insert(count, k, reals, ints)
         return count + k
+
+    def value_names(self) -> list[str]:
+        """The names of the values the enabled effects give an inserted particle, in the
+        order of their columns after InsertColumn.SIZE."""
+        if getattr(self, "_value_names", None) is None:
+            self._values = [v for effect in self.e.model.effect_list
+                            for v in effect.inserted_values(self.e.context)]
+            self._value_names = [name for name, _ in self._values]
+        return self._value_names
 
     def occupied(self, count: int) -> dict:
         """What the slots in use hold, for placing new particles among them: ``alive`` (n,)
@@ -114,7 +124,6 @@ class Insertion:
         Load = particle_load(e.model.real)
         starts = tuple(f for f in (effect.inserted_func(e.context) for effect in e.model.effect_list)
                        if f is not None)
-        thermal = e.model.thermal
         process = s.process
         n_walls = s.n_walls
         wall_fields = [getattr(s, n) for n in s.wall_fields]
@@ -123,19 +132,19 @@ class Insertion:
         n_bodies = mesh.n_bodies if has_mesh else 0
         heat_loads = has_mesh and mesh.loads.particle_load_heat is not None
         flags = e.flags
-        drying = e.model.moisture
-        compensated = s.compensated
         real = e.model.real
-        _, split_f64 = make_compensated_add(real)
+        self.value_names()
+        # each effect's values for the particle (its temperature, its moisture), f64 columns
+        writers = tuple(write for _, write in self._values)
         release = e.holding.release          # (engine/holding.py; nothing without it)
         C = InsertColumn
         # what effects keep per particle beyond what is inserted (a coarse-grained particle's
-        # wall-contact clock): zero, not what a removed particle left in the slot
-        inserted = {"temperature", "temperature_residual", "inverse_thermal_mass", "moisture",
-                    "moisture_residual"}
+        # wall-contact clock): zero, not what a removed particle left in the slot; an effect
+        # that gives inserted values sets all its particle fields
         fresh = {}
         for effect in e.model.effect_list:
-            fresh.update({n: v for n, (v, _) in effect.particle_fields.items() if n not in inserted})
+            if not effect.inserted_values(e.context):
+                fresh.update({n: v for n, (v, _) in effect.particle_fields.items()})
         fresh_scalars = [getattr(s, n) for n, vec in fresh.items() if not vec]
         fresh_vectors = [getattr(s, n) for n, vec in fresh.items() if vec]
         split = e.model.split_positions
@@ -178,20 +187,8 @@ class Insertion:
                     s.serial[i] = ints[q, 2]
                     s.origin[i] = ints[q, 3]
                     s.birth_time[i] = ti.cast(reals[q, C.BIRTH_TIME], real)
-                if ti.static(thermal and compensated):
-                    t_part, t_rest = split_f64(reals[q, C.TEMPERATURE])
-                    s.temperature[i] = t_part
-                    s.temperature_residual[i] = t_rest
-                    s.inverse_thermal_mass[i] = ti.cast(reals[q, C.INVERSE_THERMAL_MASS], real)
-                elif ti.static(thermal):
-                    s.temperature[i] = ti.cast(reals[q, C.TEMPERATURE], real)
-                    s.inverse_thermal_mass[i] = ti.cast(reals[q, C.INVERSE_THERMAL_MASS], real)
-                if ti.static(drying and compensated):
-                    x_part, x_rest = split_f64(reals[q, C.MOISTURE])
-                    s.moisture[i] = x_part
-                    s.moisture_residual[i] = x_rest
-                elif ti.static(drying):
-                    s.moisture[i] = ti.cast(reals[q, C.MOISTURE], real)
+                for v in ti.static(range(len(writers))):
+                    writers[v](i, reals[q, C.SIZE + v])
                 # the slot may hold what a removed particle left: no rows, no history, no loads
                 s.row_owned[i] = 0
                 s.row_count[i] = 0

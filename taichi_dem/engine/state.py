@@ -61,19 +61,8 @@ class Reduction:
     """Slots of the engine's ``reduction`` field (real), filled by Engine.measure's kernel."""
     KINETIC_ENERGY = 0       # J, translational + rotational, of the moving particles
     MAX_SPEED = 1            # m/s
-    NON_FINITE = 2           # 1.0 when a velocity or temperature is NaN or overflowed
+    NON_FINITE = 2           # 1.0 when a velocity is NaN or overflowed
     MOVING_COUNT = 3         # moving particles alive
-    THERMAL_STEP_RATIO = 4   # largest dt sum(h) / (m c) of a particle
-    SIZE = 5
-
-
-class ThermalSum:
-    """Slots of the engine's ``thermal_sums`` field (f64: an f32 sum of m c T at 723 K would
-    round a heat balance away), filled by Engine.measure's kernel."""
-    THERMAL_ENERGY = 0       # sum m c T, J
-    THERMAL_MASS = 1         # sum m c, J/K
-    WATER_MASS = 2           # kg
-    DRY_MASS = 3             # kg of dry solid
     SIZE = 4
 
 

@@ -46,7 +46,7 @@ from ..contacts.history import history_members, make_history_io
 from ..contacts.law import make_contact_law, margin_fraction
 from ..contacts.planes import PlaneWalls, make_plane_contacts
 from ..effects.base import EffectContext
-from .state import FieldTree, Flag, PairState, ParticleState, Reduction, ThermalSum, fit_rows
+from .state import FieldTree, Flag, PairState, ParticleState, Reduction, fit_rows
 from . import drivers
 from ..setup import tuning
 from ..setup.tuning import PARALLEL_FROM
@@ -130,9 +130,6 @@ class Engine:
         self.reduction = t.add("reduction", real, Reduction.SIZE)   # named slots: Reduction
         if self.model.thermal:
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
-            # f64 sums over the particles: sum m c T (J), sum m c (J/K), water (kg), dry solid
-            # (kg); an f32 sum of m c T at 723 K would round the heat balance away
-            self.thermal_sums = t.add("thermal_sums", ti.f64, ThermalSum.SIZE)
         # what the effects see: the model, the values, the tables and the state, read-only
         self.context = EffectContext(model, self.values, self.table, self.state, self)
         for e in self.model.effect_list:
@@ -189,11 +186,6 @@ class Engine:
         """The axial plug-flow gas (thermal/plug_flow.py) of the plug-flow effect, or None."""
         e = self.context.effect("plug_flow_convection")
         return e.stream if e is not None else None
-
-    @property
-    def evaporated(self):
-        """The drying effect's evaporated water, kg since the start (a 1-entry f64 field)."""
-        return self.model.effect("drying").evaporated
 
     @property
     def workers(self) -> int:
@@ -408,8 +400,9 @@ class Engine:
 
     def measure(self) -> dict:
         """The state's sums at this instant (measure.py): kinetic_energy J, max_speed m/s,
-        non_finite; thermal: thermal_energy J, mean_temperature K, thermal_step_ratio;
-        drying: mean_moisture kg/kg, evaporated_mass kg."""
+        non_finite, and what the effects declare (Effect.measure_funcs; with heat
+        thermal_energy J, mean_temperature K, thermal_step_ratio; drying: mean_moisture
+        kg/kg, evaporated_mass kg)."""
         if self._measure is None:
             self._measure = Measure(self)
         return self._measure(self.count)

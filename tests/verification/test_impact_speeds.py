@@ -56,12 +56,15 @@ def _scene(tmp_path, sensor: bool = True):
 @pytest.fixture(scope="module")
 def series(tmp_path_factory):
     tmp_path = tmp_path_factory.mktemp("impacts")
-    with taichi_dem.Simulation.from_text(_scene(tmp_path), base_dir=str(tmp_path)) as sim:
+    h5 = tmp_path / "impacts.h5"
+    with taichi_dem.Simulation.from_text(_scene(tmp_path), base_dir=str(tmp_path),
+                                         h5=str(h5)) as sim:
         sim.run(until=0.1)             # samples at 0.05 and 0.1 s
         effects = [e.name for e in sim.effects]
         histogram = dict(sim.sensors["contact_statistics"].histogram)
         out = {k: np.asarray(v) for k, v in sim.series.items() if k.startswith("sensors/")}
         out["time"] = np.asarray(sim.series["time"])
+    out["h5"] = h5
     return out, effects, histogram
 
 
@@ -119,3 +122,16 @@ def test_a_scene_without_the_sensor_counts_nothing(tmp_path):
     scene = parse_scene(_scene(tmp_path, sensor=False), source="scene.toml",
                         base_dir=str(tmp_path))
     assert "impacts" not in [e.name for e in enabled_effects(scene)]
+
+
+def test_plot_draws_the_collisions(series):
+    from taichi_dem.app.plots import plot_results
+    s, _, _ = series
+    figures = {f.name: f for f in plot_results(str(s["h5"]))}
+    figure = figures["collisions_contacts"]
+    # no sample caught a contact (each lasts a few ms): no force panel
+    assert [p.title.split(" ")[0] for p in figure.panels] == ["collisions", "impact"]
+    x, y = figure.drawn[0]["particle-body"]
+    np.testing.assert_array_equal(y, s["sensors/contacts/body/collision_rate"])
+    x, y = figure.drawn[1]["particle-wall, median"]
+    np.testing.assert_array_equal(y, s["sensors/contacts/wall/impact_speed_p50"])
