@@ -452,6 +452,24 @@ class Radiation(Effect):
         return radiation
 
 
+def _split_writer(field, residual, real):
+    """ti.func (i, value): ``field[i] = value`` from an f64 value; with a ``residual`` field the
+    value is kept in f64 as the sum of the two (engine/precision.py: f32 far from zero)."""
+    _, split_f64 = make_compensated_add(real)
+    split = residual is not None
+
+    @ti.func
+    def write(i, value):
+        if ti.static(split):
+            part, rest = split_f64(value)
+            field[i] = part
+            residual[i] = rest
+        else:
+            field[i] = ti.cast(value, real)
+
+    return write
+
+
 class Drying(Effect):
     """Moisture: evaporation at T_e (moisture.py); run by the Temperature update."""
 
@@ -471,22 +489,10 @@ class Drying(Effect):
         self.sums = tree.add("moisture_sums", ti.f64, 2)          # kg water, kg dry solid
 
     def inserted_values(self, ctx):
-        """An inserted particle's moisture (kg water per kg dry solid), in f64 where a
-        residual keeps what f32 cannot (engine/precision.py)."""
-        s, real = ctx.state, ctx.real
-        compensated = "moisture_residual" in self.particle_fields
-        _, split_f64 = make_compensated_add(real)
-
-        @ti.func
-        def moisture(i, value):
-            if ti.static(compensated):
-                x_part, x_rest = split_f64(value)
-                s.moisture[i] = x_part
-                s.moisture_residual[i] = x_rest
-            else:
-                s.moisture[i] = ti.cast(value, real)
-
-        return [("moisture", moisture)]
+        """An inserted particle's moisture (kg water per kg dry solid)."""
+        s = ctx.state
+        residual = s.moisture_residual if "moisture_residual" in self.particle_fields else None
+        return [("moisture", _split_writer(s.moisture, residual, ctx.real))]
 
     def measure_funcs(self, ctx):
         """At a sample: mean_moisture (kg water per kg dry solid, NaN without particles) and
@@ -540,26 +546,11 @@ class Temperature(Effect):
         self.sums = tree.add("temperature_sums", ti.f64, 4)
 
     def inserted_values(self, ctx):
-        """An inserted particle's temperature (K; in f64 where a residual keeps what f32
-        cannot, engine/precision.py) and its 1 / (m c) (1/(J/K))."""
+        """An inserted particle's temperature (K) and its 1 / (m c) (1/(J/K))."""
         s, real = ctx.state, ctx.real
-        compensated = self.compensated
-        _, split_f64 = make_compensated_add(real)
-
-        @ti.func
-        def temperature(i, value):
-            if ti.static(compensated):
-                t_part, t_rest = split_f64(value)
-                s.temperature[i] = t_part
-                s.temperature_residual[i] = t_rest
-            else:
-                s.temperature[i] = ti.cast(value, real)
-
-        @ti.func
-        def inverse_thermal_mass(i, value):
-            s.inverse_thermal_mass[i] = ti.cast(value, real)
-
-        return [("temperature", temperature), ("inverse_thermal_mass", inverse_thermal_mass)]
+        residual = s.temperature_residual if self.compensated else None
+        return [("temperature", _split_writer(s.temperature, residual, real)),
+                ("inverse_thermal_mass", _split_writer(s.inverse_thermal_mass, None, real))]
 
     def measure_funcs(self, ctx):
         """At a sample: thermal_energy (sum m c T, J), mean_temperature (K, NaN without
