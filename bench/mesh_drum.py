@@ -172,7 +172,7 @@ def gas_cost(sim, calls: int = 200):
         return (time.perf_counter() - t0) / calls
 
     pair = timed(lambda: e._pair_forces(n, 0.0))
-    gas = timed(lambda: e.gas_stream.exchange(n, 0.0))
+    gas = timed(lambda: e.model.effect("plug_flow_convection").stream.exchange(n, 0.0))
     print(f"per step: particle pairs {pair * 1e3:.3f} ms; plug-flow gas exchange {gas * 1e3:.3f} ms "
           f"({gas / pair:.1%} of the pairs)")
 
@@ -307,7 +307,7 @@ def main(argv=None) -> int:
     if a.profile:
         ti.profiler.print_kernel_profiler_info("count")
     mesh_cost(sim)
-    if sim.engine.gas_stream is not None:
+    if sim.engine.model.effect("plug_flow_convection") is not None:
         gas_cost(sim)
     sim.close()
     return 0

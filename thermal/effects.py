@@ -202,6 +202,7 @@ class _OnWalls:
     left alone where the scene has them (CoarseGrainedWall stands in for their wall heat)."""
 
     kinds = ("plane", "triangle")
+    heats_walls = True
     pair_fields = {}
 
     def __init__(self, description, coarse_materials=False, rough=False):
@@ -364,6 +365,13 @@ class PlugFlowGas(Effect):
     def allocate(self, ctx, tree):
         from .plug_flow import AxialPlugFlowGas
         self.stream = AxialPlugFlowGas(self.gas, ctx.state, tree, ctx.real)
+
+    def prepare(self, ctx):
+        self.stream.compile()
+
+    def sample(self, values: dict, n: int, measured: dict) -> None:
+        """The gas stream's series (gas/...: thermal/plug_flow.py)."""
+        values.update(self.stream.series())
 
     def after_pairs(self, ctx, n, dt):
         """The per-cell stage: the gas sees this step's particles (W, K); its energy

@@ -121,6 +121,9 @@ class Effect:
     # engine/holding.py (make_rigid_drift, make_rigid_velocity, make_carried_load)
     holds_particles = False
     carrier_body = -1
+    # it conducts heat to walls and bodies that have a temperature (their heat series, the
+    # walls' temperatures uploaded)
+    heats_walls = False
     margin = 0.0
     particle_fields: dict = {}
     contact_fields: dict = {}

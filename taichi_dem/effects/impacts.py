@@ -1,7 +1,9 @@
 """Impacts: the relative normal speed of each collision at its first touching step, counted
 per pair kind, as EDEM's collision export records a collision's impact velocity. Enabled by a
-``[[sensors]] kind = "contact_statistics"`` (sensors/contact_statistics.py reads and resets
-its counts at every output sample); a scene without one neither compiles nor runs it.
+``[[sensors]] kind = "contact_statistics"``, whose collision series it writes at every output
+sample (``sample``: /series sensors/<name>/<kind>/collisions, collision_rate, impact_speed_*,
+kind particle, wall or body) before it resets its counts; a scene without one neither
+compiles nor runs it.
 
 A contact is new while the value it carries (contact history, contacts/history.py) is zero:
 the history of a contact is zeroed when it opens, carried across neighbour-list rebuilds and
@@ -38,6 +40,12 @@ class Impacts(Effect):
     per_kind = True
     # component 0: the impact speed (m/s), 1: 1 once counted (a zero-speed contact too)
     contact_fields = {"impact_history": (True, "real")}
+
+    def __init__(self, description: str, sensors=()):
+        super().__init__(description)
+        self.sensors = tuple(sensors)   # the contact_statistics sensors' names
+        self.histogram = {}             # {kind: bin counts} since the start (bin_edges)
+        self._last_time = None          # s, the time of the last sample
 
     def allocate(self, ctx, tree) -> None:
         n = len(KINDS)
@@ -78,6 +86,37 @@ class Impacts(Effect):
         self.speed_max.fill(0.0)
         return {kind: (counts[k], float(sums[k]), float(largest[k]))
                 for k, kind in enumerate(KINDS)}
+
+
+    def sample(self, values: dict, n: int, measured: dict) -> None:
+        """The collisions since the last sample, per pair kind, into each sensor's series
+        (the rate over the time since then; the first sample's interval is empty)."""
+        now = float(values["time"])
+        interval = now - (self._last_time if self._last_time is not None else now)
+        self._last_time = now
+        for law_kind, (counts, total, largest) in self.take().items():
+            kind = SENSOR_KINDS[law_kind]
+            self.histogram[kind] = self.histogram.get(kind, 0) + counts
+            series = statistics(counts, total, largest, interval)
+            for name in self.sensors:
+                for stat, value in series.items():
+                    values[f"sensors/{name}/{kind}/{stat}"] = value
+
+
+# the sensor's names of the contact law's kinds
+SENSOR_KINDS = {"pair": "particle", "plane": "wall", "triangle": "body"}
+
+
+def statistics(counts, speed_sum: float, largest: float, interval: float) -> dict:
+    """The collision series of one pair kind from the impacts' bin counts, the sum (m/s) and
+    largest (m/s) of their speeds, over ``interval`` s (the rate is 0 for an empty one)."""
+    n = int(np.sum(counts))
+    return {"collisions": float(n), "collision_rate": n / interval if interval > 0 else 0.0,
+            "impact_speed_mean": speed_sum / n if n else 0.0,
+            "impact_speed_p10": percentile(counts, 10.0),
+            "impact_speed_p50": percentile(counts, 50.0),
+            "impact_speed_p90": percentile(counts, 90.0),
+            "impact_speed_max": largest}
 
 
 def percentile(counts, q: float) -> float:

@@ -49,10 +49,12 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
                               + ": particles removed and accounted", "outlets", "process"))
     for x in scene.sensors:
         effects.append(Effect(f"sensor '{x.name}' ({x.kind})", f"sensor_{x.kind}", "observe"))
-    if any(x.kind == "contact_statistics" for x in scene.sensors):
+    statistics = [x.name for x in scene.sensors if x.kind == "contact_statistics"]
+    if statistics:
         # the collisions' impact speeds, counted by the step as each contact begins
         from .impacts import Impacts
-        effects.append(Impacts("impact speed of each collision, counted per pair kind"))
+        effects.append(Impacts("impact speed of each collision, counted per pair kind",
+                               statistics))
     if scene.domain.periodic:
         effects.append(Effect("periodic faces: " + ", ".join(scene.domain.periodic),
                               "periodic", "integrate"))

@@ -119,7 +119,7 @@ class Model:
     @property
     def moisture(self) -> bool:
         """Drying: particles carry moisture."""
-        return "drying" in self.effect_names
+        return "moisture" in self.particle_fields
 
     @property
     def pair_heat(self) -> bool:
@@ -128,8 +128,9 @@ class Model:
 
     @property
     def wall_conduction(self) -> bool:
-        """Heat is conducted to walls and bodies with a temperature (their heat series)."""
-        return "wall_conduction" in self.effect_names
+        """Heat is conducted to walls and bodies with a temperature (their heat series): an
+        effect declares ``heats_walls``."""
+        return any(e.heats_walls for e in self.effect_list)
 
     @property
     def rebuild_effects(self) -> tuple:

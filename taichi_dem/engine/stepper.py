@@ -157,8 +157,6 @@ class Engine:
         for e in self.model.effect_list:
             if hasattr(e, "upload"):
                 e.upload(self.context)
-        if self.gas_stream is not None:
-            self.gas_stream.compile()
         self.time = 0.0
         self.pairs: "PairState | None" = None
         self.broadphase = Broadphase(self)
@@ -179,13 +177,6 @@ class Engine:
         self.count = 0                     # slots in use
         self._measure = None               # (measure.py, compiled on first use)
         self.insertion = Insertion(self)
-
-    # what enabled effects hold, for the sensors and the measure kernel (None when absent)
-    @property
-    def gas_stream(self):
-        """The axial plug-flow gas (thermal/plug_flow.py) of the plug-flow effect, or None."""
-        e = self.context.effect("plug_flow_convection")
-        return e.stream if e is not None else None
 
     @property
     def workers(self) -> int:

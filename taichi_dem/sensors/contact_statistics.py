@@ -3,8 +3,9 @@ pair kind - particle-particle, particle-wall (the plane walls), particle-body (t
 the contacts now, their normal force (mean, 90th percentile, largest) and their relative
 normal speed (mean, 90th percentile, largest); and the collisions that began since the last
 sample with their impact speeds (count, rate, mean, 10th/50th/90th percentile, largest),
-counted by the step as each contact begins (effects/impacts.py): what EDEM's collision export
-is read for (the force a flight or a paddle takes, how hard particles hit each other).
+counted by the step as each contact begins (the effect the sensor enables writes those):
+what EDEM's collision export is read for (the force a flight or a paddle takes, how hard
+particles hit each other).
 /series sensors/<name>/<kind>/contacts, normal_force_*, normal_speed_*, collisions,
 collision_rate, impact_speed_*.
 
@@ -21,26 +22,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..effects import impacts
 from ..engine import transfer
 
 KINDS = ("particle", "wall", "body")
 _STATISTICS = ("contacts", "normal_force_mean", "normal_force_p90", "normal_force_max",
                "normal_speed_mean", "normal_speed_p90", "normal_speed_max")
-# the contact law's kinds (effects/impacts.py) by the sensor's names
-_IMPACT_KINDS = {"particle": "pair", "wall": "plane", "body": "triangle"}
-
-
-def impact_statistics(counts, speed_sum: float, largest: float, interval: float) -> dict:
-    """The collision series of one pair kind from the impacts' bin counts, the sum (m/s) and
-    largest (m/s) of their speeds, over ``interval`` s (the rate is 0 for an empty one)."""
-    n = int(np.sum(counts))
-    return {"collisions": float(n), "collision_rate": n / interval if interval > 0 else 0.0,
-            "impact_speed_mean": speed_sum / n if n else 0.0,
-            "impact_speed_p10": impacts.percentile(counts, 10.0),
-            "impact_speed_p50": impacts.percentile(counts, 50.0),
-            "impact_speed_p90": impacts.percentile(counts, 90.0),
-            "impact_speed_max": largest}
 
 
 def hertz_normal_force(youngs_eff, radius_eff, overlap) -> np.ndarray:
@@ -66,8 +52,6 @@ class ContactStatistics:
 
     def __init__(self, scene, engine):
         self.engine = engine
-        self.impacts = engine.model.effect("impacts")
-        self.histogram = {}             # {kind: bin counts} since the start (impacts.bin_edges)
         self.names = [x.name for x in scene.sensors if x.kind == "contact_statistics"]
         tables = engine.model.tables
         self.youngs_eff = np.asarray(tables.youngs_eff, float)
@@ -158,21 +142,8 @@ class ContactStatistics:
             out[kind] = statistics(*find(*state))
         return out
 
-    def collisions(self, interval: float) -> dict:
-        """{pair kind: its collision series} since the last call (``interval`` s before),
-        and the run's histogram added to."""
-        taken = self.impacts.take()
-        out = {}
-        for kind, law_kind in _IMPACT_KINDS.items():
-            counts, total, largest = taken[law_kind]
-            self.histogram[kind] = self.histogram.get(kind, 0) + counts
-            out[kind] = impact_statistics(counts, total, largest, interval)
-        return out
-
     def sample(self, values: dict, now) -> None:
         measured = self.measure()
-        for kind, series in self.collisions(float(now.interval)).items():
-            measured[kind].update(series)
         for name in self.names:
             for kind, series in measured.items():
                 for stat, value in series.items():

@@ -16,7 +16,8 @@ def mass_inside(engine) -> float:
 
 class ParticleSeries:
     """particles/count, kinetic_energy, lost; thermal scenes: mean_temperature (mean_moisture,
-    evaporated_mass when drying) and the gas stream's series."""
+    evaporated_mass when drying); and the series of every effect that writes its own
+    (``sample``: the gas stream's, the drag's, the collisions')."""
 
     def __init__(self, engine):
         self.engine = engine
@@ -29,8 +30,6 @@ class ParticleSeries:
             if e.model.moisture:
                 thermal["particles/mean_moisture"] = m["mean_moisture"]
                 thermal["particles/evaporated_mass"] = m["evaporated_mass"]
-            if e.gas_stream is not None:
-                thermal.update(e.gas_stream.series())
         values["particles/count"] = e.alive_count
         values["particles/kinetic_energy"] = m["kinetic_energy"]
         values["particles/lost"] = e.lost

@@ -111,7 +111,7 @@ def test_plug_flow_profile_at_one_particle_temperature(tmp_path, monkeypatch, su
     g_cell = 2 * _ranz_marshall_hA(MDOT / (AIR["density"] * AREA))
     ntu = g_cell / (MDOT * AIR["heat_capacity"])
     with _cells_scene(tmp_path, "along_axis", [tp] * CELLS) as sim:
-        assert sim.engine.gas_stream.blocks == (0 if sums == "atomics" else 64)
+        assert sim.engine.model.effect("plug_flow_convection").stream.blocks == (0 if sums == "atomics" else 64)
         sim.step(10)
         profile = sim.series["gas/temperature"][-1]
         outlet = sim.series["gas/outlet_temperature"][-1]
@@ -356,6 +356,6 @@ def test_nothing_compiled_without_the_effects(small_scene_text):
     text = text.replace("count = 20\n", "count = 20\ntemperature = 300.0\n") + "[thermal]\n"
     with taichi_dem.Simulation.from_text(text) as sim:
         e = sim.engine
-        assert e.gas_stream is None and not hasattr(e, "emissivity") and not hasattr(e, "evaporated")
+        assert e.model.effect("plug_flow_convection") is None and not hasattr(e, "emissivity") and not hasattr(e, "evaporated")
         assert not hasattr(e.state, "moisture")
         assert not any(k.startswith("gas/") or k.endswith("moisture") for k in sim.series)
