@@ -471,8 +471,8 @@ def figures(r: Results) -> list[Figure]:
     """Every figure the results file has the series for, in reading order."""
     out: list[Figure] = []
     for make in (particles_figure, wall_figure, body_figures, residence_figures, mass_flow_figure,
-                 contact_figure, contact_statistics_figures, temperature_figure, moisture_figure, gas_profile_figure,
-                 heat_flow_figure, energy_balance_figure):
+                 contact_figure, contact_statistics_figures, temperature_figure, moisture_figure,
+                 gas_profile_figure, heat_flow_figure, energy_balance_figure):
         got = make(r)
         out.extend(got if isinstance(got, list) else [got] if got is not None else [])
     return out

@@ -62,14 +62,17 @@ class Impacts(Effect):
         def impact(c, out, history, dt):
             if history.impact[1] == 0.0:
                 speed = ti.max(-c.v_rel.dot(c.normal), 0.0)
-                b = 0
-                if speed >= LOWEST:
-                    b = ti.min(ti.cast(ti.floor((ti.log(ti.cast(speed, ti.f64)) / ti.log(10.0)
-                                                  - log_lowest) * BINS_PER_DECADE), ti.i32) + 1,
-                               N_BINS - 1)
-                ti.atomic_add(counts[k * N_BINS + b], 1)
-                ti.atomic_add(speed_sum[k], ti.cast(speed, ti.f64))
-                ti.atomic_max(speed_max[k], ti.cast(speed, ti.f64))
+                # dt = 0: the start's evaluation of the initial state (a bed loaded packed, a
+                # resting contact): contacts that exist then are no collisions, only marked
+                if dt > 0.0:
+                    b = 0
+                    if speed >= LOWEST:
+                        b = ti.min(ti.cast(ti.floor((ti.log(ti.cast(speed, ti.f64)) / ti.log(10.0)
+                                                      - log_lowest) * BINS_PER_DECADE), ti.i32)
+                                   + 1, N_BINS - 1)
+                    ti.atomic_add(counts[k * N_BINS + b], 1)
+                    ti.atomic_add(speed_sum[k], ti.cast(speed, ti.f64))
+                    ti.atomic_max(speed_max[k], ti.cast(speed, ti.f64))
                 history.impact[0] = speed
                 history.impact[1] = 1.0
             return out, history
@@ -87,12 +90,13 @@ class Impacts(Effect):
         return {kind: (counts[k], float(sums[k]), float(largest[k]))
                 for k, kind in enumerate(KINDS)}
 
-
     def sample(self, values: dict, n: int, measured: dict) -> None:
         """The collisions since the last sample, per pair kind, into each sensor's series
-        (the rate over the time since then; the first sample's interval is empty)."""
+        (the rate over the time since then: the first sample of a run, or of a resumed one,
+        takes the interval the run gives it)."""
         now = float(values["time"])
-        interval = now - (self._last_time if self._last_time is not None else now)
+        interval = (now - self._last_time if self._last_time is not None
+                    else float(values.get("sample_interval", 0.0)))
         self._last_time = now
         for law_kind, (counts, total, largest) in self.take().items():
             kind = SENSOR_KINDS[law_kind]

@@ -50,8 +50,8 @@ def compile_run_steps(step: StepFunctions):
         the pair stage, the cell stage, the particle stage, then the next drift (not after
         the last step unless ``drift_last``). It stops before a step whose neighbour lists
         the previous drift invalidated (Flag.REBUILD): the host rebuilds and goes on.
-        ``full_first``: the first step follows a rebuild (held particles' pairs are judged then); ``record_last``: the
-        last step books the wall loads. Returns the steps done."""
+        ``full_first``: the first step follows a rebuild (held particles' pairs are judged
+        then); ``record_last``: the last step books the wall loads. Returns the steps done."""
         done = 0
         ti.loop_config(serialize=True)
         for j in range(steps):

@@ -26,6 +26,7 @@ class Insertion:
         self.e = engine
         self._insert = None
         self._occupied = None
+        self._values = self._value_names = None    # (value_names: the effects' inserted values)
 
     def insert(self, count: int, arrays: dict) -> int:
         """Write the particles of ``arrays`` into slots ``count`` .. ``count + k - 1`` and flag
@@ -82,7 +83,7 @@ class Insertion:
     def value_names(self) -> list[str]:
         """The names of the values the enabled effects give an inserted particle, in the
         order of their columns after InsertColumn.SIZE."""
-        if getattr(self, "_value_names", None) is None:
+        if self._value_names is None:
             self._values = [v for effect in self.e.model.effect_list
                             for v in effect.inserted_values(self.e.context)]
             self._value_names = [name for name, _ in self._values]

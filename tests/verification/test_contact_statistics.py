@@ -71,6 +71,9 @@ def test_a_body_contact_and_the_series(tmp_path):
     body = 4.0 / 3.0 * e_body * math.sqrt(R) * (1e-5) ** 1.5
     assert measured["body"]["normal_force_max"] == pytest.approx(body, rel=1e-5)
     assert series["sensors/contacts/body/contacts"][-1] == 1
+    # contacts that exist in the initial state are not collisions (none begins in the step)
+    for kind in ("particle", "wall", "body"):
+        assert list(series[f"sensors/contacts/{kind}/collisions"]) == [0, 0], kind
     assert series["sensors/contacts/particle/normal_force_p90"][-1] > 0
 
 

@@ -82,7 +82,8 @@ INACTIVE, ACTIVE, MOBILE, EMPTY = 0, 1, 2, 3
 
 class Mobility(Effect):
     """One [mobility] section (scene.model.MobilitySettings); status per mobility cell, an
-    ``particle_active`` flag per particle (1 active, 0 inactive), refreshed by ``update``."""
+    ``particle_active`` flag per particle (1 active, 0 inactive), refreshed by
+    ``after_rebuild``."""
 
     name, stage = "mobility", "detect"
     holds_particles = True      # (engine/holding.py: the step reads particle_active)
