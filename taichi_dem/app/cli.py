@@ -104,6 +104,10 @@ def _parser() -> argparse.ArgumentParser:
     mc = sub.add_parser("machine", help="the whole machine from its map: hold-up profile, "
                                         "residence, torque, outlet temperature and capacity")
     machine_command.add_arguments(mc)
+    from . import dryer_command
+    dr = sub.add_parser("dryer", help="a whole rotary dryer marched along its axis: outlet "
+                                      "temperatures and moisture, gas outlet, heat duty")
+    dryer_command.add_arguments(dr)
     from . import plots
     pl = sub.add_parser("plot", help="PNG plots of a results file (torque, residence time, "
                                      "mass flows, temperatures, heat flows)")
@@ -150,6 +154,8 @@ EXAMPLES = {
     "machine": ["taichi-dem machine map --length \"6 m\" --feed \"4.6 t/h\" \"6.5 t/h\"",
                 "taichi-dem machine map --length \"6 m\" --feed \"5 t/h\" --incline 5 --inlet-temperature \"450 C\"",
                 "taichi-dem machine map --length \"6 m\" --feed \"6.5 t/h\" --incline 5 --choice f64 map_f64"],
+    "dryer": ["taichi-dem dryer demos/dryers/aggregate_dryer.toml",
+              "taichi-dem dryer my_dryer.toml --flow co --out dryer"],
     "plot": ["taichi-dem plot out/paddle_cooler.h5", "taichi-dem plot results.h5 --out figures --dpi 150"],
     "export": ["taichi-dem export out/pile.h5 --series --out pile_series.csv",
                "taichi-dem export out/pile.h5 --frame -1 --out last_frame.csv",
@@ -175,7 +181,7 @@ def main(argv=None) -> int:
 
 
 # commands whose stdout is a report to read or parse: Taichi's import banner stays off it
-QUIET_IMPORT = ("check", "schema", "machine", "map", "export", "analyse")
+QUIET_IMPORT = ("check", "schema", "machine", "dryer", "map", "export", "analyse")
 
 
 def _main(argv=None) -> int:
@@ -210,6 +216,9 @@ def _main(argv=None) -> int:
         if args.command == "machine":
             from .machine_command import cmd_machine
             return cmd_machine(args)
+        if args.command == "dryer":
+            from .dryer_command import cmd_dryer
+            return cmd_dryer(args)
         if args.command == "export":
             from .export import cmd_export
             return cmd_export(args)

@@ -1,0 +1,261 @@
+"""``taichi-dem dryer DESIGN.toml``: a rotary dryer's design file, read and checked, marched
+(app/dryer.py) and reported (dryer.md, dryer.json, dryer_profile.png)."""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+from ..errors import SceneError
+from .dryer import FIGURES, Dryer, answer, sensitivity
+
+# section -> key -> (Dryer field, dimension, default (None: required), lower bound, upper bound,
+# description). A dimension of None: a plain number in the unit the description gives. A lower
+# bound of 0.0 means > 0; GE0 means >= 0.
+GE0 = "nonnegative"
+KEYS = {
+    "drum": {
+        "diameter": ("diameter", "length", None, 0.0, None, "the drum's inside diameter"),
+        "length": ("length", "length", None, 0.0, None, "the drum's length"),
+        "incline": ("incline", "angle", None, 0.0, math.radians(45.0),
+                    "the drum's incline, the discharge end lower"),
+        "speed": ("rpm", "angular_speed", None, 0.0, None, "the drum's speed"),
+    },
+    "solids": {
+        "feed": ("feed", "mass_rate", None, 0.0, None, "the feed of dry solids"),
+        "moisture": ("feed_moisture", "dimensionless", 0.0, GE0, 10.0,
+                     "the feed's moisture, kg water per kg dry solid"),
+        "critical_moisture": ("critical_moisture", "dimensionless", 0.0, GE0, 10.0,
+                              "the falling-rate period below it, kg/kg (0: none)"),
+        "temperature": ("feed_temperature", "temperature", None, 0.0, None,
+                        "the feed's temperature"),
+        "target_moisture": ("target_moisture", "dimensionless", 0.005, GE0, 10.0,
+                            "the product's moisture aimed at, kg/kg (the report says if met)"),
+        "particle_diameter": ("particle_diameter", "length", None, 0.0, 1.0,
+                              "the particles' diameter (Friedman-Marshall's gas term)"),
+        "heat_capacity": ("solids_heat_capacity", "specific_heat", None, 0.0, None,
+                          "the dry solid's specific heat"),
+        "bulk_density": ("bulk_density", "density", None, 0.0, None,
+                         "the dry bulk density (the fill fraction)"),
+    },
+    "gas": {
+        "mass_flow": ("gas_flow", "mass_rate", None, 0.0, None, "the dry gas's flow"),
+        "temperature": ("gas_temperature", "temperature", None, 0.0, None,
+                        "the gas's inlet temperature"),
+        "humidity": ("gas_humidity", "dimensionless", 0.0, GE0, 10.0,
+                     "the inlet gas's humidity, kg water per kg dry gas"),
+        "heat_capacity": ("gas_heat_capacity", "specific_heat", 1100.0, 0.0, None,
+                          "the dry gas's specific heat"),
+        "flow": ("counter_current", None, "counter", None, None,
+                 "\"counter\" (against the solids) or \"co\""),
+    },
+    "water": {
+        "evaporation_temperature": ("evaporation_temperature", "temperature", 373.15, 0.0, None,
+                                    "the temperature at which the parcel dries"),
+        "latent_heat": ("latent_heat", "specific_energy", 2.26e6, 0.0, None,
+                        "the latent heat at the evaporation temperature"),
+        "heat_capacity": ("water_heat_capacity", "specific_heat", 4186.0, 0.0, None,
+                          "liquid water's specific heat"),
+        "vapour_heat_capacity": ("vapour_heat_capacity", "specific_heat", 1900.0, 0.0, None,
+                                 "steam's specific heat"),
+    },
+    "shell": {
+        "loss_coefficient": ("shell_loss_coefficient", None, 0.0, GE0, 1e4,
+                             "W/(m2 K) from the gas through the shell"),
+        "ambient_temperature": ("ambient_temperature", "temperature", 288.15, 0.0, None,
+                                "the surroundings' temperature"),
+    },
+    "closure": {
+        "residence_time": ("residence_time", "time", "friedman_marshall", 0.0, None,
+                           "the solids' mean residence time, or \"friedman_marshall\""),
+        "conductance_per_metre": ("conductance_per_metre", None, "perry", 0.0, None,
+                                  "gas-solids W/(m K) per metre of drum, or \"perry\""),
+        "perry_k": ("perry_k", None, 0.5, 0.0, 100.0, "K in Perry's Ua = K G^0.67 / D, "
+                                                      "Btu/(h ft3 F)"),
+        "uncertainty": ("uncertainty", None, 0.25, GE0, 0.9,
+                        "each closure's relative uncertainty, for the sensitivity"),
+        "cells": ("cells", None, 800, 9.0, 1e6, "cells along the drum in the march"),
+    },
+}
+ABOUT = "about"          # free text: what the design is and where its numbers come from
+
+
+def load(path) -> Dryer:
+    """A dryer design file (TOML; the sections and keys of KEYS) as a Dryer; bad input is a
+    SceneError naming the file, key and reason."""
+    from ..scene.loader import read_toml
+    from ..scene.units import parse_quantity
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise SceneError(str(p), "", f"cannot read the dryer file: {getattr(e, 'strerror', None) or e}") from None
+    data = read_toml(text, str(p))
+    for section in data:
+        if section not in KEYS and section != ABOUT:
+            raise SceneError(str(p), section, "unknown section; known: " + ", ".join(KEYS))
+    kw = {}
+    for section, keys in KEYS.items():
+        table = data.get(section, {})
+        if not isinstance(table, dict):
+            raise SceneError(str(p), section, "expected a table")
+        for key in table:
+            if key not in keys:
+                raise SceneError(str(p), f"{section}.{key}", "unknown key; known: "
+                                 + ", ".join(keys))
+        for key, (attr, dimension, default, low, high, _) in keys.items():
+            name = f"{section}.{key}"
+            if key not in table:
+                if default is None:
+                    raise SceneError(str(p), name, "required")
+                continue
+            value = table[key]
+            if attr == "counter_current":
+                if value not in ("counter", "co"):
+                    raise SceneError(str(p), name, f"expected \"counter\" or \"co\", got {value!r}")
+                kw[attr] = value == "counter"
+                continue
+            if isinstance(default, str) and value == default:
+                continue
+            if dimension is None:
+                if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                        or not math.isfinite(value):
+                    raise SceneError(str(p), name, f"expected a number ({keys[key][5]}), "
+                                     f"got {value!r}")
+                number = float(value)
+            else:
+                number = parse_quantity(value, dimension, file=str(p), key=name)
+            if low == GE0 and number < 0.0:
+                raise SceneError(str(p), name, f"must be >= 0, got {number:g}")
+            if isinstance(low, float) and not number > low:
+                raise SceneError(str(p), name, f"must be > {low:g}, got {number:g}")
+            if high is not None and number > high:
+                raise SceneError(str(p), name, f"must be <= {high:g}, got {number:g}")
+            if attr == "rpm":
+                number *= 60.0 / (2.0 * math.pi)       # rad/s -> rev/min
+            kw[attr] = int(number) if attr == "cells" else number
+    return Dryer(source=str(p), **kw)
+
+
+def add_arguments(p) -> None:
+    """The ``taichi-dem dryer`` arguments."""
+    p.add_argument("design", help="a dryer design file (TOML: [drum], [solids], [gas], "
+                                  "[water], [shell], [closure]; demos/dryers/*.toml)")
+    p.add_argument("--flow", choices=("counter", "co"), default=None,
+                   help="the gas against the solids or with them (default: the file's)")
+    p.add_argument("--out", default=None, help="folder for dryer.md, dryer.json and "
+                                               "dryer_profile.png (default: print only)")
+
+
+# name, unit, scale, format: the figures of the report, in SI scaled for reading
+ROWS = (("residence_time", "min", 1 / 60.0, ".3g"),
+        ("holdup", "t (dry)", 1e-3, ".3g"),
+        ("fill_fraction", "% of the drum", 100.0, ".3g"),
+        ("solids_outlet_temperature", "C", None, ".1f"),
+        ("solids_outlet_moisture", "% (dry basis)", 100.0, ".3g"),
+        ("gas_outlet_temperature", "C", None, ".1f"),
+        ("gas_outlet_humidity", "kg/kg dry gas", 1.0, ".4f"),
+        ("gas_outlet_dew_point", "C", None, ".1f"),
+        ("evaporation", "t/h of water", 3.6, ".3g"),
+        ("heat_to_solids", "MW", 1e-6, ".4g"),
+        ("shell_loss", "MW", 1e-6, ".3g"),
+        ("burner_duty", "MW (the gas heated from ambient)", 1e-6, ".4g"),
+        ("thermal_efficiency", "(heat to the solids / burner duty)", 1.0, ".3f"),
+        ("energy_closure", "of the burner duty", 1.0, ".1e"))
+
+
+def _shown(value: float, scale) -> float:
+    return value - 273.15 if scale is None else value * scale
+
+
+def report(d: Dryer, a: dict, spread: dict, title: str = "") -> str:
+    """The answers as Markdown: each figure with its sensitivity to the closures."""
+    flow = "counter-current" if d.counter_current else "co-current"
+    lines = [f"# {title or 'Rotary dryer'}: {flow} march", "",
+             f"Drum {d.diameter:g} m x {d.length:g} m at {math.degrees(d.incline):.3g} deg and "
+             f"{d.rpm:g} rpm; feed {d.feed * 3.6:.4g} t/h dry solids at "
+             f"{d.feed_moisture * 100:.3g} % moisture and {d.feed_temperature - 273.15:.1f} C; "
+             f"gas {d.gas_flow:g} kg/s dry at {d.gas_temperature - 273.15:.0f} C.", "",
+             "Closures: residence "
+             + (f"given ({d.residence_time:g} s)" if d.residence_time is not None
+                else "from Friedman & Marshall (1949)")
+             + ", gas-solids conductance "
+             + (f"given ({d.conductance_per_metre:g} W/(m K) per metre)"
+                if d.conductance_per_metre is not None
+                else f"from Perry's Ua = {d.perry_k:g} G^0.67/D ({a['conductance_per_metre']:.4g} "
+                     "W/(m K) per metre at the inlet gas flow)")
+             + f". The +- column is each figure's change when each closure moves by "
+               f"+-{d.uncertainty * 100:.0f} % (root sum of squares), a sensitivity, not a "
+               "measured scatter.", "",
+             "| figure | value | +- | unit |", "|---|---|---|---|"]
+    for name, unit, scale, fmt in ROWS:
+        value = _shown(a[name], scale)
+        err = spread["combined"].get(name) if name in FIGURES else None
+        err_text = format(err * (1.0 if scale is None else abs(scale)), ".2g") if err is not None else ""
+        lines.append(f"| {name.replace('_', ' ')} | {format(value, fmt)} | {err_text} | {unit} |")
+    notes = []
+    if not 0.03 <= a["fill_fraction"] <= 0.08 and d.residence_time is None:
+        notes.append(f"the fill ({a['fill_fraction'] * 100:.2g} %) is outside the 3-8 % of drum "
+                     "volume Friedman and Marshall fitted")
+    if a["gas_outlet_temperature"] < a["gas_outlet_dew_point"] + 10.0:
+        notes.append("the gas leaves within 10 K of its dew point: water may condense in the "
+                     "ducts and filter")
+    if a["solids_outlet_moisture"] > d.target_moisture:
+        notes.append(f"the product leaves wetter than the {d.target_moisture * 100:.3g} % aimed "
+                     "at: more gas, a hotter gas or a longer drum")
+    if notes:
+        lines += [""] + [f"- Note: {n}." for n in notes]
+    return "\n".join(lines)
+
+
+def _plot(a: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    p = a["profile"]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    top.plot(p.x, p.solids_temperature - 273.15, label="solids")
+    top.plot(p.x, p.gas_temperature - 273.15, label="gas")
+    top.set_ylabel("temperature (C)")
+    top.legend()
+    bottom.plot(p.x, p.moisture * 100.0, label="solids' moisture (% dry basis)")
+    bottom.plot(p.x, p.humidity * 100.0, label="gas humidity (% of dry gas)")
+    bottom.set_xlabel("distance from the feed end (m)")
+    bottom.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def run(path, flow: str | None = None) -> tuple[Dryer, dict, dict]:
+    """Load, march and measure the sensitivity of the dryer in ``path``."""
+    from dataclasses import replace
+    d = load(path)
+    if flow is not None:
+        d = replace(d, counter_current=flow == "counter")
+    a = answer(d)
+    return d, a, sensitivity(d, a)
+
+
+def cmd_dryer(args) -> int:
+    """``taichi-dem dryer``: the module docstring."""
+    d, a, spread = run(args.design, args.flow)
+    text = report(d, a, spread, Path(args.design).stem.replace("_", " "))
+    print(text)
+    if args.out:
+        folder = Path(args.out)
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "dryer.md").write_text(text + "\n")
+        figures = {k: v for k, v in a.items() if k != "profile"}
+        p = a["profile"]
+        figures["profile"] = {"x": p.x.tolist(), "solids_temperature": p.solids_temperature.tolist(),
+                              "moisture": p.moisture.tolist(),
+                              "gas_temperature": p.gas_temperature.tolist(),
+                              "humidity": p.humidity.tolist()}
+        figures["sensitivity"] = spread
+        (folder / "dryer.json").write_text(json.dumps(figures, indent=1, default=float))
+        _plot(a, folder / "dryer_profile.png")
+        print(f"wrote {folder / 'dryer.md'}, {folder / 'dryer.json'}, "
+              f"{folder / 'dryer_profile.png'}", file=sys.stderr)
+    return 0

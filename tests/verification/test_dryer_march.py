@@ -1,0 +1,187 @@
+"""The dryer march (app/dryer.py) against analytic solutions and the correlations' own units.
+
+- Without water, at a constant conductance, the march is a heat exchanger: its outlet
+  temperatures must follow the effectiveness-NTU solutions of counter- and co-current exchangers
+  (Incropera, ch. 11). Heun's method in 800 cells errs by ~(NTU/800)^2 ~ 1e-5 of the duty, so
+  1e-4 relative is a real test.
+- Solids fed at the evaporation temperature and too wet to dry take every watt as latent heat:
+  the gas cools as against a wall at T_e, T_out = T_e + (T_in - T_e) exp(-ha' L / (G c_g)), and
+  the water evaporated is G c_g (T_in - T_out) / L (vapour heat capacity 0, so the vapour takes
+  no sensible heat).
+- The energy balance, from the streams in and out and the shell loss, closes to round-off: the
+  two streams are stepped with the same heat and evaporation (the issue asks for 1 %).
+- Friedman-Marshall and Perry's Ua in their handbook units, worked by hand here.
+"""
+import json
+import math
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from taichi_dem.app import dryer
+from taichi_dem.app.dryer import Dryer, answer
+from taichi_dem.app.dryer_command import load
+
+ROOT = Path(__file__).resolve().parents[2]
+DESIGN = ROOT / "demos" / "dryers" / "aggregate_dryer.toml"
+
+
+def _exchanger(counter: bool, **kw) -> Dryer:
+    base = dict(diameter=2.0, length=10.0, incline=math.radians(3.0), rpm=5.0, feed=10.0,
+                feed_moisture=0.0, feed_temperature=300.0, particle_diameter=0.01,
+                solids_heat_capacity=800.0, bulk_density=1500.0, gas_flow=6.0,
+                gas_temperature=900.0, gas_heat_capacity=1000.0, counter_current=counter,
+                conductance_per_metre=1500.0, residence_time=300.0)
+    base.update(kw)
+    return Dryer(**base)
+
+
+@pytest.mark.parametrize("counter", [True, False], ids=["counter", "co"])
+@pytest.mark.parametrize("gas_flow", [6.0, 12.0, 30.0])
+def test_without_water_the_march_is_a_heat_exchanger(counter, gas_flow):
+    d = _exchanger(counter, gas_flow=gas_flow)
+    a = answer(d)
+    c_s, c_g = d.feed * d.solids_heat_capacity, d.gas_flow * d.gas_heat_capacity
+    c_min, c_max = min(c_s, c_g), max(c_s, c_g)
+    ratio, ntu = c_min / c_max, d.conductance_per_metre * d.length / c_min
+    if counter:
+        e = math.exp(-ntu * (1.0 - ratio))
+        effectiveness = (1.0 - e) / (1.0 - ratio * e)
+    else:
+        effectiveness = (1.0 - math.exp(-ntu * (1.0 + ratio))) / (1.0 + ratio)
+    duty = effectiveness * c_min * (d.gas_temperature - d.feed_temperature)
+    assert c_s * (a["solids_outlet_temperature"] - d.feed_temperature) == pytest.approx(duty, rel=1e-4)
+    assert c_g * (d.gas_temperature - a["gas_outlet_temperature"]) == pytest.approx(duty, rel=1e-4)
+    # the gas arrives at its inlet end in its inlet state (the two-point problem is solved)
+    p = a["profile"]
+    assert p.gas_temperature[-1 if counter else 0] == pytest.approx(d.gas_temperature, abs=1e-6)
+
+
+def test_the_constant_rate_period_evaporates_what_the_gas_gives():
+    d = _exchanger(True, feed_moisture=5.0, feed_temperature=373.15, vapour_heat_capacity=0.0,
+                   gas_humidity=0.0)
+    a = answer(d)
+    ntu_gas = d.conductance_per_metre * d.length / (d.gas_flow * d.gas_heat_capacity)
+    t_out = 373.15 + (d.gas_temperature - 373.15) * math.exp(-ntu_gas)
+    assert a["gas_outlet_temperature"] == pytest.approx(t_out, abs=0.01)
+    water = d.gas_flow * d.gas_heat_capacity * (d.gas_temperature - t_out) / d.latent_heat
+    assert a["evaporation"] == pytest.approx(water, rel=1e-4)
+    assert a["solids_outlet_temperature"] == pytest.approx(373.15, abs=1e-9)   # held at T_e
+    assert a["gas_outlet_humidity"] == pytest.approx(a["evaporation"] / d.gas_flow, rel=1e-9)
+
+
+@pytest.mark.parametrize("flow", ["counter", "co"])
+def test_the_energy_balance_closes(flow):
+    d = replace(load(DESIGN), counter_current=flow == "counter")
+    a = answer(d)
+    p = a["profile"]
+    gas_out = 0 if d.counter_current else -1
+    streams_in = (d.feed * (d.solids_heat_capacity + d.feed_moisture * d.water_heat_capacity)
+                  * d.feed_temperature
+                  + d.gas_flow * dryer.gas_enthalpy(d.gas_temperature, d.gas_humidity, d))
+    streams_out = (d.feed * (d.solids_heat_capacity + p.moisture[-1] * d.water_heat_capacity)
+                   * p.solids_temperature[-1]
+                   + d.gas_flow * dryer.gas_enthalpy(p.gas_temperature[gas_out],
+                                                     p.humidity[gas_out], d))
+    assert a["shell_loss"] > 0.01 * a["burner_duty"]        # the loss is booked, not absent
+    assert abs(streams_in - streams_out - a["shell_loss"]) < 1e-9 * a["burner_duty"]
+    # water: what the solids lost the gas carries
+    water = d.feed * (d.feed_moisture - p.moisture[-1])
+    assert d.gas_flow * (p.humidity[gas_out] - d.gas_humidity) == pytest.approx(water, rel=1e-9)
+
+
+def test_the_falling_rate_slows_the_last_of_the_drying():
+    d = load(DESIGN)
+    constant = answer(replace(d, critical_moisture=0.0))
+    falling = answer(replace(d, critical_moisture=0.03))
+    assert falling["solids_outlet_moisture"] > constant["solids_outlet_moisture"]
+    # below X_cr the solids warm while they still dry: hotter than T_e before they are dry
+    p = falling["profile"]
+    wet_and_hot = (p.moisture > 0.0) & (p.solids_temperature > d.evaporation_temperature + 1.0)
+    assert wet_and_hot.any()
+
+
+def test_the_parcel_step_is_the_particle_model():
+    """dryer.heat_and_dry with no falling rate is thermal/moisture.py's step (the same
+    formulas, checked on values that cross T_e, that dry out and that stay below)."""
+    import taichi as ti
+    from taichi_dem.thermal.moisture import heat_and_dry as particle_step
+    ti.init(arch=ti.cpu, default_fp=ti.f64)
+    d = load(DESIGN)
+    cases = [(350.0, 0.05, 1.0e4), (373.15, 0.05, 2.0e5), (370.0, 0.001, 5.0e4), (300.0, 0.0, 1e3)]
+    out = ti.field(ti.f64, shape=(len(cases), 3))
+
+    @ti.kernel
+    def step(t: ti.f64, x: ti.f64, energy: ti.f64, k: ti.i32):
+        capacity = d.solids_heat_capacity + x * d.water_heat_capacity   # per kg dry solid
+        t_new, x_new, _, evaporated = particle_step(t, x, 1.0 / capacity, 1.0, energy,
+                                                    d.evaporation_temperature, d.latent_heat,
+                                                    d.water_heat_capacity)
+        out[k, 0], out[k, 1], out[k, 2] = t_new, x_new, evaporated
+
+    for k, (t, x, energy) in enumerate(cases):
+        step(t, x, energy, k)
+        expected = dryer.heat_and_dry(t, x, energy, replace(d, critical_moisture=0.0))
+        assert [out[k, j] for j in range(3)] == pytest.approx(list(expected), rel=1e-12, abs=1e-15)
+
+
+def test_friedman_marshall_and_perry_in_their_own_units():
+    ft, lb_h_ft2 = 0.3048, 0.45359237 / 3600.0 / 0.3048 ** 2
+    # L 30 ft, D 6 ft, slope 0.05, 5 rpm: 0.23 * 30 / (0.05 * 5^0.9 * 6) = 5.404 min; with
+    # 500 um particles B = 5 / sqrt(500) and G / F = 1000 / 2000 lb/(h ft2): + 0.6 B 30 0.5
+    tau = dryer.friedman_marshall_residence(30 * ft, 6 * ft, math.atan(0.05), 5.0, 500e-6,
+                                            1000 * lb_h_ft2, 2000 * lb_h_ft2, True)
+    assert tau / 60.0 == pytest.approx(0.23 * 30 / (0.05 * 5 ** 0.9 * 6)
+                                       + 0.6 * 5 / math.sqrt(500) * 30 * 0.5, rel=1e-12)
+    assert 0.23 * 30 / (0.05 * 5 ** 0.9 * 6) == pytest.approx(5.404, abs=1e-3)
+    co = dryer.friedman_marshall_residence(30 * ft, 6 * ft, math.atan(0.05), 5.0, 500e-6,
+                                           1000 * lb_h_ft2, 2000 * lb_h_ft2, False)
+    assert co < tau
+    # Ua = 0.5 * 1000^0.67 / 6 Btu/(h ft3 F); 1 Btu/(h ft2 F) = 5.678263 W/(m2 K) (the
+    # conversion tables' IT value), so 1 Btu/(h ft3 F) = 5.678263 / 0.3048 W/(m3 K)
+    ua = dryer.perry_volumetric_coefficient(1000 * lb_h_ft2, 6 * ft, 0.5)
+    assert ua == pytest.approx(0.5 * 1000 ** 0.67 / 6 * 5.678263 / 0.3048, rel=1e-6)
+
+
+def test_the_dew_point_inverts_the_saturation_pressure():
+    # air at 50 C saturated: p_sat 12.35 kPa (steam tables 12.35), Y = 0.622 p / (P - p)
+    p = dryer.saturation_pressure(323.15)
+    assert p == pytest.approx(12352.0, rel=5e-3)
+    y = 0.622 * p / (101325.0 - p)
+    assert dryer.dew_point(y) == pytest.approx(323.15, abs=1e-6)
+
+
+def _cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "taichi_dem", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=300)
+
+
+def test_the_command_reports_and_writes(tmp_path):
+    r = _cli("dryer", str(DESIGN), "--out", str(tmp_path))
+    assert r.returncode == 0, r.stderr
+    assert "gas outlet temperature" in r.stdout and "burner duty" in r.stdout
+    data = json.loads((tmp_path / "dryer.json").read_text())
+    assert abs(data["energy_closure"]) < 1e-9
+    assert (tmp_path / "dryer_profile.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("edit, key, reason", [
+    (("diameter = \"2.2 m\"", ""), "drum.diameter", "required"),
+    (("speed = \"8 rpm\"", "speed = \"8 furlongs\""), "drum.speed", "unknown unit"),
+    (("flow = \"counter\"", "flow = \"sideways\""), "gas.flow", "counter"),
+    (("moisture = 0.05 ", "moisture = -0.05 "), "solids.moisture", ">= 0"),
+    (("[shell]", "[shell]\nloss = 3"), "shell.loss", "unknown key"),
+    (("[drum]", "[drumm]\n[drum]"), "drumm", "unknown section"),
+])
+def test_bad_input_names_the_file_key_and_reason(tmp_path, edit, key, reason):
+    text = DESIGN.read_text()
+    assert edit[0] in text
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace(edit[0], edit[1], 1))
+    r = _cli("dryer", str(bad))
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "Traceback" not in r.stderr
+    assert str(bad) in r.stderr and key in r.stderr and reason in r.stderr
