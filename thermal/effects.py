@@ -416,14 +416,36 @@ class Radiation(Effect):
     name = "radiation"
     stage = "particle"
 
+    # J into the particles since the start (sensors/energy.py books every declared term)
+    energy_terms = {"thermal/radiated_heat": 1.0}
+
     def __init__(self, description, thermal, emissivities):
         super().__init__(description)
         self.thermal = thermal
         self.emissivities = dict(emissivities)     # material name -> grey-body emissivity
         self.emissivity = None                     # per material index, once allocated
+        # this step's radiant heat into each particle (W), booked by integrate_func at the
+        # step's dt: the particle stage does not know the step (a start pass has dt = 0)
+        self.particle_fields = {"radiated_power": (False, "real")}
 
     def allocate(self, ctx, tree):
         self.emissivity = tree.add("emissivity", ctx.real, len(ctx.material_names))
+        self.radiated = tree.add("radiated_heat", ti.f64, 1)     # J since the start
+
+    def integrate_func(self, ctx):
+        """Books the radiant heat of the step, q dt (J, thermal time S dt), into the run's
+        total, an f64 sum."""
+        s, radiated = ctx.state, self.radiated
+        time_scale = float(self.thermal.time_scale)
+
+        @ti.func
+        def book_radiation(i, load, dt):
+            radiated[0] += ti.cast(s.radiated_power[i], ti.f64) * ti.cast(dt, ti.f64) * time_scale
+        return book_radiation
+
+    def sample(self, values: dict, n: int, measured: dict) -> None:
+        """thermal/radiated_heat: J into the particles by radiation since the start."""
+        values["thermal/radiated_heat"] = float(self.radiated.to_numpy()[0])
 
     def upload(self, ctx):
         npf = np.float64 if ctx.real == ti.f64 else np.float32
@@ -445,6 +467,7 @@ class Radiation(Effect):
 
         @ti.func
         def radiation(i, load):
+            s.radiated_power[i] = 0.0
             if in_radiation_region(s.position[i]):
                 t_surroundings = ti.static(radiation_temperature) + 0.0 * load.heat
                 sees = 1
@@ -455,6 +478,7 @@ class Radiation(Effect):
                                                       t_surroundings, s.temperature[i])
                     load.heat += q_rad
                     load.conductance += g_rad
+                    s.radiated_power[i] = q_rad
             return load
 
         return radiation
@@ -488,9 +512,19 @@ class Drying(Effect):
         super().__init__(description)
         self.constants = (thermal.evaporation_temperature, thermal.latent_heat,
                           thermal.water_heat_capacity)
+        self.critical_moisture = float(thermal.critical_moisture)     # kg/kg (0: none)
         self.particle_fields = {"moisture": (False, "real")}
         if compensated:
             self.particle_fields["moisture_residual"] = (False, "f64")
+
+    # J into the particles since the start (sensors/energy.py): the vapour leaves with
+    # L + c_w T_e per kg (moisture.py)
+    energy_terms = {"thermal/vapour_heat": -1.0}
+
+    def sample(self, values: dict, n: int, measured: dict) -> None:
+        """thermal/vapour_heat: J the evaporated water carried off since the start."""
+        t_e, latent, c_w = self.constants
+        values["thermal/vapour_heat"] = measured["evaporated_mass"] * (latent + c_w * t_e)
 
     def allocate(self, ctx, tree):
         self.evaporated = tree.add("evaporated", ti.f64, 1)      # kg since the start
@@ -621,10 +655,11 @@ class Temperature(Effect):
         compensated = self.compensated
         moisture = drying_effect is not None
         compensated_add, split_f64 = make_compensated_add(real)
-        t_evap = latent = c_water = 0.0
+        t_evap = latent = c_water = critical = 0.0
         evaporated = None
         if moisture:
             t_evap, latent, c_water = drying_effect.constants
+            critical = drying_effect.critical_moisture
             evaporated = drying_effect.evaporated
 
         scale = self.time_scale
@@ -641,7 +676,7 @@ class Temperature(Effect):
                     ti.cast(s.moisture[i], ti.f64) + s.moisture_residual[i],
                     ti.cast(s.inverse_thermal_mass[i], ti.f64),
                     ti.cast(s.mass[i], ti.f64), ti.cast(dt * heat, ti.f64),
-                    t_evap, latent, c_water)
+                    t_evap, latent, c_water, critical)
                 t_part, t_rest = split_f64(t_new)
                 s.temperature[i] = t_part
                 s.temperature_residual[i] = t_rest
@@ -654,7 +689,7 @@ class Temperature(Effect):
             elif ti.static(moisture):
                 t_new, x_new, inv_c, dm = drying.heat_and_dry(
                     s.temperature[i], s.moisture[i], s.inverse_thermal_mass[i],
-                    s.mass[i], dt * heat, t_evap, latent, c_water)
+                    s.mass[i], dt * heat, t_evap, latent, c_water, critical)
                 s.temperature[i] = t_new
                 if dm > 0.0:
                     s.moisture[i] = x_new
@@ -767,8 +802,10 @@ def thermal_effects(scene) -> list:
         out.append(Radiation(f"grey-body radiation to {to}{where} (no shadowing)", th,
                              {k: m.emissivity for k, m in scene.materials.items()}))
     if th.moisture:
+        falling = (f", falling rate below {th.critical_moisture:g} kg/kg"
+                   if th.critical_moisture > 0.0 else "")
         out.append(Drying(f"moisture: evaporation at {th.evaporation_temperature:g} K, "
-                          f"latent heat {th.latent_heat:g} J/kg", th, compensated))
+                          f"latent heat {th.latent_heat:g} J/kg{falling}", th, compensated))
     return out
 
 

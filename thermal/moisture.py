@@ -9,24 +9,40 @@ evaporates water instead (the latent heat L), so it holds at T_e until dry, then
 which balances the enthalpy C T exactly, the vapour leaving with dm (L + c_w T_e). A particle
 wetter and hotter than T_e (inserted hot) flashes its excess sensible heat into vapour in one
 step. The mechanical mass stays the dry mass (the water is a small, neglected load).
+
+Below a critical moisture X_cr (the falling-rate period: the water left is inside the grain and
+reaches the surface ever more slowly) only the fraction X / X_cr of this step's heat above T_e
+evaporates water, and the rest warms the particle (a linear characteristic drying curve):
+
+    surplus = C (T + Q dt / C - max(T, T_e)),   dm = min((X / X_cr) surplus / L, X m)
+
+with the same enthalpy balance. X_cr = 0 (the default) has no falling rate.
 """
 import taichi as ti
 
 
 @ti.func
 def heat_and_dry(temperature, moisture, inverse_thermal_mass, dry_mass, energy,
-                 evaporation_temperature, latent_heat, water_heat_capacity):
+                 evaporation_temperature, latent_heat, water_heat_capacity,
+                 critical_moisture: ti.template()):
     """One explicit step with ``energy`` = Q dt J into the particle. Returns (temperature K,
-    moisture kg/kg, inverse thermal mass 1/(J/K), evaporated water kg)."""
+    moisture kg/kg, inverse thermal mass 1/(J/K), evaporated water kg). ``critical_moisture``
+    (kg/kg, a Python number: 0 compiles the falling rate away)."""
     t_new = temperature + energy * inverse_thermal_mass
     x_new = moisture
     inv_new = inverse_thermal_mass
     evaporated = 0.0 * energy
     if moisture > 0.0 and t_new > evaporation_temperature:
         thermal_mass = 1.0 / inverse_thermal_mass
-        surplus = thermal_mass * (t_new - evaporation_temperature)
+        surplus = thermal_mass * (t_new - evaporation_temperature)     # the enthalpy above T_e
         water = moisture * dry_mass
         evaporated = surplus / latent_heat
+        if ti.static(critical_moisture > 0.0):
+            if moisture < critical_moisture:
+                # falling rate: this step's heat above T_e only, a fraction X / X_cr of it
+                evaporated = (moisture / critical_moisture * thermal_mass
+                              * (t_new - ti.max(temperature, evaporation_temperature))
+                              / latent_heat)
         x_new = moisture - evaporated / dry_mass
         if evaporated >= water:
             evaporated = water

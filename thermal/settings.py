@@ -41,6 +41,9 @@ _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
 # the series the heat effects write besides the sensors' (taichi_dem/sensors/series.py)
 SERIES = (
     Series("particles/evaporated_mass", "kg", "drying: water evaporated so far"),
+    Series("thermal/vapour_heat", "J", "drying: carried off by the vapour so far, "
+           "(L + c_w T_e) per kg"),
+    Series("thermal/radiated_heat", "J", "radiation: into the particles so far"),
     Series("gas/temperature", "K", "plug flow: the gas leaving each cell", "(cells,)"),
     Series("gas/outlet_temperature", "K", "plug flow: the gas leaving the stream"),
     Series("gas/heat_flow", "W", "plug flow: from the gas to the particles"),
@@ -139,6 +142,10 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
         default=2.26e6, **_P, effect="drying"),
     Key("water_heat_capacity", "quantity", "drying: liquid water's specific heat",
         unit="specific_heat", default=4186.0, minimum=0.0, effect="drying"),
+    Key("critical_moisture", "quantity", "drying: the falling-rate period below this "
+        "moisture (kg water per kg dry solid): only X / X_cr of the heat above the evaporation "
+        "temperature evaporates water, the rest warms the particle (0: none)",
+        unit="dimensionless", default=0.0, minimum=0.0, effect="drying"),
     Key("gas_gap", "boolean", "conduction through the gas gap near contacts (to walls and "
         "bodies, and between particles unless gas_gap_pairs = false)", default=False,
         effect="gas_gap"),
@@ -248,6 +255,7 @@ class ThermalSettings:
     evaporation_temperature: float = THERMAL.default("evaporation_temperature")
     latent_heat: float = THERMAL.default("latent_heat")
     water_heat_capacity: float = THERMAL.default("water_heat_capacity")
+    critical_moisture: float = THERMAL.default("critical_moisture")
     gas_gap: bool = THERMAL.default("gas_gap")
     gas_gap_pairs: bool = THERMAL.default("gas_gap_pairs")
     gas_gap_model: str = THERMAL.default("gas_gap_model")
@@ -296,7 +304,8 @@ def parse_thermal(value: Any, ctx, fills, walls, bodies) -> ThermalSettings:
     kw["moisture"] = any(f.moisture is not None or (getattr(f, "moistures", None) is not None
                                                     and f.moistures.any()) for f in fills)
     kw.update(THERMAL.read(t, file, key, only=("evaporation_temperature", "latent_heat",
-                                               "water_heat_capacity", "gas_gap")))
+                                               "water_heat_capacity", "critical_moisture",
+                                               "gas_gap")))
     if "time_scale" in t:
         k = f"{key}.time_scale"
         scale = Key("time_scale", "quantity", "", unit="dimensionless", minimum=0.0,

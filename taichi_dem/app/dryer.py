@@ -155,24 +155,23 @@ class Dryer:
 def heat_and_dry(temperature, moisture, energy, d: Dryer):
     """One step of ``energy`` J per kg dry solid into the parcel at ``temperature`` K with
     ``moisture`` kg/kg: (temperature K, moisture kg/kg, evaporated kg per kg dry solid), the
-    enthalpy (c_s + X c_w) T balanced exactly with the vapour leaving at c_w T_e + L."""
+    enthalpy (c_s + X c_w) T balanced exactly with the vapour leaving at c_w T_e + L. The same
+    arithmetic as thermal/moisture.py's particle step (tested to round-off)."""
     capacity = d.solids_heat_capacity + moisture * d.water_heat_capacity
     t_new = temperature + energy / capacity
     if moisture <= 0.0 or t_new <= d.evaporation_temperature:
         return t_new, moisture, 0.0
-    if moisture >= d.critical_moisture:       # constant rate: all heat above T_e evaporates
-        surplus = capacity * (t_new - d.evaporation_temperature)
-        fraction = 1.0
-    else:                                     # falling rate: a fraction X / X_cr of this step's
-        surplus = capacity * (t_new - max(temperature, d.evaporation_temperature))
-        fraction = moisture / d.critical_moisture
-    evaporated = min(fraction * surplus / d.latent_heat, moisture)
+    above = capacity * (t_new - d.evaporation_temperature)       # the enthalpy above T_e
+    evaporated = above / d.latent_heat                           # constant rate
+    if d.critical_moisture > 0.0 and moisture < d.critical_moisture:
+        # falling rate: this step's heat above T_e only, a fraction X / X_cr of it
+        evaporated = (moisture / d.critical_moisture * capacity
+                      * (t_new - max(temperature, d.evaporation_temperature)) / d.latent_heat)
     x_new = moisture - evaporated
     if evaporated >= moisture:
-        x_new = 0.0
+        evaporated, x_new = moisture, 0.0
     dry_capacity = capacity - evaporated * d.water_heat_capacity
-    t_out = (capacity * t_new - evaporated * (d.latent_heat + d.water_heat_capacity
-                                              * d.evaporation_temperature)) / dry_capacity
+    t_out = d.evaporation_temperature + (above - evaporated * d.latent_heat) / dry_capacity
     return t_out, x_new, evaporated
 
 

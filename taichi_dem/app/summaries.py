@@ -146,7 +146,8 @@ def process_summary(sim, window: float = 0.25) -> dict:
         loss = float(s["thermal/particle_heat_loss"][-1])
         walls = float(s["thermal/wall_heat"][-1])
         gas = float(s["thermal/gas_heat"][-1])
-        booked = walls - gas
+        source = float(s["thermal/source_heat"][-1]) if "thermal/source_heat" in s else 0.0
+        booked = walls - gas - source
         out["heat_out_of_particles"] = loss
         out["heat_into_walls"] = walls
         scale = sim.scene.thermal.time_scale
@@ -155,14 +156,18 @@ def process_summary(sim, window: float = 0.25) -> dict:
         line = (f"summary: energy balance{when}: the particles lost {loss / 1e3:.4g} kJ; "
                 f"{walls / 1e3:.4g} kJ went into isothermal walls and bodies"
                 + (f", {gas / 1e3:.4g} kJ came from the gas" if gas else ""))
+        for key in ("thermal/radiated_heat", "thermal/vapour_heat"):
+            if key in s and len(s[key]):
+                what = {"thermal/radiated_heat": "came by radiation",
+                        "thermal/vapour_heat": "left with the vapour"}[key]
+                line += f", {float(s[key][-1]) / 1e3:.4g} kJ {what}"
+
         if abs(booked) > 0 or abs(loss) > 0:
             error = (loss - booked) / max(abs(booked), abs(loss))
             out["energy_balance_error"] = error
             line += f" (difference {error:.2%}"
             if sim.scene.thermal.gas is not None and not sim.scene.thermal.gas.plug_flow:
                 line += "; convection to the fixed gas is not booked"
-            if sim.scene.thermal.radiation:
-                line += "; radiation is not booked"
             line += ")"
         print(line)
         for b in sim.scene.bodies:

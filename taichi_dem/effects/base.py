@@ -124,6 +124,10 @@ class Effect:
     # it conducts heat to walls and bodies that have a temperature (their heat series, the
     # walls' temperatures uploaded)
     heats_walls = False
+    # the energy the effect brings into the particles from outside the balance of
+    # sensors/energy.py: {series name: sign}, each series J since the start, written by the
+    # effect's ``sample`` (+1: into the particles, -1: out of them)
+    energy_terms: dict = {}
     margin = 0.0
     particle_fields: dict = {}
     contact_fields: dict = {}

@@ -69,10 +69,11 @@ class GatherStage:
         book_carried_load = holding.carried_load
         Load = particle_load(real)
         particle_effects = tuple(x.particle_func(ctx) for x in model.particle_effects)
-        # the integrate stage's updates of a particle's own state from its load (its
-        # temperature and moisture from the heat), in step order
-        integrators = tuple(f for f in (x.integrate_func(ctx) for x in model.effect_list
-                                        if x.stage == "integrate") if f is not None)
+        # the updates of a particle's own state from its load at the step's dt (its
+        # temperature and moisture from the heat; a particle effect's booking of what it
+        # gave), in step order
+        integrators = tuple(f for f in (x.integrate_func(ctx) for x in model.effect_list)
+                            if f is not None)
         drift_particle = e.drift_particle
         pool = e.worker_pool
         take_scattered = make_take_scattered(s, pool, pair_heat)

@@ -2,6 +2,7 @@
 
     heat out of the particles = E_0 + E_fed - E_removed - E_inside          (J, sum m c T)
                               = heat into isothermal walls and bodies - heat from the gas
+                                - heat from the effects' own sources
 
 /series thermal/energy_inside (sum m c T now), energy_fed and energy_removed (carried in by
 factories and out through outlets and the domain's faces, since the start), particle_heat_loss
@@ -11,8 +12,10 @@ thermal time (S x the simulated interval): the particles' temperatures moved S t
 
 Bodies record the mean heat flow over every step of the interval, so their integral is exact;
 plane walls record their last step only, so with plane walls the balance closes only to the
-change of the wall heat flow within an output interval. Convection to a fixed gas and radiation
-are not booked here (their source is unbounded), so with those the two lines differ by them.
+change of the wall heat flow within an output interval. The effects' own sources are booked as
+each declares (``Effect.energy_terms``: radiation in, the vapour's enthalpy out) into
+thermal/source_heat. Convection to a fixed gas is not booked (its source is unbounded), so with
+it the two lines differ by it.
 """
 from __future__ import annotations
 
@@ -41,12 +44,16 @@ class EnergyBalance:
         fed = sim.factories.inserted_energy if sim.factories is not None else 0.0
         removed = sim.accounts.removed_energy if sim.accounts is not None else 0.0
         gas = float(values.get("gas/transferred_heat", 0.0))
+        # the effects' own sources (radiation, the vapour): each declares its series
+        source = sum(sign * float(values[key]) for effect in sim.engine.model.effect_list
+                     for key, sign in effect.energy_terms.items() if key in values)
         values["thermal/energy_inside"] = inside
         values["thermal/energy_fed"] = fed
         values["thermal/energy_removed"] = removed
         values["thermal/particle_heat_loss"] = self.initial + fed - removed - inside
         values["thermal/wall_heat"] = self.wall_heat
         values["thermal/gas_heat"] = gas
+        values["thermal/source_heat"] = source
 
     def state_dict(self) -> dict:
         return {"initial": self.initial if self.initial is not None else float("nan"),

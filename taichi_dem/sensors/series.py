@@ -101,4 +101,6 @@ SERIES = (
     Series("thermal/particle_heat_loss", "J", "heat the particles gave off so far"),
     Series("thermal/wall_heat", "J", "into walls and bodies so far"),
     Series("thermal/gas_heat", "J", "into the gas so far"),
+    Series("thermal/source_heat", "J", "into the particles from the effects' own sources so "
+           "far (radiation in, less the vapour's enthalpy out)"),
 )

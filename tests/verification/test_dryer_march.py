@@ -104,14 +104,17 @@ def test_the_falling_rate_slows_the_last_of_the_drying():
     assert wet_and_hot.any()
 
 
-def test_the_parcel_step_is_the_particle_model():
-    """dryer.heat_and_dry with no falling rate is thermal/moisture.py's step (the same
-    formulas, checked on values that cross T_e, that dry out and that stay below)."""
+@pytest.mark.parametrize("critical", [0.0, 0.03])
+def test_the_parcel_step_is_the_particle_model(critical):
+    """dryer.heat_and_dry is thermal/moisture.py's step (the same arithmetic, f64), on values
+    that cross T_e, that dry out, that stay below, and (with a critical moisture) that are in
+    the falling-rate period below and above T_e."""
     import taichi as ti
     from taichi_dem.thermal.moisture import heat_and_dry as particle_step
     ti.init(arch=ti.cpu, default_fp=ti.f64)
-    d = load(DESIGN)
-    cases = [(350.0, 0.05, 1.0e4), (373.15, 0.05, 2.0e5), (370.0, 0.001, 5.0e4), (300.0, 0.0, 1e3)]
+    d = replace(load(DESIGN), critical_moisture=critical)
+    cases = [(350.0, 0.05, 1.0e4), (373.15, 0.05, 2.0e5), (370.0, 0.001, 5.0e4), (300.0, 0.0, 1e3),
+             (373.15, 0.02, 3.0e4), (390.0, 0.01, 2.0e4), (360.0, 0.025, 2.0e5)]
     out = ti.field(ti.f64, shape=(len(cases), 3))
 
     @ti.kernel
@@ -119,12 +122,12 @@ def test_the_parcel_step_is_the_particle_model():
         capacity = d.solids_heat_capacity + x * d.water_heat_capacity   # per kg dry solid
         t_new, x_new, _, evaporated = particle_step(t, x, 1.0 / capacity, 1.0, energy,
                                                     d.evaporation_temperature, d.latent_heat,
-                                                    d.water_heat_capacity)
+                                                    d.water_heat_capacity, critical)
         out[k, 0], out[k, 1], out[k, 2] = t_new, x_new, evaporated
 
     for k, (t, x, energy) in enumerate(cases):
         step(t, x, energy, k)
-        expected = dryer.heat_and_dry(t, x, energy, replace(d, critical_moisture=0.0))
+        expected = dryer.heat_and_dry(t, x, energy, d)
         assert [out[k, j] for j in range(3)] == pytest.approx(list(expected), rel=1e-12, abs=1e-15)
 
 

@@ -182,6 +182,11 @@ def test_plug_flow_energy_balance(small_scene_text, wet):
           f"{abs(e1 - e0 + vapour - given) / given:.1e}; outlet {s['gas/outlet_temperature'][-1]:.2f} K")
     assert given > 1.0
     assert e1 - e0 + vapour == pytest.approx(given, rel=1e-9)
+    # the run's own balance books the vapour (Drying.energy_terms): it closes as this one does
+    assert -s["thermal/source_heat"][-1] == pytest.approx(vapour, rel=1e-12, abs=1e-12)
+    loss = s["thermal/particle_heat_loss"][-1]
+    booked = s["thermal/wall_heat"][-1] - s["thermal/gas_heat"][-1] - s["thermal/source_heat"][-1]
+    assert loss == pytest.approx(booked, rel=1e-9)
 
 
 # ------------------------------------------------------------------------------ radiation
@@ -209,8 +214,15 @@ def test_radiation_lumped(tmp_path, source):
         text += f"[thermal]\nradiation = true\nradiation_to = {tw}\n"
     with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
         assert 4 * k * tw ** 3 * sim.dt < 3e-4
+        e0 = sim.thermal_energy()
         sim.run(6.0)
         temps = sim.particles()["temperature"]
+        gained = sim.thermal_energy() - e0
+        radiated = sim.series["thermal/radiated_heat"][-1]
+        balance = sim.series["thermal/particle_heat_loss"][-1] + sim.series["thermal/source_heat"][-1]
+    # every joule the particles gained came by radiation, and the run books it (to f64 sums)
+    assert radiated == pytest.approx(gained, rel=1e-9)
+    assert abs(balance) < 1e-9 * gained
     analytic = _radiation_time(t0, temps[0], tw, k)
     print(f"\n  radiation ({source}): T = {temps[0]:.3f} K at t = {sim.time:.3f} s; the analytic "
           f"t(T) = {analytic:.4f} s; second particle {temps[1]:.3f} K")
@@ -308,6 +320,50 @@ def test_drying_holds_at_evaporation_temperature(tmp_path):
     assert T[after] - t_gas == pytest.approx(dry_T - t_gas, rel=2e-3)
     assert abs(done - (t1 + t_dry)) <= 0.011          # one output interval
     assert s["particles/evaporated_mass"][-1] == pytest.approx(x0 * m, rel=1e-12)
+
+
+def test_drying_falling_rate_follows_its_ode(tmp_path):
+    """[thermal] critical_moisture: below X_cr a fraction X / X_cr of the heat evaporates water
+    and the rest warms the particle. Once at T_e the particle follows
+        C(X) dT/dt = Q - m' (L + c_w (T_e - T)),   m dX/dt = -m',   m' = (X / X_cr) Q / L,
+    Q = hA (T_g - T), C = m (c + X c_w) (the enthalpy balance of moisture.py in continuous
+    form), integrated here by scipy (rtol 1e-10); the run's explicit steps agree to 2e-3 as the
+    constant-rate test's do."""
+    from scipy.integrate import solve_ivp
+    u, t_gas, t0, t_evap = 2.0, 500.0, 300.0, 373.15
+    c, c_water, x0, x_cr = 1.0, 4.0, 0.1, 0.2
+    m = _mass()
+    hA = _ranz_marshall_hA(u)
+    latent = hA * (t_gas - t_evap) * 0.5 / (x0 * m)
+    c_wet = m * (c + x0 * c_water)
+    t1 = c_wet / hA * math.log((t_gas - t0) / (t_gas - t_evap))     # reaches T_e, still wet
+
+    def rates(_, y):
+        temperature, x = y
+        q = hA * (t_gas - temperature)
+        vapour = x / x_cr * q / latent if x > 0.0 else 0.0
+        return [(q - vapour * (latent + c_water * (t_evap - temperature))) / (m * (c + x * c_water)),
+                -vapour / m]
+
+    text = (h.header(dt=5e-5, lo=(-0.05,) * 3, hi=(0.05,) * 3, output_interval=0.01)
+            + _material("glass", c) + h.interaction("glass", "glass", 0.5, 0.5)
+            + _fill(tmp_path, "w.csv", "glass", [[0, 0, 0]], t0, extra=f"moisture = {x0}\n")
+            + f"[thermal]\nlatent_heat = {latent!r}\nwater_heat_capacity = {c_water}\n"
+              f"critical_moisture = {x_cr}\n"
+              f"[thermal.gas]\ntemperature = {t_gas}\nvelocity = [{u}, 0.0, 0.0]\n")
+    with taichi_dem.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
+        sim.run(t1 + 1.5)
+        s = sim.series
+    t, T, X = s["time"], s["particles/mean_temperature"], s["particles/mean_moisture"]
+    after = t > t1 + 0.01
+    ode = solve_ivp(rates, (t1, t[-1]), [t_evap, x0], t_eval=t[after], rtol=1e-10, atol=1e-12)
+    print(f"\n  falling rate: at t = {t[-1]:.2f} s T = {T[-1]:.3f} K (ODE {ode.y[0][-1]:.3f}), "
+          f"X = {X[-1]:.5f} (ODE {ode.y[1][-1]:.5f}); constant rate would have dried at "
+          f"{t1 + 0.5:.2f} s")
+    assert X[-1] > 0.2 * x0                    # slower than the constant rate's 0.5 s
+    assert np.all(T[after] > t_evap)           # warming while it dries
+    assert T[after] - t_gas == pytest.approx(ode.y[0] - t_gas, rel=2e-3)
+    assert X[after] == pytest.approx(ode.y[1], abs=2e-3 * x0)
 
 
 # ------------------------------------------------------------------------------ input checks
