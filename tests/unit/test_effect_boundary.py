@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[2]
 EFFECT_MODULES = sorted(set((ROOT / "taichi_dem" / "effects").rglob("*.py"))
                         - {ROOT / "taichi_dem" / "effects" / "base.py",
                            ROOT / "taichi_dem" / "effects" / "registry.py"}) + [
-    ROOT / "thermal" / "effects.py"]
+    ROOT / "thermal" / "effects.py", ROOT / "thermal" / "radiation.py"]
 # the methods through which the engine calls an effect: their first argument is the context
 HOOKS = {"allocate", "upload", "contact_func", "particle_func", "integrate_func", "cell_func",
          "after_pairs", "compile", "update", "prepare", "after_rebuild", "make_rigid_drift", "make_rigid_velocity",
