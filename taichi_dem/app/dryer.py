@@ -127,6 +127,15 @@ class Dryer:
     uncertainty: float = 0.25        # relative, of each closure (for the sensitivity)
     cells: int = 800
     source: str = "<dryer>"
+    # the gas's transport properties (a map's closure: h from Ranz-Marshall); air at 400 C
+    gas_density: float = 0.52        # kg/m^3
+    gas_viscosity: float = 3.3e-5    # Pa s
+    gas_conductivity: float = 0.051  # W/(m K)
+    # from a map (app/dryer_map.py): each closure's own relative uncertainty, the drive torque
+    residence_uncertainty: float | None = None
+    conductance_uncertainty: float | None = None
+    drive_torque: float | None = None            # N m
+    map_info: dict | None = None
 
     @property
     def area(self) -> float:
@@ -323,6 +332,7 @@ def answer(d: Dryer) -> dict:
         "energy_imbalance": imbalance,
         "energy_closure": imbalance / burner if burner else math.nan,
         "conductance_per_metre": d.conductance(d.gas_flow * (1.0 + d.gas_humidity)),
+        "drive_torque": d.drive_torque if d.drive_torque is not None else math.nan,
     }
 
 
@@ -337,10 +347,12 @@ def sensitivity(d: Dryer, base: dict | None = None) -> dict:
     base = base or answer(d)
     out = {}
     tau, ha = d.residence(), d.conductance(d.gas_flow * (1.0 + d.gas_humidity))
+    own = {"residence": d.residence_uncertainty, "conductance": d.conductance_uncertainty}
     for name, changed in (("residence", lambda f: replace(d, residence_time=tau * f)),
                           ("conductance", lambda f: replace(d, conductance_per_metre=ha * f))):
         moved = {}
-        for f in (1.0 + d.uncertainty, 1.0 - d.uncertainty):
+        u = d.uncertainty if own[name] is None else own[name]
+        for f in (1.0 + u, 1.0 - u):
             a = answer(changed(f))
             for key in FIGURES:
                 moved[key] = max(moved.get(key, 0.0), abs(a[key] - base[key]))

@@ -47,6 +47,12 @@ KEYS = {
                      "the inlet gas's humidity, kg water per kg dry gas"),
         "heat_capacity": ("gas_heat_capacity", "specific_heat", 1100.0, 0.0, None,
                           "the dry gas's specific heat"),
+        "density": ("gas_density", "density", 0.52, 0.0, None,
+                    "the gas's density (a map's closure; default air at 400 C)"),
+        "viscosity": ("gas_viscosity", "viscosity", 3.3e-5, 0.0, None,
+                      "the gas's viscosity (a map's closure)"),
+        "conductivity": ("gas_conductivity", "thermal_conductivity", 0.051, 0.0, None,
+                         "the gas's conductivity (a map's closure)"),
         "flow": ("counter_current", None, "counter", None, None,
                  "\"counter\" (against the solids) or \"co\""),
     },
@@ -71,6 +77,8 @@ KEYS = {
                            "the solids' mean residence time, or \"friedman_marshall\""),
         "conductance_per_metre": ("conductance_per_metre", None, "perry", 0.0, None,
                                   "gas-solids W/(m K) per metre of drum, or \"perry\""),
+        "map": ("map", None, "", None, None, "a map.json of this drum's slices (taichi-dem "
+                "map), relative to this file: the residence and conductance from it"),
         "perry_k": ("perry_k", None, 0.5, 0.0, 100.0, "K in Perry's Ua = K G^0.67 / D, "
                                                       "Btu/(h ft3 F)"),
         "uncertainty": ("uncertainty", None, 0.25, GE0, 0.9,
@@ -111,6 +119,11 @@ def load(path) -> Dryer:
                     raise SceneError(str(p), name, "required")
                 continue
             value = table[key]
+            if attr == "map":
+                if not isinstance(value, str) or not value:
+                    raise SceneError(str(p), name, f"expected a path to a map.json, got {value!r}")
+                kw["map"] = str((p.parent / value).resolve())
+                continue
             if attr == "counter_current":
                 if value not in ("counter", "co"):
                     raise SceneError(str(p), name, f"expected \"counter\" or \"co\", got {value!r}")
@@ -135,6 +148,20 @@ def load(path) -> Dryer:
             if attr == "rpm":
                 number *= 60.0 / (2.0 * math.pi)       # rad/s -> rev/min
             kw[attr] = int(number) if attr == "cells" else number
+    map_path = kw.pop("map", None)
+    if map_path is not None:
+        if "residence_time" in kw or "conductance_per_metre" in kw:
+            raise SceneError(str(p), "closure.map", "a map gives the residence time and the "
+                             "conductance: leave residence_time and conductance_per_metre out")
+        from dataclasses import fields
+        from .dryer_map import closures
+        base = Dryer(source=str(p), **kw)
+        design = {f.name: getattr(base, f.name) for f in fields(base)}
+        found = closures(map_path, design, str(p))
+        kw.update({k: found[k] for k in ("residence_time", "residence_uncertainty",
+                                         "conductance_per_metre", "conductance_uncertainty",
+                                         "drive_torque")})
+        kw["map_info"] = found
     return Dryer(source=str(p), **kw)
 
 
@@ -162,6 +189,7 @@ ROWS = (("residence_time", "min", 1 / 60.0, ".3g"),
         ("shell_loss", "MW", 1e-6, ".3g"),
         ("burner_duty", "MW (the gas heated from ambient)", 1e-6, ".4g"),
         ("thermal_efficiency", "(heat to the solids / burner duty)", 1.0, ".3f"),
+        ("drive_torque", "kN m (from the map)", 1e-3, ".3g"),
         ("energy_closure", "of the burner duty", 1.0, ".1e"))
 
 
@@ -177,6 +205,12 @@ def report(d: Dryer, a: dict, spread: dict, title: str = "") -> str:
              f"{d.rpm:g} rpm; feed {d.feed * 3.6:.4g} t/h dry solids at "
              f"{d.feed_moisture * 100:.3g} % moisture and {d.feed_temperature - 273.15:.1f} C; "
              f"gas {d.gas_flow:g} kg/s dry at {d.gas_temperature - 273.15:.0f} C.", "",
+             ("Closures from the slices' map " + d.map_info["map_source"]
+              + f": the feed is carried at {d.map_info['map_holdup']:.4g} kg/m (dry), "
+              f"{d.map_info['map_airborne_fraction']:.1%} of it airborne, the curtains' "
+              f"coefficient h = {d.map_info['map_heat_transfer_coefficient']:.3g} W/(m^2 K); "
+              "the +- column is each figure's change with the closures moved by the map's "
+              "standard errors (added in quadrature)." if d.map_info else
              "Closures: residence "
              + (f"given ({d.residence_time:g} s)" if d.residence_time is not None
                 else "from Friedman & Marshall (1949)")
@@ -187,9 +221,11 @@ def report(d: Dryer, a: dict, spread: dict, title: str = "") -> str:
                      "W/(m K) per metre at the inlet gas flow)")
              + f". The +- column is each figure's change when each closure moves by "
                f"+-{d.uncertainty * 100:.0f} % (root sum of squares), a sensitivity, not a "
-               "measured scatter.", "",
+               "measured scatter."), "",
              "| figure | value | +- | unit |", "|---|---|---|---|"]
     for name, unit, scale, fmt in ROWS:
+        if not math.isfinite(a[name]):
+            continue
         value = _shown(a[name], scale)
         err = spread["combined"].get(name) if name in FIGURES else None
         err_text = format(err * (1.0 if scale is None else abs(scale)), ".2g") if err is not None else ""
@@ -201,6 +237,8 @@ def report(d: Dryer, a: dict, spread: dict, title: str = "") -> str:
     if a["gas_outlet_temperature"] < a["gas_outlet_dew_point"] + 10.0:
         notes.append("the gas leaves within 10 K of its dew point: water may condense in the "
                      "ducts and filter")
+    if d.map_info:
+        notes += d.map_info.get("map_notes", [])
     if a["solids_outlet_moisture"] > d.target_moisture:
         notes.append(f"the product leaves wetter than the {d.target_moisture * 100:.3g} % aimed "
                      "at: more gas, a hotter gas or a longer drum")

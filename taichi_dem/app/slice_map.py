@@ -22,6 +22,9 @@ surface_chord        m      the length of that surface across the shell (Saeman'
                             the top layer's centres
 axial_dispersion     m^2/s  D_ax: half the growth rate of the variance of the particles' unwrapped
                             axial displacements (app/dispersion.py), from the flow's steady start
+airborne_fraction    -      the mass fraction touching nothing, in flight (app/curtains.py)
+curtain_area_per_metre m^2/m those particles' surface per metre: what a dryer's gas meets
+curtain_slip_speed   m/s    their mean speed relative to the gas ([gas] velocity; at rest without)
 
 ``map_slices`` runs a scene at each hold-up (kg/m, or a fill fraction of the free section at
 a bulk solid fraction of BULK_SOLID_FRACTION) and reduces each series to its steady mean and
@@ -171,6 +174,13 @@ class SliceObserver:
         # each particle's unwrapped axial displacement: the axial dispersion (dispersion.py)
         from .dispersion import AxialDisplacements
         self.displacements = AxialDisplacements(geometry.length)
+        # the curtains (curtains.py): the bodies' meshes at their t = 0 placement, and the gas
+        # the particles fall through (a [gas] section's velocity; at rest without one)
+        import trimesh
+        self.meshes = [trimesh.Trimesh(np.asarray(b.vertices, float), np.asarray(b.faces),
+                                       process=False) for b in sim.scene.bodies]
+        gas = sim.scene.settings.get("gas")
+        self.gas_velocity = tuple(getattr(gas, "velocity", (0.0, 0.0, 0.0)))
 
     def _add(self, name: str, value: float):
         self.series.setdefault(name, []).append(float(value))
@@ -196,6 +206,12 @@ class SliceObserver:
         # chord Saeman's flow is computed from, measured rather than from an assumed packing
         self._add("surface_chord", surface_chord(slope, offset - float(np.mean(r)) if len(r)
                                                  else math.nan, g.shell_radius))
+        poses = sim.body_poses()
+        from .curtains import curtain_figures
+        for name, value in curtain_figures(
+                x, v, r, m, self.meshes, [poses[b.name] for b in self.scene.bodies], g.length,
+                g.axis, self.gas_velocity).items():
+            self._add(name, value)
         for body in self.scene.bodies:
             prefix = f"bodies/{body.name}/"
             for name, out in (("axial_torque", "torque_per_metre"), ("power", "power_per_metre"),
@@ -316,7 +332,8 @@ class SliceResult:
 FIGURES = {"axial_mass_flow": "kg/s", "axial_speed": "m/s", "slip_ratio": "-",
            "shell_layer_axial_speed": "m/s", "surface_chord": "m", "bed_solid_fraction": "-",
            "dynamic_angle": "deg", "saeman_flow": "kg/s", "saeman_ratio": "-",
-           "axial_dispersion": "m^2/s"}
+           "axial_dispersion": "m^2/s", "airborne_fraction": "-",
+           "curtain_area_per_metre": "m^2/m", "curtain_slip_speed": "m/s"}
 BODY_FIGURES = {"torque_per_metre": "N m/m", "power_per_metre": "W/m",
                 "covered_area_per_metre": "m^2/m", "heat_transfer_coefficient": "W/(m^2 K)",
                 "conductance_per_metre": "W/(m K)"}
@@ -370,7 +387,12 @@ def machine_info(scene, geometry: SliceGeometry, fill_index: int = 0) -> dict:
             "shell": scene.bodies[geometry.shell].name,
             "angular_speeds": speeds, "wall_temperatures": walls,
             "heat_capacity": (getattr(material, "heat_capacity", None)
-                              if scene.thermal is not None else None)}
+                              if scene.thermal is not None else None),
+            # the gas the curtains fell through ([gas]: its speed along the axis, m/s, and
+            # density, kg/m^3): a dryer marched on this map should blow as fast
+            "gas": ({"axial_velocity": float(np.asarray(gas.velocity, float) @ geometry.axis_direction),
+                     "density": float(gas.density)}
+                    if (gas := scene.settings.get("gas")) is not None else None)}
 
 
 def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float,

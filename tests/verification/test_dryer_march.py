@@ -188,3 +188,62 @@ def test_bad_input_names_the_file_key_and_reason(tmp_path, edit, key, reason):
     assert r.returncode == 2, r.stdout + r.stderr
     assert "Traceback" not in r.stderr
     assert str(bad) in r.stderr and key in r.stderr and reason in r.stderr
+
+
+def _map(tmp_path, diameter=1.0, rpm=8.0, incline=4.7):
+    """A map.json as `taichi-dem map` writes it, with made-up rows: the feed 0.5 kg/s is carried
+    at 20 kg/m."""
+    rows = []
+    for holdup, flow, area, slip, torque in ((10.0, -0.2, 0.5, 3.0, 40.0), (20.0, -0.5, 0.9, 3.4, 70.0),
+                                             (40.0, -1.2, 1.5, 3.6, 120.0)):
+        rows.append({"holdup_kg_per_m": holdup, "incline_deg": incline, "axial_slope": -0.08,
+                     "axial_mass_flow": flow, "axial_mass_flow_standard_error": 0.05 * abs(flow),
+                     "curtain_area_per_metre": area, "curtain_area_per_metre_standard_error": 0.1 * area,
+                     "curtain_slip_speed": slip, "curtain_slip_speed_standard_error": 0.0,
+                     "airborne_fraction": 0.1, "airborne_fraction_standard_error": 0.01,
+                     "drum/torque_per_metre": torque, "drum/torque_per_metre_standard_error": 1.0})
+    info = {"shell_radius": diameter / 2, "bulk_density": 1740.0, "particle_diameter": 0.024,
+            "angular_speeds": {"drum": rpm * 2 * math.pi / 60}, "bodies": ["drum"]}
+    path = tmp_path / "map.json"
+    path.write_text(json.dumps({"scene": "slice.toml", "machine": info, "rows": rows}))
+    return path
+
+
+def _design_with_map(tmp_path, map_path):
+    text = DESIGN.read_text().replace('diameter = "2.2 m"', 'diameter = "1.0 m"').replace(
+        'feed = "57.14 t/h"', 'feed = "0.5 kg/s"').replace(
+        "[shell]", f'[closure]\nmap = "{map_path.name}"\n\n[shell]')
+    path = tmp_path / "design.toml"
+    path.write_text(text)
+    return path
+
+
+def test_a_map_gives_the_residence_the_conductance_and_the_torque(tmp_path):
+    d = load(_design_with_map(tmp_path, _map(tmp_path)))
+    assert d.residence_time == pytest.approx(20.0 * 12.0 / 0.5)        # H L / F
+    # Ranz-Marshall on the curtains at 20 kg/m: a' = 0.9 m^2/m at 3.4 m/s
+    re = d.gas_density * 0.024 * 3.4 / d.gas_viscosity
+    pr = d.gas_heat_capacity * d.gas_viscosity / d.gas_conductivity
+    h = d.gas_conductivity * (2 + 0.6 * re ** 0.5 * pr ** (1 / 3)) / 0.024
+    assert d.conductance_per_metre == pytest.approx(h * 0.9, rel=1e-12)
+    assert d.drive_torque == pytest.approx(70.0 * 12.0)
+    assert d.residence_uncertainty == pytest.approx(0.05)
+    assert d.conductance_uncertainty == pytest.approx(0.1)
+    r = _cli("dryer", str(tmp_path / "design.toml"))
+    assert r.returncode == 0, r.stderr
+    assert "slices' map" in r.stdout and "drive torque" in r.stdout
+
+
+@pytest.mark.parametrize("change, reason", [({"diameter": 1.2}, "across"), ({"rpm": 5.0}, "rpm"),
+                                            ({"incline": 2.0}, "incline")])
+def test_a_map_of_another_drum_is_refused(tmp_path, change, reason):
+    path = _design_with_map(tmp_path, _map(tmp_path, **change))
+    r = _cli("dryer", str(path))
+    assert r.returncode == 2 and "closure.map" in r.stderr and reason in r.stderr, r.stderr
+
+
+def test_a_feed_outside_the_map_is_refused(tmp_path):
+    path = _design_with_map(tmp_path, _map(tmp_path))
+    path.write_text(path.read_text().replace('feed = "0.5 kg/s"', 'feed = "2 kg/s"'))
+    r = _cli("dryer", str(path))
+    assert r.returncode == 2 and "map more hold-ups" in r.stderr, r.stderr

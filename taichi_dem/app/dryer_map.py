@@ -1,0 +1,121 @@
+"""A dryer's closures from the map of its flighted drum's slices (``taichi-dem map`` of a
+slice such as demos/dryers/dryer_slice.toml) instead of the correlations (app/dryer.py).
+
+A flighted drum conveys by its flights' cascading at a rate set by its hold-up: the slice
+measures the axial mass flow q(H) at the drum's incline (with the gas's drag when the slice has
+a [gas]), and a whole drum fed F kg/s of dry solids runs at the hold-up per metre where
+|q(H)| = F, the same along its length (no depth gradient drives a flighted drum's flow as it
+does a bare drum's bed: app/machine.py). Then
+    residence time  tau = H L / F,
+    gas-solids conductance per metre  ha' = h a'(H),  h = k_g Nu / d,
+      Nu = 2 + 0.6 Re^(1/2) Pr^(1/3) (Ranz-Marshall), Re = rho_g d s(H) / mu_g,
+    with a'(H) the curtains' surface per metre and s(H) their speed through the gas
+    (app/curtains.py): only the airborne particles meet the gas,
+    drive torque  T(H) L  from the drum's torque per metre.
+Each is interpolated linearly in H between the mapped hold-ups; a feed that needs a hold-up
+outside the map is refused (map more hold-ups). The relative standard errors of q, a' and s at
+H become the closures' uncertainties (the report's +- column).
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+
+
+def _interpolate(rows, x_name, x, name):
+    """(value, standard error) of ``name`` at ``x_name`` = x, linear between rows."""
+    xs = np.array([r[x_name] for r in rows], float)
+    ys = np.array([r.get(name, math.nan) for r in rows], float)
+    es = np.array([r.get(name + "_standard_error", math.nan) or 0.0 for r in rows], float)
+    return float(np.interp(x, xs, ys)), float(np.interp(x, xs, es))
+
+
+def closures(path, design: dict, source: str) -> dict:
+    """The residence time (s), conductance per metre (W/(m K)), drive torque (N m) and their
+    relative uncertainties from the map at ``path`` for ``design`` (the Dryer's fields so far:
+    diameter, length, incline rad, rpm, feed kg/s and the gas's density, viscosity,
+    conductivity and heat capacity). SceneError (``source``, closure.map) when the map is not
+    of this drum or cannot carry the feed."""
+    key = "closure.map"
+    p = Path(path)
+    if p.is_dir():
+        p = p / "map.json"
+    try:
+        doc = json.loads(p.read_text())
+    except OSError as err:
+        raise SceneError(source, key, f"cannot read the map {p}: {err.strerror}") from None
+    except json.JSONDecodeError as err:
+        raise SceneError(source, key, f"{p} is not a map (JSON): {err}") from None
+    info, rows = doc.get("machine"), doc.get("rows") or []
+    if not isinstance(info, dict) or not rows:
+        raise SceneError(source, key, f"{p} is not a map of `taichi-dem map` (no machine "
+                         "section or no rows)")
+    if abs(2.0 * float(info["shell_radius"]) - design["diameter"]) > 0.01 * design["diameter"]:
+        raise SceneError(source, key, f"the map's drum is {2 * info['shell_radius']:.4g} m "
+                         f"across, the dryer's {design['diameter']:.4g} m: map a slice of this "
+                         "drum")
+    speeds = [abs(v) for v in info.get("angular_speeds", {}).values() if v]
+    rpm = max(speeds) * 60.0 / (2.0 * math.pi) if speeds else 0.0
+    if abs(rpm - design["rpm"]) > 0.01 * design["rpm"]:
+        raise SceneError(source, key, f"the map's drum turns at {rpm:.4g} rpm, the dryer's at "
+                         f"{design['rpm']:.4g} rpm")
+    incline = math.degrees(design["incline"])
+    mapped = sorted({round(float(r["incline_deg"]), 6) for r in rows})
+    near = min(mapped, key=lambda a: abs(a - incline))
+    if abs(near - incline) > 0.05:
+        raise SceneError(source, key, f"the map's inclines are {mapped} deg, the dryer's "
+                         f"{incline:.4g} deg: map the slice at the dryer's incline")
+    rows = sorted((r for r in rows if abs(float(r["incline_deg"]) - near) <= 1e-6),
+                  key=lambda r: float(r["holdup_kg_per_m"]))
+    for r in rows:
+        r["conveyed"] = abs(float(r["axial_mass_flow"]))
+    conveyed = [r["conveyed"] for r in rows]
+    feed = design["feed"]
+    if not conveyed[0] <= feed <= conveyed[-1] or np.any(np.diff(conveyed) <= 0.0):
+        raise SceneError(source, key, f"the feed {feed * 3.6:.4g} t/h needs a hold-up outside "
+                         f"the map (it conveys {conveyed[0] * 3.6:.3g} - {conveyed[-1] * 3.6:.3g} "
+                         "t/h, rising with the hold-up): map more hold-ups")
+    holdup = float(np.interp(feed, conveyed, [float(r["holdup_kg_per_m"]) for r in rows]))
+    flow, flow_error = _interpolate(rows, "holdup_kg_per_m", holdup, "axial_mass_flow")
+    area, area_error = _interpolate(rows, "holdup_kg_per_m", holdup, "curtain_area_per_metre")
+    slip, slip_error = _interpolate(rows, "holdup_kg_per_m", holdup, "curtain_slip_speed")
+    if not (math.isfinite(area) and math.isfinite(slip)):
+        raise SceneError(source, key, f"{p} has no curtain figures (map the slice again with "
+                         "this version of taichi-dem map)")
+    d = float(info["particle_diameter"])
+    reynolds = design["gas_density"] * d * slip / design["gas_viscosity"]
+    prandtl = design["gas_heat_capacity"] * design["gas_viscosity"] / design["gas_conductivity"]
+    nusselt = 2.0 + 0.6 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0)
+    h = design["gas_conductivity"] * nusselt / d
+    # dh/h = (0.3 Re^0.5 Pr^(1/3) / Nu) ds/s
+    slip_share = 0.3 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0) / nusselt
+    notes = []
+    gas = info.get("gas")
+    if gas:
+        speed = design["gas_flow"] / (design["gas_density"] * math.pi * design["diameter"] ** 2 / 4)
+        if abs(speed - abs(gas["axial_velocity"])) > 0.25 * abs(gas["axial_velocity"]):
+            notes.append(f"the dryer's gas moves at {speed:.3g} m/s (its mass flow over its "
+                         f"density and the drum's section), the map's at "
+                         f"{abs(gas['axial_velocity']):.3g} m/s: the curtains' exposure and the "
+                         "drag on the transport were measured at another gas speed")
+    torques = [n for n in rows[0] if n.endswith("/torque_per_metre")]
+    torque = sum(_interpolate(rows, "holdup_kg_per_m", holdup, n)[0] for n in torques)
+    return {
+        "residence_time": holdup * design["length"] / feed,
+        "residence_uncertainty": abs(flow_error / flow) if flow else 0.0,
+        "conductance_per_metre": h * area,
+        "conductance_uncertainty": math.hypot(area_error / area if area else 0.0,
+                                              slip_share * slip_error / slip if slip else 0.0),
+        "drive_torque": abs(torque) * design["length"],
+        "map_holdup": holdup,
+        "map_airborne_fraction": _interpolate(rows, "holdup_kg_per_m", holdup,
+                                              "airborne_fraction")[0],
+        "map_heat_transfer_coefficient": h,
+        "map_source": str(p),
+        "map_notes": notes,
+    }
