@@ -458,8 +458,8 @@ class DryerDrum(Process):
         dem = heat / difference if difference > 0 else math.nan
         perry = perry_volumetric_coefficient(gas.mass_flow / area, 2 * radius) * area
         sensor = next((x.name for x in scene.sensors if x.kind == "residence_time"), None)
-        times = sim.residence_times(sensor) if sensor else np.zeros(0)
-        median = float(np.median(times)) if len(times) else math.nan
+        rows = sim.residence_times(sensor) if sensor else np.zeros((0, 3))
+        median = float(np.median(rows[:, 2] - rows[:, 1])) if len(rows) else math.nan
         from .slice_map import BULK_SOLID_FRACTION
         bulk = BULK_SOLID_FRACTION * scene.materials[scene.factories[0].material].density
         fill = float(np.sum(sim.particles()["mass"])) / (bulk * area * gas.length)
@@ -473,14 +473,36 @@ class DryerDrum(Process):
               "piece of one (its aggregate's rolling friction, 0.05 on single spheres, lets "
               "spheres roll freely); a whole dryer's answers come from the march below.")
 
+    PILOT = "dryers/pilot_dryer.toml"
+
     def _whole_dryer(self):
-        """The real-size dryer of demos/dryers/aggregate_dryer.toml, marched (app/dryer.py)."""
-        from .dryer_command import report, run
-        path = DEMOS_DIR / self.DESIGN
-        d, a, spread = run(path)
+        """The real-size dryer of demos/dryers/aggregate_dryer.toml, marched (app/dryer.py);
+        then this drum as a 6 m pilot dryer on the DEM map of its own slices, beside the same
+        pilot on the correlations."""
+        from dataclasses import replace
+        from .dryer import answer
+        from .dryer_command import load, report, run
+        d, a, spread = run(DEMOS_DIR / self.DESIGN)
         print(f"summary: the dryer this demo stands for ({self.DESIGN}, `taichi-dem dryer`), "
               "marched along its length:")
         print(report(d, a, spread, "aggregate dryer"))
+        pilot = load(DEMOS_DIR / self.PILOT)
+        on_map = answer(pilot)
+        on_correlations = answer(replace(pilot, residence_time=None, conductance_per_metre=None,
+                                         map_info=None, drive_torque=None))
+        words = []
+        for label, x in (("on the DEM map of this drum's slices", on_map),
+                         ("on the correlations", on_correlations)):
+            words.append(f"{label}: residence {x['residence_time'] / 60:.3g} min, gas-solids "
+                         f"{x['conductance_per_metre']:.3g} W/(m K) per metre, the solids leave at "
+                         f"{x['solids_outlet_temperature'] - 273.15:.0f} C with "
+                         f"{x['solids_outlet_moisture']:.1%} moisture, the gas at "
+                         f"{x['gas_outlet_temperature'] - 273.15:.0f} C")
+        print(f"summary: this drum as a {pilot.length:g} m pilot dryer fed "
+              f"{pilot.feed * 3.6 * (1 + pilot.feed_moisture):.3g} t/h ({self.PILOT}): "
+              + "; ".join(words) + ". The map's aggregate is not calibrated and rolls freely: "
+              "it runs through faster and shows the gas less surface than the correlations' "
+              "dryers (docs/machine/dryer_slice).")
 
 
 class SlotHopper(Demo):
