@@ -136,6 +136,9 @@ class Dryer:
     conductance_uncertainty: float | None = None
     drive_torque: float | None = None            # N m
     map_info: dict | None = None
+    # the closures moved by these factors (the sensitivity, the capacity's)
+    residence_factor: float = 1.0
+    conductance_factor: float = 1.0
 
     @property
     def area(self) -> float:
@@ -145,8 +148,8 @@ class Dryer:
     def residence(self) -> float:
         """Mean residence time of the solids (s): the given one, or Friedman-Marshall's."""
         if self.residence_time is not None:
-            return self.residence_time
-        return friedman_marshall_residence(
+            return self.residence_time * self.residence_factor
+        return self.residence_factor * friedman_marshall_residence(
             self.length, self.diameter, self.incline, self.rpm, self.particle_diameter,
             self.gas_flow * (1.0 + self.gas_humidity) / self.area,
             self.feed * (1.0 + self.feed_moisture) / self.area, self.counter_current)
@@ -154,9 +157,9 @@ class Dryer:
     def conductance(self, gas_flow_with_vapour: float) -> float:
         """Gas-solids conductance per metre of drum (W/(m K)) at a local gas flow (kg/s)."""
         if self.conductance_per_metre is not None:
-            return self.conductance_per_metre
-        return perry_volumetric_coefficient(gas_flow_with_vapour / self.area, self.diameter,
-                                            self.perry_k) * self.area
+            return self.conductance_per_metre * self.conductance_factor
+        return self.conductance_factor * perry_volumetric_coefficient(
+            gas_flow_with_vapour / self.area, self.diameter, self.perry_k) * self.area
 
 
 # ---- the parcel of solids: thermal/moisture.py's step, with the falling rate ---------------
@@ -346,10 +349,9 @@ def sensitivity(d: Dryer, base: dict | None = None) -> dict:
     +- d.uncertainty: {closure: {figure: change}} and their root sum of squares."""
     base = base or answer(d)
     out = {}
-    tau, ha = d.residence(), d.conductance(d.gas_flow * (1.0 + d.gas_humidity))
     own = {"residence": d.residence_uncertainty, "conductance": d.conductance_uncertainty}
-    for name, changed in (("residence", lambda f: replace(d, residence_time=tau * f)),
-                          ("conductance", lambda f: replace(d, conductance_per_metre=ha * f))):
+    for name, changed in (("residence", lambda f: replace(d, residence_factor=f)),
+                          ("conductance", lambda f: replace(d, conductance_factor=f))):
         moved = {}
         u = d.uncertainty if own[name] is None else own[name]
         for f in (1.0 + u, 1.0 - u):
@@ -360,3 +362,22 @@ def sensitivity(d: Dryer, base: dict | None = None) -> dict:
     out["combined"] = {k: math.hypot(*(out[c][k] for c in ("residence", "conductance")))
                        for k in FIGURES}
     return out
+
+
+def drying_capacity(at_feed, low: float, high: float, target: float, cells: int = 200,
+                    tolerance: float = 0.01) -> tuple[float, str]:
+    """The largest dry feed (kg/s) in [low, high] whose product leaves at or below ``target``
+    moisture (kg/kg): bisection to ``tolerance`` (relative) on ``at_feed(feed) -> Dryer`` (the
+    dryer at that feed, its closures re-derived: a map's hold-up changes with the feed) marched
+    in ``cells`` cells. Returns (feed, "") or the bound with why: (high, "above") when even the
+    highest dries, (low, "below") when even the lowest does not."""
+    def dries(feed):
+        return answer(replace(at_feed(feed), cells=cells))["solids_outlet_moisture"] <= target
+    if dries(high):
+        return high, "above"
+    if not dries(low):
+        return low, "below"
+    while high - low > tolerance * high:
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if dries(mid) else (low, mid)
+    return low, ""

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ..errors import SceneError
-from .dryer import FIGURES, Dryer, answer, sensitivity
+from .dryer import Dryer, answer, sensitivity
 
 # section -> key -> (Dryer field, dimension, default (None: required), lower bound, upper bound,
 # description). A dimension of None: a plain number in the unit the description gives. A lower
@@ -89,9 +89,10 @@ KEYS = {
 ABOUT = "about"          # free text: what the design is and where its numbers come from
 
 
-def load(path) -> Dryer:
-    """A dryer design file (TOML; the sections and keys of KEYS) as a Dryer; bad input is a
-    SceneError naming the file, key and reason."""
+def load(path, feed: float | None = None) -> Dryer:
+    """A dryer design file (TOML; the sections and keys of KEYS) as a Dryer (at ``feed`` kg/s
+    of dry solids instead of the file's, when given: a map's closures follow it); bad input is
+    a SceneError naming the file, key and reason."""
     from ..scene.loader import read_toml
     from ..scene.units import parse_quantity
     p = Path(path)
@@ -148,6 +149,8 @@ def load(path) -> Dryer:
             if attr == "rpm":
                 number *= 60.0 / (2.0 * math.pi)       # rad/s -> rev/min
             kw[attr] = int(number) if attr == "cells" else number
+    if feed is not None:
+        kw["feed"] = feed
     map_path = kw.pop("map", None)
     if map_path is not None:
         if "residence_time" in kw or "conductance_per_metre" in kw:
@@ -190,6 +193,7 @@ ROWS = (("residence_time", "min", 1 / 60.0, ".3g"),
         ("burner_duty", "MW (the gas heated from ambient)", 1e-6, ".4g"),
         ("thermal_efficiency", "(heat to the solids / burner duty)", 1.0, ".3f"),
         ("drive_torque", "kN m (from the map)", 1e-3, ".3g"),
+        ("drying_capacity", "t/h of dry solids dried to the target moisture", 3.6, ".3g"),
         ("energy_closure", "of the burner duty", 1.0, ".1e"))
 
 
@@ -224,12 +228,16 @@ def report(d: Dryer, a: dict, spread: dict, title: str = "") -> str:
                "measured scatter."), "",
              "| figure | value | +- | unit |", "|---|---|---|---|"]
     for name, unit, scale, fmt in ROWS:
-        if not math.isfinite(a[name]):
+        if not math.isfinite(a.get(name, math.nan)):
             continue
         value = _shown(a[name], scale)
-        err = spread["combined"].get(name) if name in FIGURES else None
+        err = spread["combined"].get(name)
         err_text = format(err * (1.0 if scale is None else abs(scale)), ".2g") if err is not None else ""
-        lines.append(f"| {name.replace('_', ' ')} | {format(value, fmt)} | {err_text} | {unit} |")
+        shown = format(value, fmt)
+        if name == "drying_capacity" and a.get("drying_capacity_bound"):
+            shown = {"above": "> ", "below": "< "}[a["drying_capacity_bound"]] + shown
+            err_text = ""
+        lines.append(f"| {name.replace('_', ' ')} | {shown} | {err_text} | {unit} |")
     notes = []
     if not 0.03 <= a["fill_fraction"] <= 0.08 and d.residence_time is None:
         notes.append(f"the fill ({a['fill_fraction'] * 100:.2g} %) is outside the 3-8 % of drum "
@@ -239,6 +247,10 @@ def report(d: Dryer, a: dict, spread: dict, title: str = "") -> str:
                      "ducts and filter")
     if d.map_info:
         notes += d.map_info.get("map_notes", [])
+    bound = a.get("drying_capacity_bound")
+    if bound:
+        notes.append(f"the drying capacity is {bound} the feeds searched "
+                     + ("(the map's)" if d.map_info else "(0.05 - 5x the design's)"))
     if a["solids_outlet_moisture"] > d.target_moisture:
         notes.append(f"the product leaves wetter than the {d.target_moisture * 100:.3g} % aimed "
                      "at: more gas, a hotter gas or a longer drum")
@@ -266,14 +278,47 @@ def _plot(a: dict, path: Path) -> None:
     plt.close(fig)
 
 
-def run(path, flow: str | None = None) -> tuple[Dryer, dict, dict]:
-    """Load, march and measure the sensitivity of the dryer in ``path``."""
+def run(path, flow: str | None = None, capacity: bool = True) -> tuple[Dryer, dict, dict]:
+    """Load, march and measure the sensitivity of the dryer in ``path``; with ``capacity``
+    also its drying capacity (the largest dry feed it dries to the target moisture) and that
+    figure's sensitivity to the closures."""
     from dataclasses import replace
     d = load(path)
     if flow is not None:
         d = replace(d, counter_current=flow == "counter")
     a = answer(d)
-    return d, a, sensitivity(d, a)
+    spread = sensitivity(d, a)
+    if capacity:
+        a["drying_capacity"], a["drying_capacity_bound"], moved = _capacity(path, d)
+        spread["combined"]["drying_capacity"] = moved
+    return d, a, spread
+
+
+def _capacity(path, d: Dryer):
+    """(capacity kg/s, "" or "above"/"below" the searched range, its sensitivity kg/s)."""
+    from dataclasses import replace
+    from .dryer import drying_capacity
+    if d.map_info:
+        low, high = d.map_info["map_feed_range"]
+    else:
+        low, high = 0.05 * d.feed, 5.0 * d.feed
+
+    def at_feed(feed, residence=1.0, conductance=1.0):
+        return replace(load(path, feed=feed), counter_current=d.counter_current,
+                       residence_factor=residence, conductance_factor=conductance)
+    value, bound = drying_capacity(at_feed, low, high, d.target_moisture)
+    own = {"residence": d.residence_uncertainty, "conductance": d.conductance_uncertainty}
+    moves = []
+    for name in ("residence", "conductance"):
+        u = d.uncertainty if own[name] is None else own[name]
+        moved = 0.0
+        for f in (1.0 + u, 1.0 - u):
+            kw = {name: f}
+            other, _ = drying_capacity(lambda feed: at_feed(feed, **kw), low, high,
+                                       d.target_moisture)
+            moved = max(moved, abs(other - value))
+        moves.append(moved)
+    return value, bound, math.hypot(*moves)
 
 
 def cmd_dryer(args) -> int:

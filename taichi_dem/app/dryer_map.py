@@ -118,4 +118,5 @@ def closures(path, design: dict, source: str) -> dict:
         "map_heat_transfer_coefficient": h,
         "map_source": str(p),
         "map_notes": notes,
+        "map_feed_range": (conveyed[0], conveyed[-1]),
     }

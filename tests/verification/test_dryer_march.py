@@ -247,3 +247,15 @@ def test_a_feed_outside_the_map_is_refused(tmp_path):
     path.write_text(path.read_text().replace('feed = "0.5 kg/s"', 'feed = "2 kg/s"'))
     r = _cli("dryer", str(path))
     assert r.returncode == 2 and "map more hold-ups" in r.stderr, r.stderr
+
+
+def test_the_drying_capacity_is_the_feed_dried_to_the_target():
+    from taichi_dem.app.dryer_command import run
+    d, a, spread = run(DESIGN)
+    capacity = a["drying_capacity"]
+    assert a["drying_capacity_bound"] == "" and capacity > d.feed        # the design dries
+    at = answer(replace(d, feed=capacity, residence_time=None, cells=200))
+    over = answer(replace(d, feed=1.02 * capacity, residence_time=None, cells=200))
+    # the bisection's 1 %: the product is dry enough at the capacity and not 2 % above it
+    assert at["solids_outlet_moisture"] <= d.target_moisture < over["solids_outlet_moisture"]
+    assert spread["combined"]["drying_capacity"] > 0.0
