@@ -78,7 +78,8 @@ KEYS = {
         "conductance_per_metre": ("conductance_per_metre", None, "perry", 0.0, None,
                                   "gas-solids W/(m K) per metre of drum, or \"perry\""),
         "map": ("map", None, "", None, None, "a map.json of this drum's slices (taichi-dem "
-                "map), relative to this file: the residence and conductance from it"),
+                "map), relative to this file, or a list of maps at several gas speeds: the "
+                "residence, conductance and torque from it"),
         "perry_k": ("perry_k", None, 0.5, 0.0, 100.0, "K in Perry's Ua = K G^0.67 / D, "
                                                       "Btu/(h ft3 F)"),
         "uncertainty": ("uncertainty", None, 0.25, GE0, 0.9,
@@ -121,9 +122,13 @@ def load(path, feed: float | None = None) -> Dryer:
                 continue
             value = table[key]
             if attr == "map":
-                if not isinstance(value, str) or not value:
-                    raise SceneError(str(p), name, f"expected a path to a map.json, got {value!r}")
-                kw["map"] = str((p.parent / value).resolve())
+                paths = [value] if isinstance(value, str) else value
+                if (not isinstance(paths, list) or not paths
+                        or not all(isinstance(v, str) and v for v in paths)):
+                    raise SceneError(str(p), name, "expected a path to a map.json or a list of "
+                                     f"them (maps at several gas speeds), got {value!r}")
+                resolved = [str((p.parent / v).resolve()) for v in paths]
+                kw["map"] = resolved[0] if isinstance(value, str) else resolved
                 continue
             if attr == "counter_current":
                 if value not in ("counter", "co"):
@@ -157,10 +162,10 @@ def load(path, feed: float | None = None) -> Dryer:
             raise SceneError(str(p), "closure.map", "a map gives the residence time and the "
                              "conductance: leave residence_time and conductance_per_metre out")
         from dataclasses import fields
-        from .dryer_map import closures
+        from .dryer_map import closures_over_gas
         base = Dryer(source=str(p), **kw)
         design = {f.name: getattr(base, f.name) for f in fields(base)}
-        found = closures(map_path, design, str(p))
+        found = closures_over_gas(map_path, design, str(p))
         kw.update({k: found[k] for k in ("residence_time", "residence_uncertainty",
                                          "conductance_per_metre", "conductance_uncertainty",
                                          "drive_torque")})

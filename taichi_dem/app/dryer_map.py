@@ -14,7 +14,9 @@ does a bare drum's bed: app/machine.py). Then
     drive torque  T(H) L  from the drum's torque per metre.
 Each is interpolated linearly in H between the mapped hold-ups; a feed that needs a hold-up
 outside the map is refused (map more hold-ups). The relative standard errors of q, a' and s at
-H become the closures' uncertainties (the report's +- column).
+H become the closures' uncertainties (the report's +- column). Maps of the same drum blown at
+several gas speeds (each map records its [gas]) are interpolated in the gas speed as well
+(``closures_over_gas``): the map over hold-up and gas mass velocity.
 """
 from __future__ import annotations
 
@@ -119,4 +121,43 @@ def closures(path, design: dict, source: str) -> dict:
         "map_source": str(p),
         "map_notes": notes,
         "map_feed_range": (conveyed[0], conveyed[-1]),
+        "map_gas_speed": abs(float(gas["axial_velocity"])) if gas else None,
     }
+
+
+def closures_over_gas(paths, design: dict, source: str) -> dict:
+    """``closures`` from several maps of the same drum blown at different gas speeds (each
+    map's ``machine.gas``): each figure interpolated linearly in the gas's axial speed at the
+    dryer's (its dry gas and vapour at the inlet over its density and the drum's section); a
+    dryer outside the mapped speeds takes the nearest map's, with a note."""
+    if isinstance(paths, str):
+        return closures(paths, design, source)
+    found = []
+    for path in paths:
+        c = closures(path, design, source)
+        if c["map_gas_speed"] is None:
+            raise SceneError(source, "closure.map", f"{c['map_source']} does not record its "
+                             "gas (map it again with this version of taichi-dem map): with "
+                             "several maps each must say its gas speed")
+        found.append(c)
+    found.sort(key=lambda c: c["map_gas_speed"])
+    speeds = [c["map_gas_speed"] for c in found]
+    if len(set(speeds)) != len(speeds):
+        raise SceneError(source, "closure.map", f"two maps at the same gas speed ({speeds} m/s)")
+    speed = design["gas_flow"] * (1.0 + design["gas_humidity"]) / (
+        design["gas_density"] * math.pi * design["diameter"] ** 2 / 4.0)
+    notes = []
+    if not speeds[0] <= speed <= speeds[-1]:
+        notes.append(f"the dryer's gas ({speed:.3g} m/s) is outside the maps' {speeds[0]:.3g} - "
+                     f"{speeds[-1]:.3g} m/s: the nearest map's figures are used")
+    out = dict(found[0])
+    for name in ("residence_time", "residence_uncertainty", "conductance_per_metre",
+                 "conductance_uncertainty", "drive_torque", "map_holdup",
+                 "map_airborne_fraction", "map_heat_transfer_coefficient"):
+        out[name] = float(np.interp(speed, speeds, [c[name] for c in found]))
+    out["map_source"] = " + ".join(f"{c['map_source']} ({c['map_gas_speed']:.3g} m/s)" for c in found)
+    out["map_notes"] = notes
+    out["map_feed_range"] = (max(c["map_feed_range"][0] for c in found),
+                             min(c["map_feed_range"][1] for c in found))
+    out["map_gas_speed"] = speed
+    return out

@@ -190,12 +190,14 @@ def test_bad_input_names_the_file_key_and_reason(tmp_path, edit, key, reason):
     assert str(bad) in r.stderr and key in r.stderr and reason in r.stderr
 
 
-def _map(tmp_path, diameter=1.0, rpm=8.0, incline=4.7):
+def _map(tmp_path, diameter=1.0, rpm=8.0, incline=4.7, gas=None, slower=1.0, name="map.json"):
     """A map.json as `taichi-dem map` writes it, with made-up rows: the feed 0.5 kg/s is carried
-    at 20 kg/m."""
+    at 20 kg/m (at 20 * ``slower`` kg/m with the flows divided by ``slower``); ``gas``: the
+    slice's gas speed along the axis (m/s), recorded as the map does."""
     rows = []
     for holdup, flow, area, slip, torque in ((10.0, -0.2, 0.5, 3.0, 40.0), (20.0, -0.5, 0.9, 3.4, 70.0),
                                              (40.0, -1.2, 1.5, 3.6, 120.0)):
+        flow /= slower
         rows.append({"holdup_kg_per_m": holdup, "incline_deg": incline, "axial_slope": -0.08,
                      "axial_mass_flow": flow, "axial_mass_flow_standard_error": 0.05 * abs(flow),
                      "curtain_area_per_metre": area, "curtain_area_per_metre_standard_error": 0.1 * area,
@@ -203,8 +205,9 @@ def _map(tmp_path, diameter=1.0, rpm=8.0, incline=4.7):
                      "airborne_fraction": 0.1, "airborne_fraction_standard_error": 0.01,
                      "drum/torque_per_metre": torque, "drum/torque_per_metre_standard_error": 1.0})
     info = {"shell_radius": diameter / 2, "bulk_density": 1740.0, "particle_diameter": 0.024,
-            "angular_speeds": {"drum": rpm * 2 * math.pi / 60}, "bodies": ["drum"]}
-    path = tmp_path / "map.json"
+            "angular_speeds": {"drum": rpm * 2 * math.pi / 60}, "bodies": ["drum"],
+            "gas": {"axial_velocity": gas, "density": 0.46} if gas is not None else None}
+    path = tmp_path / name
     path.write_text(json.dumps({"scene": "slice.toml", "machine": info, "rows": rows}))
     return path
 
@@ -259,3 +262,27 @@ def test_the_drying_capacity_is_the_feed_dried_to_the_target():
     # the bisection's 1 %: the product is dry enough at the capacity and not 2 % above it
     assert at["solids_outlet_moisture"] <= d.target_moisture < over["solids_outlet_moisture"]
     assert spread["combined"]["drying_capacity"] > 0.0
+
+
+def test_maps_at_two_gas_speeds_are_interpolated_in_the_gas_speed(tmp_path):
+    """The map over hold-up and gas mass velocity: a dryer blowing halfway between two maps'
+    gas speeds takes the mean of their closures (linear in the speed)."""
+    one = _map(tmp_path, gas=1.0, name="one.json")
+    two = _map(tmp_path, gas=3.0, slower=1.25, name="two.json")     # the gas holds solids back
+    text = _design_with_map(tmp_path, one).read_text()
+    density = 0.46
+    flow = 2.0 * density * math.pi / 4                              # 2 m/s through 1 m
+    text = text.replace('map = "one.json"', 'map = ["one.json", "two.json"]').replace(
+        'mass_flow = "6.5 kg/s"', f'mass_flow = "{flow!r} kg/s"').replace(
+        "humidity = 0.02 ", "humidity = 0.0 ").replace(
+        'heat_capacity = 1150.0', f'heat_capacity = 1150.0\ndensity = {density}')
+    path = tmp_path / "two_speeds.toml"
+    path.write_text(text)
+    d = load(path)
+    holdup_two = 20.0 + (0.5 - 0.4) / (0.96 - 0.4) * 20.0              # the flows / 1.25
+    tau_one, tau_two = 20.0 * 12.0 / 0.5, holdup_two * 12.0 / 0.5
+    assert d.residence_time == pytest.approx(0.5 * (tau_one + tau_two), rel=1e-9)
+    assert "one.json (1 m/s)" in d.map_info["map_source"] and d.map_info["map_notes"] == []
+    faster = tmp_path / "faster.toml"
+    faster.write_text(text.replace(f'mass_flow = "{flow!r} kg/s"', f'mass_flow = "{3 * flow!r} kg/s"'))
+    assert "outside the maps'" in load(faster).map_info["map_notes"][0]
