@@ -36,6 +36,14 @@ up to 25 % (why its tail is that long was not looked into). The tolerances are t
 the larger of the two spreads (torque +- 2.54 N m, shell heat flow +- 618 W, 4.6 %; residence
 keeps +- 0.31 s); the means stay the seeds', which the perturbed runs' agree with (-8.98
 against -9.11 N m, 13534 against 13565 W).
+
+The residence pin moved on 2026-12-06: on that day's machine (same code: the tree of
+2026-12-05 gives the same 2.629 s) seed 1 read 2.629 s and seeds 2-4 2.698, 2.938 and 2.858 s
+(tests/regression/cooler_reference.py 2 3 4; torques -7.76, -8.95, -9.07 N m, shell heat
+flows 13138 - 13625 W, inside the pins): every seed's trajectory had changed, as the last bit
+of a library's arithmetic (a numpy or OpenBLAS kernel picked for the processor) changes a
+chaotic flow's. The residence is pinned to the eight runs of the two machines, seeds 1-4 each:
+mean 2.870 s, std 0.150 (+- 0.45 s at 3 std), a scatter of machines as well as of seeds.
 """
 import numpy as np
 import pytest
@@ -43,7 +51,7 @@ import pytest
 from cooler_reference import T0, UNTIL, run
 
 TORQUE_MEAN, TORQUE_STD = -8.982, 0.848         # (std: the round-off runs', above)
-RESIDENCE_MEAN, RESIDENCE_STD = 2.960, 0.104
+RESIDENCE_MEAN, RESIDENCE_STD = 2.870, 0.150       # (seeds 1-4 on two machines, above)
 SHELL_HEAT_MEAN, SHELL_HEAT_STD = 13534.0, 206.0  # (std: the round-off runs', above)
 
 
