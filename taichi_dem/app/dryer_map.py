@@ -20,9 +20,7 @@ several gas speeds (each map records its [gas]) are interpolated in the gas spee
 """
 from __future__ import annotations
 
-import json
 import math
-from pathlib import Path
 
 import numpy as np
 
@@ -43,16 +41,9 @@ def closures(path, design: dict, source: str) -> dict:
     diameter, length, incline rad, rpm, feed kg/s and the gas's density, viscosity,
     conductivity and heat capacity). SceneError (``source``, closure.map) when the map is not
     of this drum or cannot carry the feed."""
+    from .machine import read_map
     key = "closure.map"
-    p = Path(path)
-    if p.is_dir():
-        p = p / "map.json"
-    try:
-        doc = json.loads(p.read_text())
-    except OSError as err:
-        raise SceneError(source, key, f"cannot read the map {p}: {err.strerror}") from None
-    except json.JSONDecodeError as err:
-        raise SceneError(source, key, f"{p} is not a map (JSON): {err}") from None
+    p, doc = read_map(path)
     info, rows = doc.get("machine"), doc.get("rows") or []
     if not isinstance(info, dict) or not rows:
         raise SceneError(source, key, f"{p} is not a map of `taichi-dem map` (no machine "

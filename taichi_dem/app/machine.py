@@ -122,6 +122,20 @@ class MapRow:
         return self.figures.get(name, (math.nan, 0.0))[0]
 
 
+def read_map(path) -> tuple[Path, dict]:
+    """(the file, its JSON) of a ``map.json`` written by ``taichi-dem map`` (or its folder);
+    an unreadable or malformed file is a SceneError naming it."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "map.json"
+    try:
+        return path, json.loads(path.read_text())
+    except OSError as err:
+        raise SceneError(str(path), "", f"cannot read the map: {err.strerror}") from None
+    except json.JSONDecodeError as err:
+        raise SceneError(str(path), "", f"not a map (JSON): {err}") from None
+
+
 @dataclass
 class MachineMap:
     """A map (the rows of ``taichi-dem map``) and what the march needs of the slice: its
@@ -139,15 +153,7 @@ class MachineMap:
     @classmethod
     def load(cls, path) -> "MachineMap":
         """Read a ``map.json`` written by ``taichi-dem map`` (or its folder)."""
-        path = Path(path)
-        if path.is_dir():
-            path = path / "map.json"
-        try:
-            doc = json.loads(path.read_text())
-        except OSError as err:
-            raise SceneError(str(path), "", f"cannot read the map: {err.strerror}") from None
-        except json.JSONDecodeError as err:
-            raise SceneError(str(path), "", f"not a map (JSON): {err}") from None
+        path, doc = read_map(path)
         info = doc.get("machine")
         if not isinstance(info, dict):
             raise SceneError(str(path), "machine", "the map has no 'machine' section (write "
