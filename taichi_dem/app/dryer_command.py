@@ -84,7 +84,7 @@ KEYS = {
                                                       "Btu/(h ft3 F)"),
         "uncertainty": ("uncertainty", None, 0.25, GE0, 0.9,
                         "each closure's relative uncertainty, for the sensitivity"),
-        "cells": ("cells", None, 800, 9.0, 1e6, "cells along the drum in the march"),
+        "cells": ("cells", None, 800, 9.0, 1e4, "cells along the drum in the march"),
     },
 }
 ABOUT = "about"          # free text: what the design is and where its numbers come from
@@ -105,6 +105,8 @@ def load(path, feed: float | None = None) -> Dryer:
     for section in data:
         if section not in KEYS and section != ABOUT:
             raise SceneError(str(p), section, "unknown section; known: " + ", ".join(KEYS))
+    if not isinstance(data.get(ABOUT, ""), str):
+        raise SceneError(str(p), ABOUT, f"expected text, got {data[ABOUT]!r}")
     kw = {}
     for section, keys in KEYS.items():
         table = data.get(section, {})

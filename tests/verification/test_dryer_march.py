@@ -24,6 +24,7 @@ import pytest
 from taichi_dem.app import dryer
 from taichi_dem.app.dryer import Dryer, answer
 from taichi_dem.app.dryer_command import load
+from taichi_dem.errors import SceneError
 
 ROOT = Path(__file__).resolve().parents[2]
 DESIGN = ROOT / "demos" / "dryers" / "aggregate_dryer.toml"
@@ -286,3 +287,18 @@ def test_maps_at_two_gas_speeds_are_interpolated_in_the_gas_speed(tmp_path):
     faster = tmp_path / "faster.toml"
     faster.write_text(text.replace(f'mass_flow = "{flow!r} kg/s"', f'mass_flow = "{3 * flow!r} kg/s"'))
     assert "outside the maps'" in load(faster).map_info["map_notes"][0]
+
+
+@pytest.mark.parametrize("edit, key, reason", [
+    (("[drum]", "[closure]\ncells = 1000000\n[drum]"), "closure.cells", "<= 10000"),
+    (('about = "aggregate dryer, seed 002\'s material and incline; drum and gas chosen"',
+      "about = 3"), "about", "expected text"),
+])
+def test_more_bad_input(tmp_path, edit, key, reason):
+    text = DESIGN.read_text()
+    assert edit[0] in text
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace(edit[0], edit[1], 1))
+    with pytest.raises(SceneError) as err:
+        load(bad)
+    assert key in str(err.value) and reason in str(err.value)
