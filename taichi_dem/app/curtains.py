@@ -68,9 +68,28 @@ def touching_bodies(position: np.ndarray, radius: np.ndarray, meshes, poses) -> 
         idx = np.nonzero(candidate & ~out)[0]
         if len(idx) == 0:
             continue
-        _, distance, _ = trimesh.proximity.closest_point_naive(mesh, local[idx])
-        out[idx[distance <= radius[idx] * (1.0 + CONTACT_TOLERANCE)]] = True
+        out[idx[_within(mesh, local[idx], radius[idx] * (1.0 + CONTACT_TOLERANCE))]] = True
     return out
+
+
+def _within(mesh, points: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """(N,) bool: the point is within ``reach`` (m, per point) of a triangle of ``mesh``.
+    Exact: the triangles are first narrowed to those whose bounding sphere (about the centroid)
+    comes within reach (a KD-tree on the centroids), then measured by trimesh's closest point."""
+    import trimesh
+    from scipy.spatial import cKDTree
+    triangles = np.asarray(mesh.triangles, float)
+    centroid = triangles.mean(axis=1)
+    sphere = float(np.max(np.linalg.norm(triangles - centroid[:, None, :], axis=2)))
+    near = cKDTree(centroid).query_ball_point(points, sphere + reach)
+    point_of = np.repeat(np.arange(len(points)), [len(n) for n in near])
+    if len(point_of) == 0:
+        return np.zeros(len(points), bool)
+    triangle_of = np.concatenate([np.asarray(n, int) for n in near])
+    closest = trimesh.triangles.closest_point(triangles[triangle_of], points[point_of])
+    distance = np.full(len(points), np.inf)
+    np.minimum.at(distance, point_of, np.linalg.norm(closest - points[point_of], axis=1))
+    return distance <= reach
 
 
 def curtain_figures(position, velocity, radius, mass, meshes, poses, length: float,
