@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 
@@ -46,9 +45,6 @@ BTU = 1055.05585262              # J (International Table Btu)
 RANKINE = 5.0 / 9.0              # K per degree F
 LB_PER_H_FT2 = POUND / 3600.0 / FOOT ** 2      # kg/(s m^2) in one lb/(h ft2)
 BTU_PER_H_FT3_F = BTU / 3600.0 / FOOT ** 3 / RANKINE   # W/(m^3 K) in one Btu/(h ft3 F)
-
-STEFAN_BOLTZMANN = 5.670374419e-8
-
 
 def friedman_marshall_residence(length: float, diameter: float, incline: float, rpm: float,
                                 particle_diameter: float, gas_mass_velocity: float,
