@@ -46,6 +46,7 @@ RANKINE = 5.0 / 9.0              # K per degree F
 LB_PER_H_FT2 = POUND / 3600.0 / FOOT ** 2      # kg/(s m^2) in one lb/(h ft2)
 BTU_PER_H_FT3_F = BTU / 3600.0 / FOOT ** 3 / RANKINE   # W/(m^3 K) in one Btu/(h ft3 F)
 
+
 def friedman_marshall_residence(length: float, diameter: float, incline: float, rpm: float,
                                 particle_diameter: float, gas_mass_velocity: float,
                                 feed_mass_velocity: float, counter_current: bool) -> float:
