@@ -181,8 +181,18 @@ def add_arguments(p) -> None:
                                   "[water], [shell], [closure]; demos/dryers/*.toml)")
     p.add_argument("--flow", choices=("counter", "co"), default=None,
                    help="the gas against the solids or with them (default: the file's)")
+    p.add_argument("--feed", default=None,
+                   help="a feed of dry solids ('45 t/h', or kg/s) instead of the design's")
     p.add_argument("--out", default=None, help="folder for dryer.md, dryer.json and "
                                                "dryer_profile.png (default: print only)")
+
+
+def _is_number(text) -> bool:
+    try:
+        float(text)
+        return True
+    except (TypeError, ValueError):
+        return False
 
 
 # name, unit, scale, format: the figures of the report, in SI scaled for reading
@@ -285,12 +295,14 @@ def _plot(a: dict, path: Path) -> None:
     plt.close(fig)
 
 
-def run(path, flow: str | None = None, capacity: bool = True) -> tuple[Dryer, dict, dict]:
-    """Load, march and measure the sensitivity of the dryer in ``path``; with ``capacity``
-    also its drying capacity (the largest dry feed it dries to the target moisture) and that
-    figure's sensitivity to the closures."""
+def run(path, flow: str | None = None, capacity: bool = True,
+        feed: float | None = None) -> tuple[Dryer, dict, dict]:
+    """Load, march and measure the sensitivity of the dryer in ``path`` (at ``feed`` kg/s of
+    dry solids instead of the file's, when given); with ``capacity`` also its drying capacity
+    (the largest dry feed it dries to the target moisture) and that figure's sensitivity to the
+    closures."""
     from dataclasses import replace
-    d = load(path)
+    d = load(path, feed=feed)
     if flow is not None:
         d = replace(d, counter_current=flow == "counter")
     a = answer(d)
@@ -330,7 +342,14 @@ def _capacity(path, d: Dryer):
 
 def cmd_dryer(args) -> int:
     """``taichi-dem dryer``: the module docstring."""
-    d, a, spread = run(args.design, args.flow)
+    feed = getattr(args, "feed", None)
+    if isinstance(feed, str):
+        from ..scene.units import parse_quantity
+        feed = parse_quantity(float(feed) if _is_number(feed) else feed, "mass_rate",
+                              file="taichi-dem dryer", key="--feed")
+        if feed <= 0.0:
+            raise SceneError("taichi-dem dryer", "--feed", "must be > 0")
+    d, a, spread = run(args.design, args.flow, feed=feed)
     text = report(d, a, spread, Path(args.design).stem.replace("_", " "))
     print(text)
     if args.out:

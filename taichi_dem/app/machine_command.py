@@ -13,10 +13,17 @@ from .machine import (MachineMap, choice_differences, choices_report, parse_hold
 
 def add_arguments(p) -> None:
     """The ``taichi-dem machine`` arguments."""
-    p.add_argument("map", help="a map.json written by `taichi-dem map` (or its folder)")
-    p.add_argument("--length", required=True, help="the machine's length ('6 m', or metres)")
-    p.add_argument("--feed", nargs="+", required=True,
-                   help="feed rates ('6.5 t/h', or kg/s): the answers at each")
+    p.add_argument("map", help="a map.json written by `taichi-dem map` (or its folder); or a "
+                               "dryer design (TOML with [drum], [solids], [gas]: "
+                               "demos/dryers/*.toml), marched as `taichi-dem dryer` does")
+    p.add_argument("--length", default=None, help="the machine's length ('6 m', or metres; "
+                                                  "required with a map, a dryer design has its own)")
+    p.add_argument("--feed", nargs="+", default=None,
+                   help="feed rates ('6.5 t/h', or kg/s): the answers at each (required with a "
+                        "map; for a dryer design, dry feeds instead of the design's)")
+    p.add_argument("--flow", choices=("counter", "co"), default=None,
+                   help="a dryer design only: the gas against the solids or with them "
+                        "(default: the design's)")
     p.add_argument("--incline", type=float, default=None,
                    help="the machine's incline (deg, the +axis end raised; default: the map's "
                         "only incline; with several mapped, any incline between them)")
@@ -61,6 +68,15 @@ def _is_number(text) -> bool:
 def cmd_machine(args) -> int:
     """``taichi-dem machine``: the whole machine from its map (module docstring)."""
     import sys
+    if _is_dryer_design(args.map):
+        return _dryer_machine(args)
+    if args.flow is not None:
+        raise SceneError("taichi-dem machine", "--flow", "is for a dryer design (a TOML file), "
+                         "not for a map")
+    for key, value in (("--length", args.length), ("--feed", args.feed)):
+        if value is None:
+            raise SceneError("taichi-dem machine", key, "is required with a map (a dryer "
+                             "design file gives its own)")
     m = MachineMap.load(args.map)
     map_path = Path(args.map)
     length = _quantity(args.length, "length", "--length")
@@ -129,6 +145,39 @@ def cmd_machine(args) -> int:
     _plot_profiles(out, folder / "profile.png")
     print(f"wrote {folder / 'machine.md'}, {folder / 'machine.json'}, {folder / 'profile.png'}",
           file=sys.stderr)
+    return 0
+
+
+def _is_dryer_design(path) -> bool:
+    """The machine file is a dryer design (TOML), not a slice's map (map.json or its folder)."""
+    return Path(path).suffix.lower() == ".toml"
+
+
+def _dryer_machine(args) -> int:
+    """``taichi-dem machine DESIGN.toml``: a dryer, marched along its axis by app/dryer.py (its
+    closures from the design's [closure] map or the correlations), at the design's feed or at
+    each ``--feed``; the report and files are those of ``taichi-dem dryer``."""
+    from types import SimpleNamespace
+    from .dryer_command import cmd_dryer
+    refused = [key for key, value in (("--length", args.length), ("--incline", args.incline),
+                                      ("--inlet-temperature", args.inlet_temperature),
+                                      ("--discharge-depth", args.discharge_depth),
+                                      ("--overflow", args.overflow),
+                                      ("--inlet-section", args.inlet_section),
+                                      ("--choice", args.choice)) if value]
+    if refused:
+        raise SceneError(str(args.map), refused[0], "a dryer design gives its drum, incline "
+                         "and feed in the file ([drum], [solids]); this option is for a map")
+    feeds = [None] if not args.feed else [_quantity(f, "mass_rate", "--feed") for f in args.feed]
+    if any(f is not None and f <= 0.0 for f in feeds):
+        raise SceneError("taichi-dem machine", "--feed", "must be > 0")
+    for i, feed in enumerate(feeds):
+        out = args.out
+        if out and len(feeds) > 1:
+            out = str(Path(out) / f"feed_{i + 1}")
+        code = cmd_dryer(SimpleNamespace(design=args.map, flow=args.flow, out=out, feed=feed))
+        if code:
+            return code
     return 0
 
 

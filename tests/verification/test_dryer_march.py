@@ -172,6 +172,38 @@ def test_the_command_reports_and_writes(tmp_path):
     assert (tmp_path / "dryer_profile.png").stat().st_size > 10_000
 
 
+def test_machine_answers_a_dryer_design_at_each_feed(tmp_path):
+    """`taichi-dem machine DESIGN.toml` marches the dryer as `taichi-dem dryer` does; a --feed
+    replaces the design's dry feed (the same figures as `dryer --feed`)."""
+    r = _cli("machine", str(DESIGN), "--feed", "45 t/h", "60 t/h", "--out", str(tmp_path))
+    assert r.returncode == 0, r.stderr
+    low = json.loads((tmp_path / "feed_1" / "dryer.json").read_text())
+    high = json.loads((tmp_path / "feed_2" / "dryer.json").read_text())
+    # more solids through the same gas: each kilogram gets less heat
+    assert high["solids_outlet_temperature"] < low["solids_outlet_temperature"]
+    d = _cli("dryer", str(DESIGN), "--feed", "12.5", "--out", str(tmp_path / "direct"))
+    assert d.returncode == 0, d.stderr
+    direct = json.loads((tmp_path / "direct" / "dryer.json").read_text())
+    assert direct["gas_outlet_temperature"] == pytest.approx(low["gas_outlet_temperature"],
+                                                             rel=1e-12)
+
+
+@pytest.mark.parametrize("args, key", [
+    (("--length", "12 m"), "--length"),          # a dryer design has its own length
+    (("--incline", "4"), "--incline"),
+])
+def test_machine_refuses_map_options_for_a_dryer(args, key):
+    r = _cli("machine", str(DESIGN), *args)
+    assert r.returncode == 2
+    assert key in r.stderr and "dryer design" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_machine_on_a_map_still_needs_length_and_feed():
+    r = _cli("machine", str(ROOT / "docs" / "machine" / "dryer_slice" / "map.json"), "--feed",
+             "1 t/h")
+    assert r.returncode == 2 and "--length" in r.stderr and "Traceback" not in r.stderr
+
+
 @pytest.mark.parametrize("edit, key, reason", [
     (("diameter = \"2.2 m\"", ""), "drum.diameter", "required"),
     (("speed = \"8 rpm\"", "speed = \"8 furlongs\""), "drum.speed", "unknown unit"),
