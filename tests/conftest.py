@@ -177,6 +177,7 @@ SLOW_FILES = {
     "tests/verification/test_drum_wall_heat.py": 240,   # four drums of 32-58 s (2026-12-05)
     "tests/unit/test_slice_map.py": 90,        # (2026-12-04: ~35 s, and the Dask map ~40 s)
     "tests/verification/test_saeman_drum.py": 120,
+    "tests/verification/test_flight_unloading.py": 70,   # a 469-sphere flighted slice, 12 s
     "tests/verification/test_direct_check.py": 60,   # a 3-row cooler inlet to outlet, 40 s   # a 900-particle drum slice, 8 s (2026-12-04)
     "tests/unit/test_engine_surface.py": 73,
     "tests/unit/test_compile_once.py": 45,     # six fresh processes on one scene (2026-12-05)

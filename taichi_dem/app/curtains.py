@@ -92,16 +92,27 @@ def _within(mesh, points: np.ndarray, reach: np.ndarray) -> np.ndarray:
     return distance <= reach
 
 
-def curtain_figures(position, velocity, radius, mass, meshes, poses, length: float,
-                    period_axis: int | None = None, gas_velocity=(0.0, 0.0, 0.0)) -> dict:
-    """A slice's curtains now: ``airborne_fraction`` (of the mass), ``curtain_area_per_metre``
-    (the airborne particles' surface, m^2 per metre of drum) and ``curtain_slip_speed`` (their
-    mean speed relative to the gas, m/s; NaN with none airborne)."""
+def airborne(position, radius, meshes, poses, length: float,
+             period_axis: int | None = None) -> np.ndarray:
+    """(N,) bool: the particle touches no particle (across the periodic axis of length
+    ``length`` m) and no body at its pose: it is in flight."""
     free = ~touching_another(position, radius, period_axis, length)
     idx = np.nonzero(free)[0]
     if len(idx):
         hit = touching_bodies(position[idx], radius[idx], meshes, poses)
         free[idx[hit]] = False
+    return free
+
+
+def curtain_figures(position, velocity, radius, mass, meshes, poses, length: float,
+                    period_axis: int | None = None, gas_velocity=(0.0, 0.0, 0.0),
+                    free: np.ndarray | None = None) -> dict:
+    """A slice's curtains now: ``airborne_fraction`` (of the mass), ``curtain_area_per_metre``
+    (the airborne particles' surface, m^2 per metre of drum) and ``curtain_slip_speed`` (their
+    mean speed relative to the gas, m/s; NaN with none airborne). ``free``: the airborne mask
+    when already known (airborne())."""
+    if free is None:
+        free = airborne(position, radius, meshes, poses, length, period_axis)
     total = float(np.sum(mass))
     slip = np.linalg.norm(np.asarray(velocity)[free] - np.asarray(gas_velocity, float), axis=1)
     return {"airborne_fraction": float(np.sum(mass[free])) / total if total > 0 else float("nan"),

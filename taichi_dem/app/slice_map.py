@@ -162,7 +162,7 @@ def holdup_count(scene, geometry: SliceGeometry, holdup: tuple[str, float],
 class SliceObserver:
     """Observer (Simulation.add_observer) recording a slice's figures at each sample."""
 
-    def __init__(self, sim, geometry: SliceGeometry):
+    def __init__(self, sim, geometry: SliceGeometry, shell_mesh: dict | None = None):
         self.g = geometry
         self.scene = sim.scene
         gravity = np.asarray(sim.scene.simulation.gravity, float)
@@ -181,6 +181,10 @@ class SliceObserver:
                                        process=False) for b in sim.scene.bodies]
         gas = sim.scene.settings.get("gas")
         self.gas_velocity = tuple(getattr(gas, "velocity", (0.0, 0.0, 0.0)))
+        # the flights' loads against their angle (flights.py), for a drum builder's flights
+        from .flights import FlightRecorder
+        self.flights = (FlightRecorder.for_slice(sim, geometry, shell_mesh, self.up,
+                                                 self.horizontal) if shell_mesh else None)
 
     def _add(self, name: str, value: float):
         self.series.setdefault(name, []).append(float(value))
@@ -207,11 +211,14 @@ class SliceObserver:
         self._add("surface_chord", surface_chord(slope, offset - float(np.mean(r)) if len(r)
                                                  else math.nan, g.shell_radius))
         poses = sim.body_poses()
-        from .curtains import curtain_figures
-        for name, value in curtain_figures(
-                x, v, r, m, self.meshes, [poses[b.name] for b in self.scene.bodies], g.length,
-                g.axis, self.gas_velocity).items():
+        from .curtains import airborne, curtain_figures
+        placed = [poses[b.name] for b in self.scene.bodies]
+        free = airborne(x, r, self.meshes, placed, g.length, g.axis)
+        for name, value in curtain_figures(x, v, r, m, self.meshes, placed, g.length, g.axis,
+                                           self.gas_velocity, free=free).items():
             self._add(name, value)
+        if self.flights is not None:
+            self.flights.sample(x, m, ~free, placed[g.shell][0])
         for body in self.scene.bodies:
             prefix = f"bodies/{body.name}/"
             for name, out in (("axial_torque", "torque_per_metre"), ("power", "power_per_metre"),
@@ -314,6 +321,7 @@ class SliceResult:
     figures: dict            # name -> SteadyMean
     incline: float = 0.0     # deg, the +axis end raised (gravity's axial pull towards -axis)
     axial_slope: float = 0.0 # gravity's axial component / its component in the section
+    flight_unloading: dict | None = None   # flights.unloading_profile, for a flighted drum
 
     def row(self) -> dict:
         out = {"holdup_kg_per_m": self.holdup, "fill_fraction": self.fill_fraction,
@@ -416,8 +424,10 @@ def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float
     doc = apply(tomllib.loads(text), changes, source)
     sliced = parse_scene(to_text(doc), source=source, base_dir=base_dir)
     angle, slope = incline_of(sliced.simulation.gravity, geometry)
+    shell_mesh = (doc.get("bodies") or [{}])[geometry.shell].get("mesh") \
+        if len(doc.get("bodies") or []) > geometry.shell else None
     with Simulation(sliced, arch=arch, h5="", threads=threads) as sim:
-        observer = SliceObserver(sim, geometry)
+        observer = SliceObserver(sim, geometry, shell_mesh if isinstance(shell_mesh, dict) else None)
         sim.add_observer(observer, now=False)
         sim.run(sim.time + duration)
         series = observer.series
@@ -437,7 +447,14 @@ def run_slice(text: str, source: str, holdup: tuple[str, float], duration: float
     dispersion = _axial_dispersion(observer.displacements, figures.get("axial_mass_flow"))
     if dispersion is not None:
         figures["axial_dispersion"] = dispersion
-    return SliceResult(kg_per_m, fraction, count, figures, angle, slope)
+    unloading = None
+    if observer.flights is not None:
+        steady = figures.get("airborne_fraction") or figures.get("axial_mass_flow")
+        start = steady.start if steady is not None else len(series.get("time", [])) // 2
+        # the flights' loads as cross-sections of the bulk at the map's packing
+        density = sliced.materials[sliced.fills[fill_index].material].density * BULK_SOLID_FRACTION
+        unloading = observer.flights.profile(geometry.length, density, start)
+    return SliceResult(kg_per_m, fraction, count, figures, angle, slope, unloading)
 
 
 def _axial_dispersion(record, flow):
@@ -521,10 +538,19 @@ def write_map(results: list[SliceResult], out_dir: Path, scene_name: str,
         lines += ["", "The beds at the end of their runs (`--pictures`), seen along the axis, "
                   "coloured by axial speed:", ""]
         lines += [f"![{png.stem}]({png.name})" for png in beds]
+    unloading = [(r.holdup, r.incline, r.flight_unloading) for r in results
+                 if isinstance(r, SliceResult) and r.flight_unloading]
+    if unloading:                     # a flighted drum's flights (flights.py)
+        from .flights import plot_unloading, unloading_lines
+        lines += unloading_lines(unloading) + ["![flight unloading](flights.png)"]
+        plot_unloading(unloading, out_dir / "flights.png")
     md.write_text("\n".join(lines) + "\n")
     js = out_dir / "map.json"
+    extra = {"flight_unloading": [{"holdup_kg_per_m": h, "incline_deg": i, **p}
+                                  for h, i, p in unloading]} if unloading else {}
     js.write_text(json.dumps({"scene": scene_name, "units": {n: _unit(n) for n in figures},
-                              "machine": machine or {}, "rows": rows}, indent=1, default=float))
+                              "machine": machine or {}, "rows": rows, **extra}, indent=1,
+                             default=float))
     png = out_dir / "map.png"
     _plot(rows, png)
     return [csv, md, js, png]
