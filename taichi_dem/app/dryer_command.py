@@ -227,7 +227,10 @@ def report(d: Dryer, a: dict, spread: dict, title: str = "") -> str:
              f"{d.feed_moisture * 100:.3g} % moisture and {d.feed_temperature - 273.15:.1f} C; "
              f"gas {d.gas_flow:g} kg/s dry at {d.gas_temperature - 273.15:.0f} C.", "",
              ("Closures from the slices' map " + d.map_info["map_source"]
-              + f": the feed is carried at {d.map_info['map_holdup']:.4g} kg/m (dry), "
+              + f": the hold-up marched from the discharge (as `taichi-dem machine` does) "
+              f"averages {d.map_info['map_holdup']:.4g} kg/m (dry; "
+              f"{d.map_info['map_uniform_holdup']:.4g} kg/m where the slice alone carries the "
+              "feed), "
               f"{d.map_info['map_airborne_fraction']:.1%} of it airborne, the curtains' "
               f"coefficient h = {d.map_info['map_heat_transfer_coefficient']:.3g} W/(m^2 K); "
               "the +- column is each figure's change with the closures moved by the map's "

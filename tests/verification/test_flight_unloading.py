@@ -17,7 +17,7 @@ says (app/flights.py; PHYSICS.md, "Flighted rotary dryers"): a slice of the drye
 
 What the spheres do not follow (docs/machine/dryer_slice/flights.md): in the pocket, walled in
 by the leg, the lip and the shell three to seven spheres across, they stand far steeper than on
-an open heap - the fitted mu is 1.3 - 1.5 where the heap gives 0.36 - so the model needs the
+an open heap - the fitted mu is 1.1 - 1.5 where the heap gives 0.36 - so the model needs the
 fitted angle, not the heap's, before the last solids.
 """
 import math

@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""The dryer's closures checked against a direct run: a short flighted drum
+(bench/direct_check/dryer_direct.toml: the dryer slice's drum 0.72 m long, 24 mm aggregate,
+8 rpm, 4.7 deg, the gas at 1 m/s against the solids, fed 13 t/h, a free discharge) run inlet to
+outlet to its steady state, beside what the map of its own slice (docs/machine/dryer_slice/
+map.json) gives for it two ways:
+
+- the march of `taichi-dem machine` (app/machine.py), the cooler's, which `taichi-dem dryer`'s
+  map closure (app/dryer_map.py) now uses too: the hold-up profile from the discharge back,
+  with the bed's axial depth gradient pulling it along;
+- a uniform hold-up: the hold-up per metre at which the slice conveys the feed, the same along
+  the drum (residence H L / F, torque T(H) L) - the dryer's closure before this check.
+
+    python bench/dryer_direct.py --out bench/results/dryer_direct            # run and compare
+    python bench/dryer_direct.py --out bench/results/dryer_direct --reuse    # the table again
+
+The tolerances are the cooler's direct check's (15 %; BENCHMARKS.md).
+"""
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from taichi_dem.app import direct_run as dr   # noqa: E402
+from taichi_dem.app import machine as mc      # noqa: E402
+
+SCENE = ROOT / "bench" / "direct_check" / "dryer_direct.toml"
+MAP = ROOT / "docs" / "machine" / "dryer_slice" / "map.json"
+LENGTH = 0.72
+INCLINE = 4.7
+TOLERANCES = {"holdup": 0.15, "residence_time": 0.15, "drum/torque": 0.15}
+GAS = {"gas_density": 0.46, "gas_viscosity": 3.6e-5, "gas_conductivity": 0.056,
+       "gas_heat_capacity": 1150.0}
+
+
+def save_observer(obs, residence, path: Path):
+    np.savez(path, time=obs.time, profile=np.asarray(obs.profile), inside=obs.inside,
+             discharged=obs.discharged, temperature=obs.discharge_temperature,
+             edges=obs.edges, residence=np.asarray(residence, float),
+             **{f"load:{k}": v for k, v in obs.loads.items()})
+
+
+def load_observer(path: Path):
+    z = np.load(path)
+    obs = dr.DirectObserver([1.0, 0.0, 0.0], 0.0, 1.0, 1, "discharge")
+    obs.edges = z["edges"]
+    obs.time, obs.profile, obs.inside = list(z["time"]), list(z["profile"]), list(z["inside"])
+    obs.discharged, obs.discharge_temperature = list(z["discharged"]), list(z["temperature"])
+    obs.loads = {k[5:]: list(z[k]) for k in z.files if k.startswith("load:")}
+    return obs, z["residence"]
+
+
+class Uniform:
+    """A uniform hold-up H where the slice carries the feed, in the shape compare() reads
+    (machine.MachineAnswer's)."""
+
+    def __init__(self, holdup: float, feed: float, torque_per_metre: float):
+        self.holdup = holdup * LENGTH
+        self.residence_time = holdup * LENGTH / feed
+        self.torques = {"drum": torque_per_metre * LENGTH}
+        self.outlet_temperature = None
+        self.profile = None
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "dryer_direct")
+    p.add_argument("--time", type=float, default=90.0, help="simulated s of the direct run")
+    p.add_argument("--reuse", action="store_true", help="reuse the direct run in OUT")
+    a = p.parse_args(argv)
+    a.out.mkdir(parents=True, exist_ok=True)
+    run_file = a.out / "direct.npz"
+    wall = None
+    if not (a.reuse and run_file.exists()):
+        t0 = time.perf_counter()
+        obs, residence, _ = dr.run_direct(SCENE.read_text(), base_dir=str(SCENE.parent),
+                                          source=str(SCENE), seconds=a.time, length=LENGTH,
+                                          bins=6, outlet="discharge", residence_sensor="residence")
+        wall = time.perf_counter() - t0
+        save_observer(obs, residence, run_file)
+    obs, residence = load_observer(run_file)
+    direct = dr.reduce_direct(obs, residence)
+    feed = direct.discharge_rate.value
+    from taichi_dem.app.dryer_map import closures
+    c = closures(MAP, {"diameter": 1.0, "length": LENGTH, "incline": math.radians(INCLINE),
+                       "rpm": 8.0, "feed": feed, "gas_flow": 0.46 * math.pi / 4, **GAS},
+                 "bench/dryer_direct.py")
+    doc_rows = json.loads(MAP.read_text())["rows"]
+    torque = float(np.interp(c["map_uniform_holdup"], [r["holdup_kg_per_m"] for r in doc_rows],
+                             [r["drum/torque_per_metre"] for r in doc_rows]))
+    uniform = Uniform(c["map_uniform_holdup"], feed, torque)
+    errors = {"holdup": c["residence_uncertainty"] * uniform.holdup,
+              "residence_time": c["residence_uncertainty"] * uniform.residence_time,
+              "drum/torque": math.nan}
+    rows_uniform = dr.compare(direct, uniform, errors, TOLERANCES)
+    m = mc.MachineMap.load(MAP)
+    out = mc.with_errors(m, LENGTH, [feed], -math.tan(math.radians(INCLINE)), draws=40)
+    ans, err = out["feeds"][0], out["errors"][0]
+    rows_machine = dr.compare(direct, ans, err, TOLERANCES)
+    rms, worst = dr.profile_difference(direct, ans)
+    lines = [f"direct run: {LENGTH:g} m, {obs.time[-1]:.3g} s, steady from "
+             f"{direct.steady_from:.1f} s ({'steady' if direct.steady else 'NOT steady'}), "
+             f"discharge {direct.discharge_rate.value * 3.6:.3f} +- "
+             f"{direct.discharge_rate.error * 3.6:.2g} t/h (fed 13 t/h), "
+             f"{direct.particles_out} particles out in the steady part; Little's law residence "
+             f"{direct.little_residence_time.value:.3g} +- {direct.little_residence_time.error:.2g} s",
+             "", "The march of `taichi-dem machine` and of `taichi-dem dryer`'s map closure (the "
+             "hold-up profile from the discharge back):", "", dr.table(rows_machine), "",
+             f"`taichi-dem dryer`'s residence, hold-up and torque from its closure: "
+             f"{c['residence_time']:.4g} s, {c['map_holdup'] * LENGTH:.4g} kg, "
+             f"{c['drive_torque']:.4g} N m", "",
+             "A uniform hold-up where the slice alone carries the feed "
+             f"({c['map_uniform_holdup']:.4g} kg/m, the dryer's closure before):", "",
+             dr.table(rows_uniform), "",
+             f"hold-up profile, march minus direct: RMS {rms:.3g} kg/m, largest {worst:.3g} "
+             f"kg/m (mean {direct.holdup.value / LENGTH:.3g} kg/m)", "",
+             "| x (m) | direct (kg/m) | march (kg/m) | uniform (kg/m) |", "|---|---|---|---|"]
+    marched = np.interp(direct.x, ans.profile.x, ans.profile.holdup)
+    for x, h, e, mh in zip(direct.x, direct.holdup_profile, direct.holdup_profile_error, marched):
+        lines.append(f"| {x:.3f} | {h:.3g} +- {e:.2g} | {mh:.3g} | {c['map_uniform_holdup']:.3g} |")
+    if wall is not None:
+        lines += ["", f"wall time of the direct run: {wall / 60:.1f} min"]
+    text = "\n".join(lines)
+    print(text)
+    (a.out / "comparison.md").write_text(text + "\n")
+    (a.out / "comparison.json").write_text(json.dumps({
+        name: [{"name": r.name, "direct": [r.direct.value, r.direct.error],
+                "march": [r.march.value, r.march.error], "ratio": r.ratio,
+                "tolerance": r.tolerance, "within": bool(r.within)} for r in rows]
+        for name, rows in (("uniform", rows_uniform), ("march", rows_machine))}, indent=1,
+        default=float))
+    return 0 if all(r.within for r in rows_machine) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
