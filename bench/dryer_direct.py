@@ -74,6 +74,8 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "dryer_direct")
     p.add_argument("--time", type=float, default=90.0, help="simulated s of the direct run")
     p.add_argument("--reuse", action="store_true", help="reuse the direct run in OUT")
+    p.add_argument("--map", type=Path, default=MAP, help="the slices' map (default: the "
+                   "published one, docs/machine/dryer_slice/map.json)")
     a = p.parse_args(argv)
     a.out.mkdir(parents=True, exist_ok=True)
     run_file = a.out / "direct.npz"
@@ -89,10 +91,10 @@ def main(argv=None) -> int:
     direct = dr.reduce_direct(obs, residence)
     feed = direct.discharge_rate.value
     from taichi_dem.app.dryer_map import closures
-    c = closures(MAP, {"diameter": 1.0, "length": LENGTH, "incline": math.radians(INCLINE),
+    c = closures(a.map, {"diameter": 1.0, "length": LENGTH, "incline": math.radians(INCLINE),
                        "rpm": 8.0, "feed": feed, "gas_flow": 0.46 * math.pi / 4, **GAS},
                  "bench/dryer_direct.py")
-    doc_rows = json.loads(MAP.read_text())["rows"]
+    doc_rows = json.loads((a.map / "map.json" if a.map.is_dir() else a.map).read_text())["rows"]
     torque = float(np.interp(c["map_uniform_holdup"], [r["holdup_kg_per_m"] for r in doc_rows],
                              [r["drum/torque_per_metre"] for r in doc_rows]))
     uniform = Uniform(c["map_uniform_holdup"], feed, torque)
@@ -100,7 +102,7 @@ def main(argv=None) -> int:
               "residence_time": c["residence_uncertainty"] * uniform.residence_time,
               "drum/torque": math.nan}
     rows_uniform = dr.compare(direct, uniform, errors, TOLERANCES)
-    m = mc.MachineMap.load(MAP)
+    m = mc.MachineMap.load(a.map)
     out = mc.with_errors(m, LENGTH, [feed], -math.tan(math.radians(INCLINE)), draws=40)
     ans, err = out["feeds"][0], out["errors"][0]
     rows_machine = dr.compare(direct, ans, err, TOLERANCES)
@@ -129,8 +131,10 @@ def main(argv=None) -> int:
         lines += ["", f"wall time of the direct run: {wall / 60:.1f} min"]
     text = "\n".join(lines)
     print(text)
-    (a.out / "comparison.md").write_text(text + "\n")
-    (a.out / "comparison.json").write_text(json.dumps({
+    tag = "" if a.map == MAP else "_" + (a.map.parent.name if a.map.name == "map.json"
+                                         else a.map.stem)
+    (a.out / f"comparison{tag}.md").write_text(text + "\n")
+    (a.out / f"comparison{tag}.json").write_text(json.dumps({
         name: [{"name": r.name, "direct": [r.direct.value, r.direct.error],
                 "march": [r.march.value, r.march.error], "ratio": r.ratio,
                 "tolerance": r.tolerance, "within": bool(r.within)} for r in rows]

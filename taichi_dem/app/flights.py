@@ -339,14 +339,19 @@ def unloading_lines(entries) -> list[str]:
              "the touching particles between its leg, its lip's line and its tip "
              "(app/flights.py). Beside it the geometric model (the solids behind a surface "
              "through the tip at Schofield & Glikin's kinetic angle), fitted in the dynamic "
-             "friction mu, the loads read as cross-sections at the bulk density given.", ""]
+             "friction mu, the loads read as cross-sections at the bulk density given. The model "
+             "is that of a flight full when it leaves the bed: at a hold-up that leaves the "
+             "flights part-full its fit means nothing (a kinetic angle below 15 deg says so).",
+             ""]
     for holdup, incline, p in entries:
         lines.append(f"### {holdup:.4g} kg/m, {incline:.3g} deg")
         lines.append("")
         if "fitted_friction" not in p:
             lines += ["Too few loaded samples for the model.", ""]
             continue
-        lines += [f"Fitted mu {p['fitted_friction']:.3g} (kinetic angle "
+        part_full = p["kinetic_angle_at_0_deg"] < 15.0
+        lines += [("**The flights leave the bed part-full: the fit is not meaningful.** "
+                   if part_full else "") + f"Fitted mu {p['fitted_friction']:.3g} (kinetic angle "
                   f"{p['kinetic_angle_at_0_deg']:.3g} deg at 0 deg, Fr {p['froude']:.3g}); "
                   f"root-mean-square difference {100 * p['rms_difference_of_full']:.3g} % of a "
                   f"full flight's load; final discharge angle {p['final_discharge_angle_deg']:.4g}"
