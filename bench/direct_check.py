@@ -47,23 +47,6 @@ def run(rows: int, seconds: float):
                          residence_sensor="residence")
 
 
-def save_observer(obs, residence, path: Path):
-    np.savez(path, time=obs.time, profile=np.asarray(obs.profile), inside=obs.inside,
-             discharged=obs.discharged, temperature=obs.discharge_temperature,
-             edges=obs.edges, residence=np.asarray(residence, float),
-             **{f"load:{k}": v for k, v in obs.loads.items()})
-
-
-def load_observer(path: Path):
-    z = np.load(path)
-    obs = dr.DirectObserver([1.0, 0.0, 0.0], 0.0, 1.0, 1, "discharge")
-    obs.edges = z["edges"]
-    obs.time, obs.profile, obs.inside = list(z["time"]), list(z["profile"]), list(z["inside"])
-    obs.discharged, obs.discharge_temperature = list(z["discharged"]), list(z["temperature"])
-    obs.loads = {k[5:]: list(z[k]) for k in z.files if k.startswith("load:")}
-    return obs, z["residence"]
-
-
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "direct_check")
@@ -85,8 +68,8 @@ def main(argv=None) -> int:
     run_file = a.out / f"direct_{a.rows}rows.npz"
     if not (a.reuse and run_file.exists()):
         obs, residence, walls["direct"] = run(a.rows, a.time)
-        save_observer(obs, residence, run_file)
-    obs, residence = load_observer(run_file)
+        dr.save_record(obs, residence, run_file)
+    obs, residence = dr.load_record(run_file)
     direct = dr.reduce_direct(obs, residence)
     m = mc.MachineMap.load(map_dir)
     feed = direct.discharge_rate.value

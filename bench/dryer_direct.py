@@ -40,23 +40,6 @@ GAS = {"gas_density": 0.46, "gas_viscosity": 3.6e-5, "gas_conductivity": 0.056,
        "gas_heat_capacity": 1150.0}
 
 
-def save_observer(obs, residence, path: Path):
-    np.savez(path, time=obs.time, profile=np.asarray(obs.profile), inside=obs.inside,
-             discharged=obs.discharged, temperature=obs.discharge_temperature,
-             edges=obs.edges, residence=np.asarray(residence, float),
-             **{f"load:{k}": v for k, v in obs.loads.items()})
-
-
-def load_observer(path: Path):
-    z = np.load(path)
-    obs = dr.DirectObserver([1.0, 0.0, 0.0], 0.0, 1.0, 1, "discharge")
-    obs.edges = z["edges"]
-    obs.time, obs.profile, obs.inside = list(z["time"]), list(z["profile"]), list(z["inside"])
-    obs.discharged, obs.discharge_temperature = list(z["discharged"]), list(z["temperature"])
-    obs.loads = {k[5:]: list(z[k]) for k in z.files if k.startswith("load:")}
-    return obs, z["residence"]
-
-
 class Uniform:
     """A uniform hold-up H where the slice carries the feed, in the shape compare() reads
     (machine.MachineAnswer's)."""
@@ -86,8 +69,8 @@ def main(argv=None) -> int:
                                           source=str(SCENE), seconds=a.time, length=LENGTH,
                                           bins=6, outlet="discharge", residence_sensor="residence")
         wall = time.perf_counter() - t0
-        save_observer(obs, residence, run_file)
-    obs, residence = load_observer(run_file)
+        dr.save_record(obs, residence, run_file)
+    obs, residence = dr.load_record(run_file)
     direct = dr.reduce_direct(obs, residence)
     feed = direct.discharge_rate.value
     from taichi_dem.app.dryer_map import closures

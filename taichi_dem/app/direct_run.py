@@ -52,6 +52,26 @@ class DirectObserver:
             f"outlets/{self.outlet}/mean_temperature", math.nan)))
 
 
+def save_record(obs: DirectObserver, residence, path) -> None:
+    """Write a direct run's observer and residence times to ``path`` (.npz), for a bench to
+    reduce again without running (load_record)."""
+    np.savez(path, time=obs.time, profile=np.asarray(obs.profile), inside=obs.inside,
+             discharged=obs.discharged, temperature=obs.discharge_temperature,
+             edges=obs.edges, residence=np.asarray(residence, float),
+             **{f"load:{k}": v for k, v in obs.loads.items()})
+
+
+def load_record(path) -> tuple[DirectObserver, np.ndarray]:
+    """(observer, residence times s) as save_record wrote them to ``path``."""
+    z = np.load(path)
+    obs = DirectObserver([1.0, 0.0, 0.0], 0.0, 1.0, 1, "discharge")
+    obs.edges = z["edges"]
+    obs.time, obs.profile, obs.inside = list(z["time"]), list(z["profile"]), list(z["inside"])
+    obs.discharged, obs.discharge_temperature = list(z["discharged"]), list(z["temperature"])
+    obs.loads = {k[5:]: list(z[k]) for k in z.files if k.startswith("load:")}
+    return obs, z["residence"]
+
+
 def shorter_machine(text: str, rows: int, row_length: float, end_time: float,
                     source: str = "<direct scene>") -> str:
     """A direct cooler scene (bench/direct_check/cooler_direct.toml's layout: bodies 0 the

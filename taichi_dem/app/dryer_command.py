@@ -187,14 +187,6 @@ def add_arguments(p) -> None:
                                                "dryer_profile.png (default: print only)")
 
 
-def _is_number(text) -> bool:
-    try:
-        float(text)
-        return True
-    except (TypeError, ValueError):
-        return False
-
-
 # name, unit, scale, format: the figures of the report, in SI scaled for reading
 ROWS = (("residence_time", "min", 1 / 60.0, ".3g"),
         ("holdup", "t (dry)", 1e-3, ".3g"),
@@ -348,6 +340,7 @@ def cmd_dryer(args) -> int:
     feed = getattr(args, "feed", None)
     if isinstance(feed, str):
         from ..scene.units import parse_quantity
+        from .machine_command import _is_number
         feed = parse_quantity(float(feed) if _is_number(feed) else feed, "mass_rate",
                               file="taichi-dem dryer", key="--feed")
         if feed <= 0.0:
