@@ -340,8 +340,11 @@ def cmd_dryer(args) -> int:
     feed = getattr(args, "feed", None)
     if isinstance(feed, str):
         from ..scene.units import parse_quantity
-        from .machine_command import _is_number
-        feed = parse_quantity(float(feed) if _is_number(feed) else feed, "mass_rate",
+        try:
+            feed = float(feed)                  # plain kg/s
+        except ValueError:
+            pass                                # a quantity ('45 t/h')
+        feed = parse_quantity(feed, "mass_rate",
                               file="taichi-dem dryer", key="--feed")
         if feed <= 0.0:
             raise SceneError("taichi-dem dryer", "--feed", "must be > 0")
