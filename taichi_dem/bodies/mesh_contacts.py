@@ -98,7 +98,8 @@ class MeshContacts:
         self.lens = margin_fraction(engine.model.contact_effects, "surface")
         self.expand = engine.model.max_radius * (1.0 + self.lens) + engine.model.skin
         self.minimum_image = engine.model.grid.make_minimum_image()
-        self.triangle_image = make_triangle_image(engine.model.grid, self.expand)
+        self.triangle_image, self.plane_side_range = make_triangle_image(engine.model.grid,
+                                                                         self.expand)
         self.binned_time = 0.0
         self.interval_steps = 0
         # the ti.func bodies of the kernels (Broadphase.fused_rebuild runs them in one launch)
@@ -558,17 +559,12 @@ class MeshContacts:
         m = self
 
         @ti.func
-        def crosses(k, x, segment):
-            """Whether the segment x -> x + segment crosses the triangle of entry k."""
-            wa, wb, wc = m.world_triangle(m.mesh_tri[k])
-            origin = m.triangle_image(x, wa, wb, wc)
-            e1 = wb - wa
-            e2 = wc - wa
-            normal = e1.cross(e2)
-            side = (origin - wa).dot(normal)
+        def crosses_plane(side, across, origin, wa, e1, e2, segment):
+            """Moeller-Trumbore for the segment origin -> origin + segment and the triangle
+            (wa, wa + e1, wa + e2), ``side`` = (origin - wa) . (e1 x e2), ``across`` =
+            segment . (e1 x e2)."""
             hit = False
-            # the two ends on the two sides of the plane (most candidates fail here)
-            if side * (side + segment.dot(normal)) < 0.0:
+            if side * (side + across) < 0.0:
                 pvec = segment.cross(e2)
                 det = e1.dot(pvec)
                 inv = 1.0 / det
@@ -577,6 +573,27 @@ class MeshContacts:
                 qvec = tvec.cross(e1)
                 v = segment.dot(qvec) * inv
                 hit = u >= 0.0 and v >= 0.0 and u + v <= 1.0
+            return hit
+
+        @ti.func
+        def crosses(k, x, segment):
+            """Whether the segment x -> x + segment crosses the triangle of entry k."""
+            wa, wb, wc = m.world_triangle(m.mesh_tri[k])
+            e1 = wb - wa
+            e2 = wc - wa
+            normal = e1.cross(e2)
+            hit = False
+            # the two ends on the two sides of the plane (most candidates fail here): the side
+            # lies strictly between 0 and -segment . normal. Whether any image the triangle's
+            # image search may choose can pass (its three closest-point searches for a shell's
+            # strip skipped when none can), with a slack of 1e-5 of the coordinates
+            lo, hi = m.plane_side_range(x, wa, wb, wc, normal)
+            across = segment.dot(normal)
+            slack = 1e-5 * (ti.abs(x).max() + ti.abs(wa).max()) * normal.norm()
+            if hi > ti.min(0.0, -across) - slack and lo < ti.max(0.0, -across) + slack:
+                origin = m.triangle_image(x, wa, wb, wc)
+                side = (origin - wa).dot(normal)
+                hit = crosses_plane(side, across, origin, wa, e1, e2, segment)
             return hit
 
         @ti.func

@@ -8,13 +8,18 @@ from ..engine.values import reader
 
 
 def make_triangle_image(grid, reach: float):
-    """ti.func (x, a, b, c) -> the periodic image of point x (m) nearest to the triangle abc
-    (world frame, m); x itself without periodic axes.
+    """ti.funcs ``triangle_image(x, a, b, c)`` -> the periodic image of point x (m) nearest to
+    the triangle abc (world frame, m), x itself without periodic axes; and
+    ``plane_side_range(x, a, b, c, normal)`` -> (lo, hi): bounds on (y - a) . normal over every
+    image y that ``triangle_image`` may choose (``normal`` any vector, m^2 for e1 x e2).
 
     The image nearest one vertex is right only while the triangle's extent along a periodic
     axis plus the reach is under half the period. A longer triangle (a floor plate or drum
     shell spanning a periodic slice) is tested against the neighbouring images as well, as
-    many as its extent needs, and the image closest to the triangle wins. ``reach``: the
+    many as its extent needs, and the image closest to the triangle wins: three closest-point
+    searches for a drum shell's strip. The side range lets a caller that needs only the plane
+    test (most candidates fail it) skip that search: an image shifted by s periods moves the
+    plane distance by s (P . normal), zero for a strip along the periodic axis. ``reach``: the
     largest contact search distance (largest radius + skin), m."""
     periodic = grid.periodic
     minimum_image = grid.make_minimum_image()
@@ -23,25 +28,32 @@ def make_triangle_image(grid, reach: float):
     reach_of = reader(grid.values, "triangle_reach", reach)
 
     @ti.func
+    def images(x, a, b, c):
+        """(base, n_side, span_v): the image of x nearest the triangle's box centre, the
+        images worth testing on each side per axis and the period vector (1 on other axes)."""
+        lo_t = ti.min(a, b, c)
+        hi_t = ti.max(a, b, c)
+        mid = 0.5 * (lo_t + hi_t)
+        base = mid + minimum_image(x - mid)   # the image nearest the triangle's box centre
+        # images on each side worth testing: those within half the extent + reach of mid
+        n_side = ti.Vector([0, 0, 0])
+        span_v = span_of()
+        for k in ti.static(range(3)):
+            if ti.static(not periodic[k]):
+                span_v[k] = 1.0
+        reach = reach_of()
+        for k in ti.static(range(3)):
+            if ti.static(periodic[k]):
+                n_side[k] = ti.max(ti.cast(ti.ceil((0.5 * (hi_t[k] - lo_t[k]) + reach)
+                                                   / span_v[k] - 0.5), ti.i32), 0)
+        return base, n_side, span_v
+
+    @ti.func
     def triangle_image(x, a, b, c):
         best = x
         if ti.static(any_periodic):
-            lo_t = ti.min(a, b, c)
-            hi_t = ti.max(a, b, c)
-            mid = 0.5 * (lo_t + hi_t)
-            base = mid + minimum_image(x - mid)   # the image nearest the triangle's box centre
+            base, n_side, span_v = images(x, a, b, c)
             best = base
-            # images on each side worth testing: those within half the extent + reach of mid
-            n_side = ti.Vector([0, 0, 0])
-            span_v = span_of()
-            for k in ti.static(range(3)):
-                if ti.static(not periodic[k]):
-                    span_v[k] = 1.0
-            reach = reach_of()
-            for k in ti.static(range(3)):
-                if ti.static(periodic[k]):
-                    n_side[k] = ti.max(ti.cast(ti.ceil((0.5 * (hi_t[k] - lo_t[k]) + reach)
-                                                       / span_v[k] - 0.5), ti.i32), 0)
             if n_side.sum() > 0:
                 q, region = closest_point_on_triangle(base, a, b, c)
                 best_sq = (base - q).norm_sqr()
@@ -56,4 +68,23 @@ def make_triangle_image(grid, reach: float):
                                     best = trial
                                     best_sq = d_sq
         return best
-    return triangle_image
+
+    @ti.func
+    def plane_side_range(x, a, b, c, normal):
+        side = (x - a).dot(normal)
+        lo = side
+        hi = side
+        if ti.static(any_periodic):
+            base, n_side, span_v = images(x, a, b, c)
+            side = (base - a).dot(normal)
+            lo = side
+            hi = side
+            for k in ti.static(range(3)):
+                if ti.static(periodic[k]):
+                    # the images base + s span e_k, |s| <= n_side: side + s span n_k
+                    shift = ti.abs(n_side[k] * (span_v[k] * normal[k]))
+                    lo -= shift
+                    hi += shift
+        return lo, hi
+
+    return triangle_image, plane_side_range

@@ -1,0 +1,150 @@
+#!/usr/bin/env python3
+"""Where a mesh-heavy step's time goes, against a plain bed of the same spheres (issue 45 item 3).
+
+The seed's cooler slice (demos/cooler_slice.toml: a periodic paddle row, the shell and the
+paddle shaft as meshes, heat on, 15 mm calibrated ash, f32) filled to ``--holdup`` kg/m, and a
+plain periodic bed of the same spheres, count, material, heat and time step lying on a floor
+(plane walls, no mesh): each settled ``--settle`` s, then ``--steps`` steps timed ``--repeats``
+times, the two alternated in one process; with ``--profile`` Taichi's kernel profiler sums the
+time of each kernel over the timed steps (the stages: ``pair_forces`` the particle pairs,
+``gather`` the mesh contacts and the integration, ``drift``, ``update_frames`` the bodies'
+poses, the rest the neighbour-list and triangle-list rebuilds and the surface survey).
+
+    python bench/slice_profile.py [--holdup 60] [--steps 500] [--repeats 3] [--profile]
+
+Prints each case's particle-steps per second (median), ns per particle-step, their ratio, and
+with ``--profile`` the per-kernel breakdown per particle-step of both.
+"""
+from __future__ import annotations
+
+import argparse
+import re
+import statistics
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SLICE = ROOT / "demos" / "cooler_slice.toml"
+
+
+def slice_text(holdup: float) -> tuple[str, int]:
+    """The cooler slice's scene filled to ``holdup`` kg/m, and its sphere count."""
+    from taichi_dem.app import slice_map as sm
+    from taichi_dem.app.overrides import apply, to_text
+    from taichi_dem.scene.loader import parse_scene
+    base = SLICE.read_text()
+    scene = parse_scene(base, source=str(SLICE))
+    count, _, _ = sm.holdup_count(scene, sm.slice_geometry(scene), ("kg/m", holdup))
+    return to_text(apply(tomllib.loads(base), {"particles.0.count": count}, str(SLICE))), count
+
+
+def bed_text(count: int) -> str:
+    """A plain periodic bed: the slice's domain, material, interactions, heat and dt, its
+    ``count`` spheres poured onto a floor between two side walls (plane walls, no mesh)."""
+    doc = tomllib.loads(SLICE.read_text())
+    from taichi_dem.app.overrides import to_text
+    doc.pop("bodies")
+    doc["simulation"]["gravity"] = [0.0, 0.0, -9.81]
+    doc["walls"] = [
+        {"name": "floor", "plane": {"point": [0, 0, -0.44], "normal": [0, 0, 1]},
+         "material": "steel", "temperature": "30 C"},
+        {"name": "left", "plane": {"point": [0, -0.44, 0], "normal": [0, 1, 0]},
+         "material": "steel"},
+        {"name": "right", "plane": {"point": [0, 0.44, 0], "normal": [0, -1, 0]},
+         "material": "steel"},
+    ]
+    doc["particles"][0]["count"] = count
+    doc["particles"][0]["region"] = {"box": {"min": [0.0, -0.43, -0.43],
+                                             "max": [0.25, 0.43, -0.1]}}
+    return to_text(doc)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--holdup", type=float, default=60.0, help="kg/m")
+    p.add_argument("--settle", type=float, default=0.5, help="simulated seconds before timing")
+    p.add_argument("--steps", type=int, default=500)
+    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--profile", action="store_true", help="Taichi's kernel profiler breakdown")
+    a = p.parse_args(argv)
+    import taichi as ti
+    if a.profile:
+        orig = ti.init
+        ti.init = lambda **kw: orig(**{**kw, "kernel_profiler": True})
+    import taichi_dem as td
+    text, count = slice_text(a.holdup)
+    cases = {"cooler slice": text, "plain bed": bed_text(count)}
+    rates = {name: [] for name in cases}
+    kernels: dict = {name: {} for name in cases}
+    # both alive at once, each settled, then timed in alternation (a noisy host's drift
+    # falls on both alike): round r times the slice, then the bed
+    sims = {name: td.Simulation.from_text(scene, h5="") for name, scene in cases.items()}
+    try:
+        for sim in sims.values():
+            sim.run(a.settle)
+        for _ in range(a.repeats):
+            for name, sim in sims.items():
+                n = sim.particle_count
+                if a.profile:
+                    ti.profiler.clear_kernel_profiler_info()
+                t0 = time.perf_counter()
+                sim.step(a.steps)
+                sim.engine.flags.to_numpy()
+                rates[name].append(n * a.steps / (time.perf_counter() - t0))
+                if a.profile:
+                    for kernel, seconds in _records():
+                        kernels[name][kernel] = kernels[name].get(kernel, 0.0) + seconds
+                kernels[name]["__per"] = kernels[name].get("__per", 0) + n * a.steps
+    finally:
+        for sim in sims.values():
+            sim.close()
+    for name, r in rates.items():
+        print(f"{name}: {count} particles, median {statistics.median(r) / 1e6:.2f} M "
+              f"particle-steps/s ({', '.join(f'{x / 1e6:.2f}' for x in r)})", flush=True)
+    paired = [b / s for s, b in zip(rates["cooler slice"], rates["plain bed"])]
+    print(f"paired ratio per round (slice cost / bed cost): "
+          f"{', '.join(f'{x:.2f}' for x in paired)}; median {statistics.median(paired):.2f}")
+    ns = {k: 1e9 / statistics.median(v) for k, v in rates.items()}
+    print(f"ns per particle-step: slice {ns['cooler slice']:.0f}, bed {ns['plain bed']:.0f}, "
+          f"ratio {ns['cooler slice'] / ns['plain bed']:.2f}")
+    if a.profile:
+        names = sorted(set(kernels["cooler slice"]) | set(kernels["plain bed"]) - {"__per"},
+                       key=lambda k: -kernels["cooler slice"].get(k, 0.0))
+        print(f"{'kernel':40s} {'slice ns':>9s} {'bed ns':>9s}   (per particle-step)")
+        for k in names:
+            if k == "__per":
+                continue
+            s = 1e9 * kernels["cooler slice"].get(k, 0.0) / kernels["cooler slice"]["__per"]
+            b = 1e9 * kernels["plain bed"].get(k, 0.0) / kernels["plain bed"]["__per"]
+            if k.startswith("launches of "):
+                continue
+            if s > 0.5 or b > 0.5:
+                per_step = {c: kernels[c].get("launches of " + k, 0) / (a.steps * a.repeats)
+                            for c in kernels}
+                print(f"{k[:40]:40s} {s:9.1f} {b:9.1f}   launches per step "
+                      f"{per_step['cooler slice']:.3f} / {per_step['plain bed']:.3f}")
+    return 0
+
+
+def _records() -> list[tuple[str, float]]:
+    """(kernel name, seconds) summed per kernel over the profiler's records since it was
+    cleared (Taichi's runtime records, as ti.profiler.print_kernel_profiler_info reads them)."""
+    from taichi.lang import impl
+    prog = impl.get_runtime().prog
+    prog.sync_kernel_profiler()
+    prog.update_kernel_profiler()
+    out: dict = {}
+    for rec in prog.get_kernel_profiler_records():
+        # Taichi names a kernel's offloaded tasks <kernel>_c<n>_<k>_<kind>...: the compile
+        # number <n> differs between the two scenes, the task <k> is kept
+        kernel = re.sub(r"_c\d+_", "#", rec.name)
+        out[kernel] = out.get(kernel, 0.0) + rec.kernel_time * 1e-3
+        launches = "launches of " + kernel
+        out[launches] = out.get(launches, 0) + 1
+    return list(out.items())
+
+
+if __name__ == "__main__":
+    sys.exit(main())
