@@ -153,6 +153,10 @@ class BodyFrames:
         self.set_frames = set_frames
 
 
+# particles per thread's partial sum in BodyLoads' flush (one atomic add per run of them)
+FLUSH_CHUNK = 256
+
+
 class BodyLoads:
     """What the contacts load the bodies with: per particle and body ``particle_load_force``
     N, ``particle_load_torque`` N m (about the axis point) and, with wall conduction,
@@ -175,23 +179,36 @@ class BodyLoads:
 
     def make_flush(self):
         """A ti.func (n, serial_loops) adding the first ``n`` particles' loads into the
-        bodies' sums and clearing them."""
+        bodies' sums and clearing them. Each thread sums a run of FLUSH_CHUNK particles and
+        adds that once: one atomic add per particle into two bodies' sums made the threads
+        fight over the sums' cache line (9 ns a particle-step on the seed's cooler slice,
+        ~200 ns a particle at each rebuild; BENCHMARKS.md "The cooler slice against a plain
+        bed")."""
         ld = self
         nb = self.n_bodies
         heat_loads = self.particle_load_heat is not None
+        chunk = FLUSH_CHUNK
 
         @ti.func
         def flush_loads_body(n, serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
-            for i in range(n):
+            for c in range((n + chunk - 1) // chunk):
                 for b in ti.static(range(nb)):
-                    ld.force_sum[b] += ld.particle_load_force[i, b]
-                    ld.torque_sum[b] += ld.particle_load_torque[i, b]
-                    ld.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
-                    ld.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                    force = ti.Vector([0.0, 0.0, 0.0])
+                    torque = ti.Vector([0.0, 0.0, 0.0])
+                    heat = 0.0
+                    for i in range(c * chunk, ti.min(n, (c + 1) * chunk)):
+                        force += ld.particle_load_force[i, b]
+                        torque += ld.particle_load_torque[i, b]
+                        ld.particle_load_force[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                        ld.particle_load_torque[i, b] = ti.Vector([0.0, 0.0, 0.0])
+                        if ti.static(heat_loads):
+                            heat += ld.particle_load_heat[i, b]
+                            ld.particle_load_heat[i, b] = 0.0
+                    ld.force_sum[b] += force
+                    ld.torque_sum[b] += torque
                     if ti.static(heat_loads):
-                        ld.heat_sum[b] += ld.particle_load_heat[i, b]
-                        ld.particle_load_heat[i, b] = 0.0
+                        ld.heat_sum[b] += heat
         return flush_loads_body
 
     def take(self, steps: int):
