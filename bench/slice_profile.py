@@ -11,6 +11,10 @@ time of each kernel over the timed steps (the stages: ``pair_forces`` the partic
 poses, the rest the neighbour-list and triangle-list rebuilds and the surface survey).
 
     python bench/slice_profile.py [--holdup 60] [--steps 500] [--repeats 3] [--profile]
+    python bench/slice_profile.py --scene demos/dryers/dryer_slice.toml --holdup 75
+
+``--scene`` takes another periodic slice whose first body is its shell (the flighted dryer
+drum above); the bed then keeps that scene's materials, gas and heat.
 
 Prints each case's particle-steps per second (median), ns per particle-step, their ratio, and
 with ``--profile`` the per-kernel breakdown per particle-step of both.
@@ -29,41 +33,50 @@ ROOT = Path(__file__).resolve().parents[1]
 SLICE = ROOT / "demos" / "cooler_slice.toml"
 
 
-def slice_text(holdup: float) -> tuple[str, int]:
-    """The cooler slice's scene filled to ``holdup`` kg/m, and its sphere count."""
+def slice_text(holdup: float, path: Path = SLICE) -> tuple[str, int]:
+    """The slice's scene (``path``, the cooler slice by default) filled to ``holdup`` kg/m,
+    and its sphere count."""
     from taichi_dem.app import slice_map as sm
     from taichi_dem.app.overrides import apply, to_text
     from taichi_dem.scene.loader import parse_scene
-    base = SLICE.read_text()
-    scene = parse_scene(base, source=str(SLICE))
+    base = path.read_text()
+    scene = parse_scene(base, source=str(path), base_dir=str(path.parent))
     count, _, _ = sm.holdup_count(scene, sm.slice_geometry(scene), ("kg/m", holdup))
-    return to_text(apply(tomllib.loads(base), {"particles.0.count": count}, str(SLICE))), count
+    return to_text(apply(tomllib.loads(base), {"particles.0.count": count}, str(path))), count
 
 
-def bed_text(count: int) -> str:
-    """A plain periodic bed: the slice's domain, material, interactions, heat and dt, its
-    ``count`` spheres poured onto a floor between two side walls (plane walls, no mesh)."""
-    doc = tomllib.loads(SLICE.read_text())
+def bed_text(count: int, path: Path = SLICE) -> str:
+    """A plain periodic bed: the slice's domain, materials, interactions, heat, gas and dt,
+    its ``count`` spheres poured onto a floor between two side walls 10 mm inside the domain
+    (plane walls of the shell's material, the floor at the shell's temperature; no mesh)."""
+    doc = tomllib.loads(path.read_text())
     from taichi_dem.app.overrides import to_text
-    doc.pop("bodies")
+    shell = doc.pop("bodies")[0]
+    lo, hi = doc["domain"]["min"], doc["domain"]["max"]
     doc["simulation"]["gravity"] = [0.0, 0.0, -9.81]
+    floor = {"name": "floor", "plane": {"point": [0, 0, lo[2] + 0.01], "normal": [0, 0, 1]},
+             "material": shell["material"]}
+    if "temperature" in shell:
+        floor["temperature"] = shell["temperature"]
     doc["walls"] = [
-        {"name": "floor", "plane": {"point": [0, 0, -0.44], "normal": [0, 0, 1]},
-         "material": "steel", "temperature": "30 C"},
-        {"name": "left", "plane": {"point": [0, -0.44, 0], "normal": [0, 1, 0]},
-         "material": "steel"},
-        {"name": "right", "plane": {"point": [0, 0.44, 0], "normal": [0, -1, 0]},
-         "material": "steel"},
+        floor,
+        {"name": "left", "plane": {"point": [0, lo[1] + 0.01, 0], "normal": [0, 1, 0]},
+         "material": shell["material"]},
+        {"name": "right", "plane": {"point": [0, hi[1] - 0.01, 0], "normal": [0, -1, 0]},
+         "material": shell["material"]},
     ]
     doc["particles"][0]["count"] = count
-    doc["particles"][0]["region"] = {"box": {"min": [0.0, -0.43, -0.43],
-                                             "max": [0.25, 0.43, -0.1]}}
+    doc["particles"][0]["region"] = {"box": {
+        "min": [lo[0], lo[1] + 0.02, lo[2] + 0.02],
+        "max": [hi[0], hi[1] - 0.02, lo[2] + 0.4 * (hi[2] - lo[2])]}}
     return to_text(doc)
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--holdup", type=float, default=60.0, help="kg/m")
+    p.add_argument("--scene", type=Path, default=SLICE, help="a periodic slice whose first "
+                   "body is its shell (default: the seed's cooler slice)")
     p.add_argument("--settle", type=float, default=0.5, help="simulated seconds before timing")
     p.add_argument("--steps", type=int, default=500)
     p.add_argument("--repeats", type=int, default=3)
@@ -74,8 +87,8 @@ def main(argv=None) -> int:
         orig = ti.init
         ti.init = lambda **kw: orig(**{**kw, "kernel_profiler": True})
     import taichi_dem as td
-    text, count = slice_text(a.holdup)
-    cases = {"cooler slice": text, "plain bed": bed_text(count)}
+    text, count = slice_text(a.holdup, a.scene)
+    cases = {"slice": text, "plain bed": bed_text(count, a.scene)}
     rates = {name: [] for name in cases}
     kernels: dict = {name: {} for name in cases}
     # both alive at once, each settled, then timed in alternation (a noisy host's drift
@@ -103,20 +116,20 @@ def main(argv=None) -> int:
     for name, r in rates.items():
         print(f"{name}: {count} particles, median {statistics.median(r) / 1e6:.2f} M "
               f"particle-steps/s ({', '.join(f'{x / 1e6:.2f}' for x in r)})", flush=True)
-    paired = [b / s for s, b in zip(rates["cooler slice"], rates["plain bed"])]
+    paired = [b / s for s, b in zip(rates["slice"], rates["plain bed"])]
     print(f"paired ratio per round (slice cost / bed cost): "
           f"{', '.join(f'{x:.2f}' for x in paired)}; median {statistics.median(paired):.2f}")
     ns = {k: 1e9 / statistics.median(v) for k, v in rates.items()}
-    print(f"ns per particle-step: slice {ns['cooler slice']:.0f}, bed {ns['plain bed']:.0f}, "
-          f"ratio {ns['cooler slice'] / ns['plain bed']:.2f}")
+    print(f"ns per particle-step: slice {ns['slice']:.0f}, bed {ns['plain bed']:.0f}, "
+          f"ratio {ns['slice'] / ns['plain bed']:.2f}")
     if a.profile:
-        names = sorted(set(kernels["cooler slice"]) | set(kernels["plain bed"]) - {"__per"},
-                       key=lambda k: -kernels["cooler slice"].get(k, 0.0))
+        names = sorted(set(kernels["slice"]) | set(kernels["plain bed"]) - {"__per"},
+                       key=lambda k: -kernels["slice"].get(k, 0.0))
         print(f"{'kernel':40s} {'slice ns':>9s} {'bed ns':>9s}   (per particle-step)")
         for k in names:
             if k == "__per":
                 continue
-            s = 1e9 * kernels["cooler slice"].get(k, 0.0) / kernels["cooler slice"]["__per"]
+            s = 1e9 * kernels["slice"].get(k, 0.0) / kernels["slice"]["__per"]
             b = 1e9 * kernels["plain bed"].get(k, 0.0) / kernels["plain bed"]["__per"]
             if k.startswith("launches of "):
                 continue
@@ -124,7 +137,7 @@ def main(argv=None) -> int:
                 per_step = {c: kernels[c].get("launches of " + k, 0) / (a.steps * a.repeats)
                             for c in kernels}
                 print(f"{k[:40]:40s} {s:9.1f} {b:9.1f}   launches per step "
-                      f"{per_step['cooler slice']:.3f} / {per_step['plain bed']:.3f}")
+                      f"{per_step['slice']:.3f} / {per_step['plain bed']:.3f}")
     return 0
 
 
