@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import sys
 from pathlib import Path
 
@@ -55,17 +54,12 @@ def main(argv=None) -> int:
     if not os.path.exists(a.state):
         make_state(a.state, a.scene, a.holdup, a.settle, a.precision)
     import taichi_dem as td
-    from taichi.lang import impl
+    from slice_profile import profiler_launches
     with td.Simulation.from_checkpoint(a.state, h5="") as sim:
         sim.step(20)
         ti.profiler.clear_kernel_profiler_info()
         sim.step(a.steps)
-        prog = impl.get_runtime().prog
-        prog.sync_kernel_profiler()
-        prog.update_kernel_profiler()
-        launches: dict = {}
-        for rec in prog.get_kernel_profiler_records():
-            launches.setdefault(re.sub(r"_c\d+_", "#", rec.name), []).append(rec.kernel_time)
+        launches = profiler_launches()
         print(f"{sim.particle_count} particles, {a.steps} steps from {a.state}")
     print(f"{'kernel':44s} {'launches':>8s} {'min ms':>8s} {'p10 ms':>8s} {'median ms':>9s}")
     for name in sorted(launches, key=lambda k: -sum(launches[k]))[:a.top]:

@@ -90,7 +90,8 @@ def main(argv=None) -> int:
     text, count = slice_text(a.holdup, a.scene)
     cases = {"slice": text, "plain bed": bed_text(count, a.scene)}
     rates = {name: [] for name in cases}
-    kernels: dict = {name: {} for name in cases}
+    launches: dict = {name: {} for name in cases}      # case -> kernel -> [ms per launch]
+    particle_steps = {name: 0 for name in cases}
     # both alive at once, each settled, then timed in alternation (a noisy host's drift
     # falls on both alike): round r times the slice, then the bed
     sims = {name: td.Simulation.from_text(scene, h5="") for name, scene in cases.items()}
@@ -106,10 +107,10 @@ def main(argv=None) -> int:
                 sim.step(a.steps)
                 sim.engine.flags.to_numpy()
                 rates[name].append(n * a.steps / (time.perf_counter() - t0))
+                particle_steps[name] += n * a.steps
                 if a.profile:
-                    for kernel, seconds in _records():
-                        kernels[name][kernel] = kernels[name].get(kernel, 0.0) + seconds
-                kernels[name]["__per"] = kernels[name].get("__per", 0) + n * a.steps
+                    for kernel, times in profiler_launches().items():
+                        launches[name].setdefault(kernel, []).extend(times)
     finally:
         for sim in sims.values():
             sim.close()
@@ -123,40 +124,36 @@ def main(argv=None) -> int:
     print(f"ns per particle-step: slice {ns['slice']:.0f}, bed {ns['plain bed']:.0f}, "
           f"ratio {ns['slice'] / ns['plain bed']:.2f}")
     if a.profile:
-        names = sorted(set(kernels["slice"]) | set(kernels["plain bed"]) - {"__per"},
-                       key=lambda k: -kernels["slice"].get(k, 0.0))
+        def per_particle_step(case, kernel):
+            return 1e6 * sum(launches[case].get(kernel, [])) / particle_steps[case]   # ns
+
+        def per_step(case, kernel):
+            return len(launches[case].get(kernel, [])) / (a.steps * a.repeats)
+
+        names = sorted(set(launches["slice"]) | set(launches["plain bed"]),
+                       key=lambda k: -per_particle_step("slice", k))
         print(f"{'kernel':40s} {'slice ns':>9s} {'bed ns':>9s}   (per particle-step)")
         for k in names:
-            if k == "__per":
-                continue
-            s = 1e9 * kernels["slice"].get(k, 0.0) / kernels["slice"]["__per"]
-            b = 1e9 * kernels["plain bed"].get(k, 0.0) / kernels["plain bed"]["__per"]
-            if k.startswith("launches of "):
-                continue
+            s, b = per_particle_step("slice", k), per_particle_step("plain bed", k)
             if s > 0.5 or b > 0.5:
-                per_step = {c: kernels[c].get("launches of " + k, 0) / (a.steps * a.repeats)
-                            for c in kernels}
                 print(f"{k[:40]:40s} {s:9.1f} {b:9.1f}   launches per step "
-                      f"{per_step['slice']:.3f} / {per_step['plain bed']:.3f}")
+                      f"{per_step('slice', k):.3f} / {per_step('plain bed', k):.3f}")
     return 0
 
 
-def _records() -> list[tuple[str, float]]:
-    """(kernel name, seconds) summed per kernel over the profiler's records since it was
-    cleared (Taichi's runtime records, as ti.profiler.print_kernel_profiler_info reads them)."""
+def profiler_launches() -> dict:
+    """kernel -> [ms of each launch] from Taichi's kernel profiler since it was last cleared
+    (the runtime's records, as ti.profiler.print_kernel_profiler_info reads them). Taichi
+    names a kernel's offloaded tasks <kernel>_c<n>_<k>_<kind>...: the compile number <n>,
+    which differs between scenes and trees, is dropped, the task <k> kept."""
     from taichi.lang import impl
     prog = impl.get_runtime().prog
     prog.sync_kernel_profiler()
     prog.update_kernel_profiler()
     out: dict = {}
     for rec in prog.get_kernel_profiler_records():
-        # Taichi names a kernel's offloaded tasks <kernel>_c<n>_<k>_<kind>...: the compile
-        # number <n> differs between the two scenes, the task <k> is kept
-        kernel = re.sub(r"_c\d+_", "#", rec.name)
-        out[kernel] = out.get(kernel, 0.0) + rec.kernel_time * 1e-3
-        launches = "launches of " + kernel
-        out[launches] = out.get(launches, 0) + 1
-    return list(out.items())
+        out.setdefault(re.sub(r"_c\d+_", "#", rec.name), []).append(rec.kernel_time)
+    return out
 
 
 if __name__ == "__main__":
