@@ -10,32 +10,14 @@ import taichi as ti
 from .hertz_mindlin import rotate_into_tangent_plane
 
 
-# The most contacts the spin limiter below shares a particle's spin among: the kissing number
-# of equal spheres. Each contact may take at most 1/12 of the relative spin in a step, so all
-# of a particle's contacts together cannot reverse its spin however many it has (up to 12).
-SPIN_LIMIT_CONTACTS = 12.0
-
-
 @ti.func
 def constant_torque(relative_spin, normal_force, r_eff, rolling_friction, inertia_eff, dt):
     """tau = -mu_r F_n R* w_rel/|w_rel| on this particle (N m), limited so that it cannot
-    reverse the relative spin within one step: otherwise a resting sphere chatters at
-    mu_r R* F_n dt / I.
-    The limit is I* |w_rel| / (12 dt) (I* = 1/(1/I_i + 1/I_j), kg m^2), a twelfth of what
-    stops this contact's relative spin alone. Each contact's limit acts on the same spin, so
-    with the whole I* |w_rel| / dt per contact a sphere with z contacts would take z times the
-    spin it has: resting in a pocket of three fixed spheres (a rough base), its spin would go
-    w -> w (1 - 3) = -2 w each step, grow to the mu_r R* F_n cap and chatter there, feeding
-    the heap's base energy until it blew up (a heap at sliding friction 1, rolling friction
-    2 diverged at 2.7 s). With the twelfth the spin decays without a change of sign for any
-    sphere with up to 12 contacts. The price: the limiter is a viscous term, so a sphere
-    under a static torque T creeps at w = 12 T dt / I* (the model's known limit: EPSD holds
-    a static torque with its spring)."""
+    reverse the relative spin within one step (otherwise a resting sphere chatters)."""
     spin = relative_spin.norm()
     torque = relative_spin * 0.0
     if spin > 0.0:
-        magnitude = ti.min(rolling_friction * normal_force * r_eff,
-                           spin * inertia_eff / (dt * SPIN_LIMIT_CONTACTS))
+        magnitude = ti.min(rolling_friction * normal_force * r_eff, spin * inertia_eff / dt)
         torque = -magnitude / spin * relative_spin
     return torque
 

@@ -1,21 +1,32 @@
-"""The constant-torque rolling model on a sphere with several contacts: it must come to rest.
+"""The constant-torque rolling model on a sphere with several contacts: a known limit (strict xfail).
 
 The model's spin limiter (PHYSICS.md "Rolling friction": the torque may not reverse the relative
 spin within one step) acts per contact. A sphere resting in a pocket of fixed spheres (the rough
-base of a heap test) has three or four contacts on the same spin: if each contact may stop the
-spin alone (I* |w| / dt, I* = I for a fixed partner), together they turn w into w (1 - z)
-each step, so the spin grows until it reaches the mu_r R* F_n cap and chatters there with
-amplitude ~ z mu_r R* F_n dt / I, feeding energy into the base. A heap of 24 mm spheres at
-sliding friction 1, rolling friction 2 (the dryer aggregate's calibration) blew up that way.
+base of a heap test) has three or four contacts on the same spin: each contact may stop the
+spin alone (I* |w| / dt, I* = I for a fixed partner), so together they turn w into w (1 - z)
+each step, and the spin grows until it reaches the mu_r R* F_n cap and chatters there with
+amplitude ~ z mu_r R* F_n dt / I. Under a large normal force the cap is large and the growth
+runs on: a heap of 24 mm spheres at sliding friction 1, rolling friction 2 blew up that way at
+2.7 s (a sphere in the base reached 8 m/s and 250 rad/s within 50 steps).
+
+Why it is not fixed: every limit that cannot reverse the spin of a sphere with z contacts (a
+z-th of the single contact's I* |w| / dt, or a twelfth, for any z up to 12) makes the model a
+viscous term at low spin, and heaps stop standing. The calibrated fly ash (constant torque,
+1.38 / 1.5) stands at 38.6 +- 0.7 deg over 8 placements with the limiter as it is (38.8 +- 0.4
+at half the time step: the holding does not depend on dt) and at 29.7 +- 0.6 with the twelfth
+(2026-12-06). The chatter at the cap is how this model holds a heap, as EDEM's type A does.
+EPSD (a rolling spring) holds a static torque without it: use EPSD where the constant-torque
+model diverges. A fix (an implicit rolling constraint, or a per-particle contact count) turns
+this test into a pass, and the strict xfail says so.
 
 Checks, f64, gravity -z, each sphere of 24 mm (aggregate: 2900 kg/m3, E 34.5 MPa) set spinning
 at 2 rad/s in a pocket of three and of four touching fixed spheres, mu = 1, mu_r = 2:
 1. after 0.1 s (about 1,700 steps) both have nearly stopped: |w| below 1e-6 of the chatter
-   amplitude z mu_r R* F_n dt / I (the spin decays geometrically, slowed by its coupling to
-   the tangential springs: ~1e-9 of it here). With the old limiter |w| was 0.1 - 0.006 of it;
-2. after 0.2 s, below 1e-10 of it (~1e-14 here, round-off; the old limiter: 0.15 and 6e-4),
-   and over the second 0.1 s the centre moved less than 1e-12 m (4e-14 here; 5e-6 m with the
-   old limiter);
+   amplitude z mu_r R* F_n dt / I (with a twelfth per contact: ~1e-9 of it). With the limiter
+   as it is, |w| is 0.1 - 0.006 of it;
+2. after 0.2 s, below 1e-10 of it (~1e-14 with a twelfth: round-off; as it is, 0.15 and 6e-4),
+   and over the second 0.1 s the centre moved less than 1e-12 m (4e-14 m with a twelfth;
+   5e-6 m as it is);
 3. the pocket holds it: sunk by less than the normal forces alone would give (Hertz's overlap
    at m g / (z cos(theta)) over cos(theta); the tangential forces carry part of the weight).
 """
@@ -60,6 +71,9 @@ def _static_overlap(z_fold, ring):
     return (force / (4.0 / 3.0 * e_eff * math.sqrt(R / 2))) ** (2.0 / 3.0), cos_t
 
 
+@pytest.mark.xfail(strict=True, reason="a known limit of the constant-torque model: its "
+                   "per-contact spin limiter lets a sphere's contacts together reverse and "
+                   "amplify its spin (module docstring); use EPSD where it diverges")
 def test_sphere_in_a_pocket_of_fixed_spheres_comes_to_rest(tmp_path):
     base3, h3, ring3 = _pocket(0.0, 3)
     base4, h4, ring4 = _pocket(0.1, 4)
