@@ -14,7 +14,9 @@ discharge end drains the bed the march's depth gradient accounts for). Then
     gas-solids conductance per metre  ha' = h a'(H_mean),  h = k_g Nu / d, H_mean = M / L,
       Nu = 2 + 0.6 Re^(1/2) Pr^(1/3) (Ranz-Marshall), Re = rho_g d s(H) / mu_g,
     with a'(H) the curtains' surface per metre and s(H) their speed through the gas
-    (app/curtains.py): only the airborne particles meet the gas,
+    (app/curtains.py): only the airborne particles meet the gas; d is the dryer's particle
+    diameter, and a map of coarser spheres (d_map) has its a' scaled by d_map / d (the same
+    airborne mass in the dryer's particles),
     drive torque  int T(H) dx  from the drum's torque per metre.
 Each figure is interpolated linearly in H between the mapped hold-ups; a feed whose uniform
 hold-up (|q(H)| = F) lies outside the map is refused (map more hold-ups). The relative standard errors of q, a' and s at
@@ -87,14 +89,24 @@ def closures(path, design: dict, source: str) -> dict:
     if not (math.isfinite(area) and math.isfinite(slip)):
         raise SceneError(source, key, f"{p} has no curtain figures (map the slice again with "
                          "this version of taichi-dem map)")
-    d = float(info["particle_diameter"])
+    # the map's spheres may be coarser than the dryer's solids (a sphere size is a modelling
+    # choice, the map's transport and airborne mass are bulk figures): the same airborne mass
+    # in particles of the dryer's diameter d shows the gas d_map / d times the surface, each
+    # particle exchanging heat at its own h(d)
+    notes = []
+    d_map = float(info["particle_diameter"])
+    d = float(design.get("particle_diameter") or d_map)
+    if abs(d - d_map) > 1e-3 * d_map:
+        area, area_error = area * d_map / d, area_error * d_map / d
+        notes.append(f"the map's spheres are {d_map * 1e3:.3g} mm, the dryer's solids "
+                     f"{d * 1e3:.3g} mm: the curtains' surface is scaled by {d_map / d:.3g} "
+                     "(the same airborne mass in the dryer's particles) and h is theirs")
     reynolds = design["gas_density"] * d * slip / design["gas_viscosity"]
     prandtl = design["gas_heat_capacity"] * design["gas_viscosity"] / design["gas_conductivity"]
     nusselt = 2.0 + 0.6 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0)
     h = design["gas_conductivity"] * nusselt / d
     # dh/h = (0.3 Re^0.5 Pr^(1/3) / Nu) ds/s
     slip_share = 0.3 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0) / nusselt
-    notes = []
     gas = info.get("gas")
     if gas:
         speed = design["gas_flow"] / (design["gas_density"] * math.pi * design["diameter"] ** 2 / 4)
@@ -167,7 +179,8 @@ def closures_over_gas(paths, design: dict, source: str) -> dict:
                  "map_airborne_fraction", "map_heat_transfer_coefficient"):
         out[name] = float(np.interp(speed, speeds, [c[name] for c in found]))
     out["map_source"] = " + ".join(f"{c['map_source']} ({c['map_gas_speed']:.3g} m/s)" for c in found)
-    out["map_notes"] = notes
+    # each map's own notes (the spheres' size) once, then the gas's
+    out["map_notes"] = list(dict.fromkeys(n for c in found for n in c["map_notes"])) + notes
     out["map_feed_range"] = (max(c["map_feed_range"][0] for c in found),
                              min(c["map_feed_range"][1] for c in found))
     out["map_gas_speed"] = speed

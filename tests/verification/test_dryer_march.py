@@ -269,19 +269,31 @@ def test_a_map_gives_the_residence_the_conductance_and_the_torque(tmp_path):
     assert d.residence_time == pytest.approx(20.0 * 12.0 / 0.5, rel=0.02)        # H L / F
     assert d.drive_torque == pytest.approx(abs(marched.torques["drum"]), rel=1e-12)
     assert d.drive_torque == pytest.approx(70.0 * 12.0, rel=0.02)
-    # Ranz-Marshall on the curtains at the mean hold-up
+    # Ranz-Marshall on the curtains at the mean hold-up. The design's solids are 18 mm, the
+    # map's spheres 24 mm: the same airborne mass in 18 mm particles shows 24/18 the surface,
+    # each at its own h
+    assert d.particle_diameter == pytest.approx(0.018)
     mean = marched.holdup / 12.0
-    area = np.interp(mean, [10.0, 20.0, 40.0], [0.5, 0.9, 1.5])
+    area = np.interp(mean, [10.0, 20.0, 40.0], [0.5, 0.9, 1.5]) * 0.024 / 0.018
     slip = np.interp(mean, [10.0, 20.0, 40.0], [3.0, 3.4, 3.6])
-    re = d.gas_density * 0.024 * slip / d.gas_viscosity
+    re = d.gas_density * 0.018 * slip / d.gas_viscosity
     pr = d.gas_heat_capacity * d.gas_viscosity / d.gas_conductivity
-    h = d.gas_conductivity * (2 + 0.6 * re ** 0.5 * pr ** (1 / 3)) / 0.024
+    h = d.gas_conductivity * (2 + 0.6 * re ** 0.5 * pr ** (1 / 3)) / 0.018
     assert d.conductance_per_metre == pytest.approx(h * area, rel=1e-12)
     assert d.residence_uncertainty == pytest.approx(0.05)
     assert d.conductance_uncertainty == pytest.approx(0.1)
     r = _cli("dryer", str(tmp_path / "design.toml"))
     assert r.returncode == 0, r.stderr
     assert "slices' map" in r.stdout and "drive torque" in r.stdout
+    assert "scaled by 1.33" in r.stdout, r.stdout
+    # solids of the map's own size: no scaling, h at 24 mm
+    path = tmp_path / "design.toml"
+    path.write_text(path.read_text().replace('particle_diameter = "18 mm"',
+                                             'particle_diameter = "24 mm"'))
+    d24 = load(path)
+    re = d24.gas_density * 0.024 * slip / d24.gas_viscosity
+    h = d24.gas_conductivity * (2 + 0.6 * re ** 0.5 * pr ** (1 / 3)) / 0.024
+    assert d24.conductance_per_metre == pytest.approx(h * area * 0.018 / 0.024, rel=1e-12)
 
 
 @pytest.mark.parametrize("change, reason", [({"diameter": 1.2}, "across"), ({"rpm": 5.0}, "rpm"),
