@@ -93,12 +93,12 @@ def closures(path, design: dict, source: str) -> dict:
     # choice, the map's transport and airborne mass are bulk figures): the same airborne mass
     # in particles of the dryer's diameter d shows the gas d_map / d times the surface, each
     # particle exchanging heat at its own h(d)
-    notes = []
+    size_notes = []
     d_map = float(info["particle_diameter"])
     d = float(design.get("particle_diameter") or d_map)
     if abs(d - d_map) > 1e-3 * d_map:
         area, area_error = area * d_map / d, area_error * d_map / d
-        notes.append(f"the map's spheres are {d_map * 1e3:.3g} mm, the dryer's solids "
+        size_notes.append(f"the map's spheres are {d_map * 1e3:.3g} mm, the dryer's solids "
                      f"{d * 1e3:.3g} mm: the curtains' surface is scaled by {d_map / d:.3g} "
                      "(the same airborne mass in the dryer's particles) and h is theirs")
     reynolds = design["gas_density"] * d * slip / design["gas_viscosity"]
@@ -107,6 +107,7 @@ def closures(path, design: dict, source: str) -> dict:
     h = design["gas_conductivity"] * nusselt / d
     # dh/h = (0.3 Re^0.5 Pr^(1/3) / Nu) ds/s
     slip_share = 0.3 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0) / nusselt
+    notes = list(size_notes)
     gas = info.get("gas")
     if gas:
         speed = design["gas_flow"] / (design["gas_density"] * math.pi * design["diameter"] ** 2 / 4)
@@ -129,6 +130,7 @@ def closures(path, design: dict, source: str) -> dict:
         "map_heat_transfer_coefficient": h,
         "map_source": str(p),
         "map_notes": notes,
+        "map_size_notes": size_notes,
         "map_feed_range": (conveyed[0], conveyed[-1]),
         "map_gas_speed": abs(float(gas["axial_velocity"])) if gas else None,
     }
@@ -179,8 +181,9 @@ def closures_over_gas(paths, design: dict, source: str) -> dict:
                  "map_airborne_fraction", "map_heat_transfer_coefficient"):
         out[name] = float(np.interp(speed, speeds, [c[name] for c in found]))
     out["map_source"] = " + ".join(f"{c['map_source']} ({c['map_gas_speed']:.3g} m/s)" for c in found)
-    # each map's own notes (the spheres' size) once, then the gas's
-    out["map_notes"] = list(dict.fromkeys(n for c in found for n in c["map_notes"])) + notes
+    # the maps' notes on the spheres' size (once; their gas notes give way to the
+    # interpolation in the gas speed), then the gas's
+    out["map_notes"] = list(dict.fromkeys(n for c in found for n in c["map_size_notes"])) + notes
     out["map_feed_range"] = (max(c["map_feed_range"][0] for c in found),
                              min(c["map_feed_range"][1] for c in found))
     out["map_gas_speed"] = speed
