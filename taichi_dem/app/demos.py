@@ -474,6 +474,7 @@ class DryerDrum(Process):
               "spheres roll freely); a whole dryer's answers come from the march below.")
 
     PILOT = "dryers/pilot_dryer.toml"
+    DESIGN_ON_MAP = "dryers/aggregate_dryer_map.toml"
 
     def _whole_dryer(self):
         """The real-size dryer of demos/dryers/aggregate_dryer.toml, marched (app/dryer.py);
@@ -486,6 +487,16 @@ class DryerDrum(Process):
         print(f"summary: the dryer this demo stands for ({self.DESIGN}, `taichi-dem dryer`), "
               "marched along its length:")
         print(report(d, a, spread, "aggregate dryer"))
+        on_map = answer(load(DEMOS_DIR / self.DESIGN_ON_MAP))
+        print(f"summary: the same dryer on the DEM map of its own drum's slices "
+              f"({self.DESIGN_ON_MAP}: 18 flights, the calibrated aggregate as 24 mm spheres): "
+              f"residence {on_map['residence_time'] / 60:.3g} min (the correlations' "
+              f"{a['residence_time'] / 60:.3g}), gas-solids {on_map['conductance_per_metre']:.3g} "
+              f"W/(m K) per metre ({a['conductance_per_metre']:.3g}); the solids leave at "
+              f"{on_map['solids_outlet_temperature'] - 273.15:.0f} C with "
+              f"{on_map['solids_outlet_moisture']:.2%} moisture, the gas at "
+              f"{on_map['gas_outlet_temperature'] - 273.15:.0f} C; drive torque "
+              f"{on_map['drive_torque'] / 1e3:.3g} kN m.")
         pilot = load(DEMOS_DIR / self.PILOT)
         on_map = answer(pilot)
         on_correlations = answer(replace(pilot, residence_time=None, conductance_per_metre=None,
