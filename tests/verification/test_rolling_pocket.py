@@ -12,7 +12,7 @@ runs on: a heap of 24 mm spheres at sliding friction 1, rolling friction 2 blew 
 Why it is not fixed: every limit that cannot reverse the spin of a sphere with z contacts (a
 z-th of the single contact's I* |w| / dt, or a twelfth, for any z up to 12) makes the model a
 viscous term at low spin, and heaps stop standing. The calibrated fly ash (constant torque,
-1.38 / 1.5) stands at 38.6 +- 0.7 deg over 8 placements with the limiter as it is (38.8 +- 0.4
+1.38 / 1.5) stands at 38.6 +- 0.7 deg (mean +- standard error) over 8 placements with the limiter as it is (38.8 +- 0.4
 at half the time step: the holding does not depend on dt) and at 29.7 +- 0.6 with the twelfth
 (2026-12-06). The chatter at the cap is how this model holds a heap, as EDEM's type A does.
 EPSD (a rolling spring) holds a static torque without it: use EPSD where the constant-torque
