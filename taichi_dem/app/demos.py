@@ -487,16 +487,16 @@ class DryerDrum(Process):
         print(f"summary: the dryer this demo stands for ({self.DESIGN}, `taichi-dem dryer`), "
               "marched along its length:")
         print(report(d, a, spread, "aggregate dryer"))
-        on_map = answer(load(DEMOS_DIR / self.DESIGN_ON_MAP))
+        m = answer(load(DEMOS_DIR / self.DESIGN_ON_MAP))
         print(f"summary: the same dryer on the DEM map of its own drum's slices "
               f"({self.DESIGN_ON_MAP}: 18 flights, the calibrated aggregate as 24 mm spheres): "
-              f"residence {on_map['residence_time'] / 60:.3g} min (the correlations' "
-              f"{a['residence_time'] / 60:.3g}), gas-solids {on_map['conductance_per_metre']:.3g} "
+              f"residence {m['residence_time'] / 60:.3g} min (the correlations' "
+              f"{a['residence_time'] / 60:.3g}), gas-solids {m['conductance_per_metre']:.3g} "
               f"W/(m K) per metre ({a['conductance_per_metre']:.3g}); the solids leave at "
-              f"{on_map['solids_outlet_temperature'] - 273.15:.0f} C with "
-              f"{on_map['solids_outlet_moisture']:.2%} moisture, the gas at "
-              f"{on_map['gas_outlet_temperature'] - 273.15:.0f} C; drive torque "
-              f"{on_map['drive_torque'] / 1e3:.3g} kN m.")
+              f"{m['solids_outlet_temperature'] - 273.15:.0f} C with "
+              f"{m['solids_outlet_moisture']:.2%} moisture, the gas at "
+              f"{m['gas_outlet_temperature'] - 273.15:.0f} C; drive torque "
+              f"{m['drive_torque'] / 1e3:.3g} kN m.")
         pilot = load(DEMOS_DIR / self.PILOT)
         on_map = answer(pilot)
         on_correlations = answer(replace(pilot, residence_time=None, conductance_per_metre=None,

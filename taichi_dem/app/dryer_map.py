@@ -99,8 +99,9 @@ def closures(path, design: dict, source: str) -> dict:
     if abs(d - d_map) > 1e-3 * d_map:
         area, area_error = area * d_map / d, area_error * d_map / d
         size_notes.append(f"the map's spheres are {d_map * 1e3:.3g} mm, the dryer's solids "
-                     f"{d * 1e3:.3g} mm: the curtains' surface is scaled by {d_map / d:.3g} "
-                     "(the same airborne mass in the dryer's particles) and h is theirs")
+                          f"{d * 1e3:.3g} mm: the curtains' surface is scaled by "
+                          f"{d_map / d:.3g} (the same airborne mass in the dryer's particles) "
+                          "and h is theirs")
     reynolds = design["gas_density"] * d * slip / design["gas_viscosity"]
     prandtl = design["gas_heat_capacity"] * design["gas_viscosity"] / design["gas_conductivity"]
     nusselt = 2.0 + 0.6 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0)
