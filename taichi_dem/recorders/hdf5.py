@@ -1,14 +1,16 @@
-"""HDF5 results as CONTRACT.md names them, appended and flushed at every output interval so a
-killed run keeps what it wrote."""
+"""HDF5 results as CONTRACT.md names them, committed whole at every output interval (written
+to a mirror, then moved into place) so a run killed at any moment keeps what it wrote."""
 from __future__ import annotations
 
 import os
+import shutil
 import sys
 
 import h5py
 import numpy as np
 
 from .._version import __version__
+from ..files import remove_stale_side_files, side_path
 from ..sensors.units import unit_of
 
 
@@ -66,7 +68,17 @@ def moves(body) -> bool:
 
 
 class HDF5Recorder:
-    """Writes /series/<name> (extendable along time) and /frames/<k>/... groups."""
+    """Writes /series/<name> (extendable along time) and /frames/<k>/... groups.
+
+    What a sample writes (``append_series``, ``append_residence``, ``append_frame``,
+    ``write_bodies``) waits until ``flush``, which commits it whole: the file at ``path`` is
+    never written in place. A flush applies the sample to a mirror of the results (a hidden
+    file beside them, ``.<name>.<pid>.mirror``), moves the mirror over the results with
+    ``os.replace`` (atomic on POSIX), then applies the same sample to the previous file (kept
+    by a hard link) so that it is the next mirror. A run killed at any moment, even inside
+    HDF5's own writes, leaves the results as of one sample or the next, each whole; each
+    sample's data is written twice. (No fsync: this guards against the process being killed,
+    not against the machine losing power.)"""
 
     def __init__(self, path: str, *, scene_text: str, dt: float, arch: str, precision: str):
         from ..errors import SceneError
@@ -75,17 +87,28 @@ class HDF5Recorder:
         if problem:
             raise SceneError(path, "h5", problem)
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+        self._start(path)
+        # created whole, then moved into place
+        tmp = side_path(path, "tmp")
+        with h5py.File(tmp, "w") as f:
+            a = f.attrs
+            a["taichi_dem_version"] = __version__
+            a["scene"] = scene_text
+            a["dt"] = dt
+            a["arch"] = arch
+            a["precision"] = precision
+            f.create_group("series")
+            f.create_group("frames")
+        os.replace(tmp, path)
+
+    def _start(self, path: str) -> None:
         self.path = path
-        self.file = h5py.File(path, "w")
-        a = self.file.attrs
-        a["taichi_dem_version"] = __version__
-        a["scene"] = scene_text
-        a["dt"] = dt
-        a["arch"] = arch
-        a["precision"] = precision
-        self.series = self.file.create_group("series")
-        self.frames = self.file.create_group("frames")
         self.frame_count = 0
+        self._pending: list = []          # what the next flush commits: functions of a file
+        self._mirror = side_path(path, "mirror")
+        self._mirror_ok = False           # the mirror holds what the results hold
+        self._open = True
+        remove_stale_side_files(path, SIDE_TAGS)
 
     @classmethod
     def continue_at(cls, path: str, time: float, dt: float, series: dict, *, scene_text: str,
@@ -96,6 +119,7 @@ class HDF5Recorder:
         missing file is created, with the series so far and frames from ``time`` on."""
         if not os.path.exists(path):
             rec = cls(path, scene_text=scene_text, dt=dt, arch=arch, precision=precision)
+            kept = 0
         else:
             from ..errors import SceneError
             from ..scene.sections.consistency import foreign_file_problem
@@ -103,68 +127,95 @@ class HDF5Recorder:
             if problem:
                 raise SceneError(path, "h5", problem)
             rec = cls.__new__(cls)
-            rec.path = path
-            rec.file = h5py.File(path, "a")
-            rec.frames = rec.file.require_group("frames")
-            if "series" in rec.file:
-                del rec.file["series"]
-            rec.series = rec.file.create_group("series")
-            later = [k for k, g in rec.frames.items() if float(g.attrs.get("time", 0.0)) > time + 0.5 * dt]
-            for k in later:
-                del rec.frames[k]
-            rec.frame_count = max((int(k) + 1 for k in rec.frames), default=0)
-        for name, rows in series.items():
-            data = np.asarray(rows, dtype=np.float64)
-            ds = rec.series.create_dataset(name, data=data, maxshape=(None,) + data.shape[1:],
-                                           chunks=(256,) + data.shape[1:])
-            _label(ds, name)
+            rec._start(path)
+            with h5py.File(path, "r") as f:
+                frames = f.get("frames", {})
+                kept = max((int(k) + 1 for k, g in frames.items()
+                            if float(g.attrs.get("time", 0.0)) <= time + 0.5 * dt), default=0)
+        rec.frame_count = kept
+        rows = {name: np.asarray(v, dtype=np.float64) for name, v in series.items()}
+
+        def rewind(f):
+            frames = f.require_group("frames")
+            for k in [k for k, g in frames.items()
+                      if float(g.attrs.get("time", 0.0)) > time + 0.5 * dt]:
+                del frames[k]
+            if "series" in f:
+                del f["series"]
+            group = f.create_group("series")
+            for name, data in rows.items():
+                ds = group.create_dataset(name, data=data, maxshape=(None,) + data.shape[1:],
+                                          chunks=(256,) + data.shape[1:])
+                _label(ds, name)
+
+        rec._pending.append(rewind)
         rec.flush()
         return rec
 
     def append_series(self, values: dict[str, np.ndarray | float]):
         """Append one sample of each series (name relative to /series, e.g. "time")."""
-        for name, value in values.items():
-            value = np.asarray(value, dtype=np.float64)
-            if name not in self.series:
-                ds = self.series.create_dataset(name, shape=(0,) + value.shape,
-                                                maxshape=(None,) + value.shape, dtype=np.float64,
-                                                chunks=(256,) + value.shape)
-                _label(ds, name)
-            ds = self.series[name]
-            ds.resize(ds.shape[0] + 1, axis=0)
-            ds[-1] = value
+        values = {name: np.array(value, dtype=np.float64) for name, value in values.items()}
+
+        def write(f):
+            series = f.require_group("series")
+            for name, value in values.items():
+                if name not in series:
+                    ds = series.create_dataset(name, shape=(0,) + value.shape,
+                                               maxshape=(None,) + value.shape,
+                                               dtype=np.float64, chunks=(256,) + value.shape)
+                    _label(ds, name)
+                ds = series[name]
+                ds.resize(ds.shape[0] + 1, axis=0)
+                ds[-1] = value
+
+        self._pending.append(write)
 
     def append_residence(self, name: str, records: np.ndarray):
         """Append (id, t_in s, t_out s) rows under /residence/<name>/id, t_in, t_out."""
-        g = self.file.require_group("residence").require_group(name)
-        for col, key, dtype in ((0, "id", np.int64), (1, "t_in", np.float64), (2, "t_out", np.float64)):
-            if key not in g:
-                g.create_dataset(key, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(4096,))
-                g[key].attrs["units"] = RESIDENCE_UNITS[key]
-            ds = g[key]
-            n = ds.shape[0]
-            ds.resize(n + len(records), axis=0)
-            ds[n:] = records[:, col].astype(dtype)
+        records = np.array(records)
+
+        def write(f):
+            g = f.require_group("residence").require_group(name)
+            for col, key, dtype in ((0, "id", np.int64), (1, "t_in", np.float64),
+                                    (2, "t_out", np.float64)):
+                if key not in g:
+                    g.create_dataset(key, shape=(0,), maxshape=(None,), dtype=dtype,
+                                     chunks=(4096,))
+                    g[key].attrs["units"] = RESIDENCE_UNITS[key]
+                ds = g[key]
+                n = ds.shape[0]
+                ds.resize(n + len(records), axis=0)
+                ds[n:] = records[:, col].astype(dtype)
+
+        self._pending.append(write)
 
     def write_bodies(self, bodies, materials=()) -> None:
         """The bodies' meshes as the scene gives them (t = 0): /bodies/<name>/vertices (V, 3; m)
         and faces (F, 3; vertex indices), with the axis they turn about as attributes; and the
         material names (root attribute ``materials``, in the order of the frames' ``material``
         index). Written once; a continued file keeps what it has."""
-        if len(materials) and "materials" not in self.file.attrs:
-            self.file.attrs["materials"] = [str(m) for m in materials]
-        if "bodies" in self.file or not bodies:
-            return
-        group = self.file.create_group("bodies")
-        for body in bodies:
-            g = group.create_group(body.name)
-            g.create_dataset("vertices", data=np.asarray(body.vertices, np.float64))
-            g.create_dataset("faces", data=np.asarray(body.faces, np.int32))
-            for key in g:
-                g[key].attrs["units"] = BODY_DATASETS[key][0]
-            g.attrs["axis_point"] = np.asarray(body.motion.axis_point, float)
-            g.attrs["axis_direction"] = np.asarray(body.motion.axis_direction, float)
-            g.attrs["moves"] = moves(body)
+        materials = [str(m) for m in materials]
+        meshes = [(b.name, np.asarray(b.vertices, np.float64), np.asarray(b.faces, np.int32),
+                   np.asarray(b.motion.axis_point, float),
+                   np.asarray(b.motion.axis_direction, float), moves(b)) for b in bodies]
+
+        def write(f):
+            if materials and "materials" not in f.attrs:
+                f.attrs["materials"] = materials
+            if "bodies" in f or not meshes:
+                return
+            group = f.create_group("bodies")
+            for name, vertices, faces, axis_point, axis_direction, moving in meshes:
+                g = group.create_group(name)
+                g.create_dataset("vertices", data=vertices)
+                g.create_dataset("faces", data=faces)
+                for key in g:
+                    g[key].attrs["units"] = BODY_DATASETS[key][0]
+                g.attrs["axis_point"] = axis_point
+                g.attrs["axis_direction"] = axis_direction
+                g.attrs["moves"] = moving
+
+        self._pending.append(write)
 
     def append_frame(self, time: float, arrays: dict[str, np.ndarray],
                      poses: dict[str, tuple[np.ndarray, np.ndarray]] | None = None):
@@ -172,39 +223,70 @@ class HDF5Recorder:
         (/frames/<k>/bodies/<name>/rotation (3, 3) and translation (3,; m): a scene vertex x0 is
         at rotation @ x0 + translation), with, for a body that moves, its vertices at that
         pose (V, 3; m) so a viewer draws it without computing."""
-        g = self.frames.create_group(str(self.frame_count))
-        g.attrs["time"] = time
-        g.attrs["time_units"] = "s"
-        for name, arr in arrays.items():
-            ds = g.create_dataset(name, data=arr)
-            if name in FRAME_UNITS:
-                ds.attrs["units"] = FRAME_UNITS[name]
-        if poses:
-            posed = g.create_group("bodies")
-            meshes = self.file.get("bodies")
-            for name, (rotation, translation) in poses.items():
-                b = posed.create_group(name)
-                b.create_dataset("rotation", data=np.asarray(rotation, np.float64))
-                b.create_dataset("translation", data=np.asarray(translation, np.float64))
-                if meshes is not None and name in meshes and meshes[name].attrs.get("moves"):
-                    x0 = meshes[name]["vertices"][()]
-                    b.create_dataset("vertices", data=x0 @ np.asarray(rotation).T + translation)
-                for key in b:
-                    b[key].attrs["units"] = FRAME_BODY_DATASETS[key][0]
+        key = str(self.frame_count)
+        arrays = {name: np.asarray(arr) for name, arr in arrays.items()}
+        poses = {name: (np.array(r, np.float64), np.array(t, np.float64))
+                 for name, (r, t) in (poses or {}).items()}
+
+        def write(f):
+            g = f.require_group("frames").create_group(key)
+            g.attrs["time"] = time
+            g.attrs["time_units"] = "s"
+            for name, arr in arrays.items():
+                ds = g.create_dataset(name, data=arr)
+                if name in FRAME_UNITS:
+                    ds.attrs["units"] = FRAME_UNITS[name]
+            if poses:
+                posed = g.create_group("bodies")
+                meshes = f.get("bodies")
+                for name, (rotation, translation) in poses.items():
+                    b = posed.create_group(name)
+                    b.create_dataset("rotation", data=rotation)
+                    b.create_dataset("translation", data=translation)
+                    if meshes is not None and name in meshes and meshes[name].attrs.get("moves"):
+                        x0 = meshes[name]["vertices"][()]
+                        b.create_dataset("vertices", data=x0 @ rotation.T + translation)
+                    for k in b:
+                        b[k].attrs["units"] = FRAME_BODY_DATASETS[k][0]
+
+        self._pending.append(write)
         self.frame_count += 1
 
     def flush(self):
-        self.file.flush()
+        """Commit what was written since the last flush, whole (the class docstring)."""
+        if not self._pending:
+            return
+        writes, self._pending = self._pending, []
+        if not (self._mirror_ok and os.path.exists(self._mirror)):
+            shutil.copyfile(self.path, self._mirror)
+        self._mirror_ok = False
+        _apply(self._mirror, writes)
+        previous = side_path(self.path, "previous")
+        try:
+            if os.path.lexists(previous):
+                os.unlink(previous)
+            os.link(self.path, previous)      # the results as they were: the next mirror
+        except OSError:                        # no hard links here: copied at the next flush
+            previous = None
+        os.replace(self._mirror, self.path)    # the commit
+        if previous is not None:
+            _apply(previous, writes)
+            os.replace(previous, self._mirror)
+            self._mirror_ok = True
 
     def close(self):
-        """Close the file; with frames in it, write its XDMF description beside it (same
+        """Commit and close; with frames in the file, write its XDMF description beside it (same
         stem, .xdmf: ParaView opens the frames from it, recorders/xdmf.py) and the ParaView
         view script (<stem>_paraview.py: spheres and bodies, recorders/paraview.py)."""
-        if self.file:
-            frames = self.frame_count
-            self.file.close()
-            self.file = None
-            if frames:
+        if self._open:
+            self.flush()
+            self._open = False
+            for tag in ("mirror", "previous"):
+                try:
+                    os.unlink(side_path(self.path, tag))
+                except OSError:
+                    pass
+            if self.frame_count:
                 from ..errors import SceneError
                 from .paraview import write_paraview_script
                 from .xdmf import write_xdmf
@@ -216,3 +298,14 @@ class HDF5Recorder:
                     # the ParaView view beside it (spheres, bodies); a file of the user's
                     # of that name is left alone
                     write_paraview_script(self.path, xdmf)
+
+
+# the side files a results writer keeps beside the results (HDF5Recorder)
+SIDE_TAGS = ("tmp", "mirror", "previous")
+
+
+def _apply(path: str, writes) -> None:
+    """Open ``path``, apply each of ``writes`` (functions of an open h5py.File), close."""
+    with h5py.File(path, "a") as f:
+        for write in writes:
+            write(f)

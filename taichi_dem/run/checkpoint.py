@@ -43,6 +43,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import CheckpointError
+from ..files import remove_stale_side_files, side_path
 
 # 2: f32 scenes with heat keep f64 residuals of temperature and moisture (engine/precision.py);
 # a version-1 file lacks them, and would resume with temperatures off by up to half an f32 step
@@ -190,8 +191,8 @@ def write(path: str, snap: Snapshot) -> None:
     path = os.path.abspath(path)
     directory = os.path.dirname(path)
     os.makedirs(directory, exist_ok=True)
-    tmp = os.path.join(directory, f".{os.path.basename(path)}.{os.getpid()}.tmp")
-    _remove_stale_temporaries(directory, os.path.basename(path))
+    tmp = side_path(path, "tmp")
+    remove_stale_side_files(path)
     try:
         with h5py.File(tmp, "w") as f:
             for k, v in snap.attrs.items():
@@ -222,26 +223,6 @@ def write(path: str, snap: Snapshot) -> None:
             os.close(fd)
     except OSError:
         pass
-
-
-def _remove_stale_temporaries(directory: str, base: str):
-    """Temporary files of writers that were killed mid-write (their process is gone)."""
-    prefix = f".{base}."
-    for name in os.listdir(directory):
-        if not (name.startswith(prefix) and name.endswith(".tmp")):
-            continue
-        pid = name[len(prefix):-len(".tmp")]
-        if not pid.isdigit() or int(pid) == os.getpid():
-            continue
-        try:
-            os.kill(int(pid), 0)
-        except ProcessLookupError:
-            try:
-                os.unlink(os.path.join(directory, name))
-            except OSError:
-                pass
-        except OSError:
-            pass
 
 
 def _write_state_dict(group, name, d: dict):
