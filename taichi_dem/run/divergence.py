@@ -194,9 +194,9 @@ class DivergenceGuard:
                 f"x the {self.expected_speed:.3g} m/s expected (free fall across the domain, "
                 f"initial and body surface speeds)",
                 "a time step too large for the stiffest contact, or two particles created "
-                "deeply overlapping (their repulsion launches them)",
+                "deeply overlapping (their repulsion launches them)" + self._rolling_cause(),
                 "reduce simulation.dt or rayleigh_fraction, and check the fills and factory "
-                "regions for overlaps"))
+                "regions for overlaps" + self._rolling_fix()))
 
     def non_finite_message(self, time: float, slot: Optional[int] = None,
                            measured: Optional[dict] = None) -> str:
@@ -235,9 +235,10 @@ class DivergenceGuard:
         """(likely cause, fix) of a non-finite ``quantity``."""
         if quantity in ("velocity", "angular_velocity"):
             return ("a time step too large for the stiffest contact (the explicit integration "
-                    "blew up)", "reduce simulation.dt or rayleigh_fraction (dt = \"auto\" uses "
+                    "blew up)" + self._rolling_cause(),
+                    "reduce simulation.dt or rayleigh_fraction (dt = \"auto\" uses "
                     "0.2 x the Rayleigh time); if the scene has very stiff walls or bodies, check "
-                    "their materials' youngs_modulus")
+                    "their materials' youngs_modulus" + self._rolling_fix())
         if quantity == "position":
             return ("not the integration: a step moves a particle by dt x its velocity, which is "
                     "finite, so the position was put into the state non-finite (written from "
@@ -270,6 +271,30 @@ class DivergenceGuard:
                 "(thermal.time_scale x simulation.dt too long), or absurd moistures or gas "
                 "conditions", "check the fills' and factories' moisture and the [thermal] "
                 "drying and gas keys; reduce thermal.time_scale or simulation.dt")
+
+    def _constant_torque_rolling(self) -> bool:
+        """Whether an interaction of the scene uses the constant-torque rolling model."""
+        return any(i.rolling_friction > 0.0 and i.rolling_model == "constant_torque"
+                   for i in self.sim.scene.interactions.values())
+
+    def _rolling_cause(self) -> str:
+        """The constant-torque rolling model's known divergence, when the scene uses it
+        (docs/explanation/01_contacts_and_engine.md, "Known limits"): its spin limiter acts
+        per contact, so a sphere with three or more contacts on the same spin has it reversed
+        and amplified each step up to the mu_r R* F_n cap; at high sliding and rolling
+        friction under a heavy load that growth runs away, and no time step cures it."""
+        if not self._constant_torque_rolling():
+            return ""
+        return ("; or the constant-torque rolling model at high friction: its spin limiter "
+                "acts per contact, so a sphere in a pocket of three or more contacts has its "
+                "spin reversed and amplified each step (a smaller dt does not cure this)")
+
+    def _rolling_fix(self) -> str:
+        if not self._constant_torque_rolling():
+            return ""
+        return ("; where the constant-torque model diverges, set model = \"epsd\" in the "
+                "[[interactions]] entry (a rolling spring that holds a static torque without "
+                "the chatter) and calibrate it again")
 
     def _describe(self, time, slot, what, cause, fix) -> str:
         s = self.sim.engine.state

@@ -378,6 +378,22 @@ def test_a_non_finite_angular_velocity_is_named(small_text):
     assert "time step too large" in message
 
 
+@pytest.mark.parametrize("model, named", [("constant_torque", True), ("epsd", False)])
+def test_a_diverged_spin_names_the_constant_torque_rolling_limit(small_text, model, named):
+    """With the constant-torque rolling model (the small scene's default) a diverged spin also
+    names the model's known runaway (a sphere in a pocket of contacts, which no smaller time
+    step cures: tests/verification/test_rolling_pocket.py) and EPSD as the way out; with
+    EPSD the message does not."""
+    text = small_text.replace("rolling_friction = 0.05",
+                              f'rolling_friction = 0.05\nmodel = "{model}"')
+    assert text.count(f'model = "{model}"') == 2
+    with td.Simulation.from_text(text, h5="") as sim:
+        message = _diverge(sim, lambda s: s.angular_velocity.__setitem__(6, [np.inf, 0, 0]))
+    assert "time step too large" in message
+    assert ("constant-torque rolling model at high friction" in message) is named, message
+    assert ('set model = "epsd"' in message) is named
+
+
 @pytest.mark.parametrize("quantity, value, fragments", [
     ("temperature", np.nan, ("has a non-finite temperature (nan K)", "heat")),
     ("temperature", -20.0, ("temperature of -20 K, not above absolute zero", "heat")),
