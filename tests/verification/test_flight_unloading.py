@@ -14,6 +14,10 @@ says (app/flights.py; PHYSICS.md, "Flighted rotary dryers"): a slice of the drye
    angle of repose, measured on a heap (demos/dryers/aggregate_heap.toml: 19.8 deg), gives
    gamma there without any fit: the flight is measured empty (the first bin of 7.5 deg whose
    mean load is under 5 % of the first's) within one bin of the model's angle.
+   This holds for these free-rolling spheres only: the calibrated aggregate's slices
+   (heap 38.9 deg, rule 129-130 deg) empty their flights in the same bin, 108.75 deg
+   (docs/machine/dryer_slice/flights.md), so the agreement here does not show that the
+   heap's angle sets the end; at this size the lip (1.7 diameters) may.
 
 What the spheres do not follow (docs/machine/dryer_slice/flights.md): in the pocket, walled in
 by the leg, the lip and the shell three to seven spheres across, they stand far steeper than on
