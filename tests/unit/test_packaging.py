@@ -78,6 +78,14 @@ def test_wheel_outside_the_checkout_runs_a_demo(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     assert {n.split("/")[0] for n in names} == {"taichi_dem", wheel.name.split("-py3")[0] + ".dist-info"}
     assert "taichi_dem/demos/pile.toml" in names
+    # every scene, map and calibration spec the demos and the docs' commands use travels with
+    # it (the calibration specs were left out once: `taichi-dem calibrate`'s example needs them)
+    shipped = {p.relative_to(ROOT / "demos").as_posix() for p in (ROOT / "demos").rglob("*")
+               if p.is_file() and p.suffix in (".toml", ".json", ".csv", ".stl", ".py")
+               and not {"out", "__pycache__"} & set(p.relative_to(ROOT / "demos").parts)}
+    assert "calibration/fly_ash_seed001.toml" in shipped
+    missing = sorted(f for f in shipped if f"taichi_dem/demos/{f}" not in names)
+    assert not missing, missing
     assert any(n.endswith("licenses/LICENSE") for n in names)
     site = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target",
