@@ -98,3 +98,27 @@ def test_nothing_is_written_in_place(tmp_path):
     rec.close()
     assert all(a != b for a, b in zip(inodes, inodes[1:]))
     assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".r.h5.")]
+
+
+def test_without_hard_links_each_flush_copies_and_commits_whole(tmp_path, monkeypatch):
+    """A file system without hard links (os.link fails): the previous file cannot be kept as
+    the next mirror, so each flush copies the results first; the commits stay whole."""
+    from taichi_dem.recorders import hdf5
+
+    def no_links(src, dst):
+        raise OSError("hard links not supported here")
+
+    monkeypatch.setattr(hdf5.os, "link", no_links)
+    path = tmp_path / "r.h5"
+    rec = hdf5.HDF5Recorder(str(path), scene_text="", dt=1e-5, arch="cpu", precision="f64")
+    for k in range(3):
+        rec.append_series({"time": 0.1 * k})
+        rec.append_frame(0.1 * k, {"position": np.full((4, 3), float(k))})
+        rec.flush()
+        assert not rec._mirror_ok
+        with h5py.File(path, "r") as f:
+            assert len(f["series/time"]) == k + 1 and len(f["frames"]) == k + 1
+    rec.close()
+    with h5py.File(path, "r") as f:
+        assert [float(f[f"frames/{k}/position"][0, 0]) for k in range(3)] == [0.0, 1.0, 2.0]
+    assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".r.h5.")]
