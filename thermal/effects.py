@@ -268,7 +268,8 @@ class CoarseGrainedWall(Effect):
         alpha_ws, effusivity_sq = ctx.table["coarse_alpha_ws"], ctx.table["coarse_effusivity_sq"]
         area_over_r2 = ctx.table["coarse_area_over_r2"]
         reach = self.reach
-        thermal_dt = ctx.dt * self.time_scale       # a step of thermal time (s)
+        # a step of thermal time, S dt (s), read at run time (engine/values.py)
+        thermal_dt = ctx.values.scalar("thermal_dt", ctx.dt * self.time_scale)
 
         @ti.func
         def coarse_grained_wall(c, out):
@@ -280,7 +281,7 @@ class CoarseGrainedWall(Effect):
                     i = c.particle
                     s.wall_touch[i] = 1
                     # the heat of this step: h at the middle of the step's thermal time
-                    age = (s.wall_contact_steps[i] + 0.5) * ti.static(thermal_dt)
+                    age = (s.wall_contact_steps[i] + 0.5) * thermal_dt()
                     h = coarse.bed_coefficient(a, effusivity_sq[c.material_i, c.material_j], age)
                     area = area_over_r2[c.material_i, c.material_j] * c.radius_i * c.radius_i
                     out.conductance += weight * h * area
@@ -526,7 +527,9 @@ class Temperature(Effect):
         dt: ``check`` reads it), and a NaN or overflowed temperature as non_finite."""
         s, sums = ctx.state, self.sums
         compensated = self.compensated
-        dt_step = ctx.dt * self.time_scale
+        # the thermal step S dt (s), read at run time: a changed dt or time scale compiles
+        # nothing new (engine/values.py)
+        thermal_dt = ctx.values.scalar("thermal_dt", ctx.dt * self.time_scale)
 
         @ti.func
         def reset():
@@ -541,8 +544,8 @@ class Temperature(Effect):
                 temperature += s.temperature_residual[i]
             sums[0] += thermal_mass * temperature
             sums[1] += thermal_mass
-            ti.atomic_max(sums[2], ti.cast(dt_step * s.conductance[i] * s.inverse_thermal_mass[i],
-                                           ti.f64))
+            ti.atomic_max(sums[2], ti.cast(thermal_dt() * s.conductance[i]
+                                           * s.inverse_thermal_mass[i], ti.f64))
             if not (s.temperature[i] > 0.0 and s.temperature[i] < 1e30):
                 sums[3] = 1.0
 
@@ -588,13 +591,13 @@ class Temperature(Effect):
             critical = drying_effect.critical_moisture
             evaporated = drying_effect.evaporated
 
-        scale = self.time_scale
+        # thermal.time_scale S, read at run time (engine/values.py): one kernel for every S
+        # (S = 1 multiplies by 1, exactly)
+        scale = ctx.values.scalar("thermal_time_scale", self.time_scale)
 
         @ti.func
         def update_temperature(i, heat, conductance, dt_mechanics):
-            dt = dt_mechanics
-            if ti.static(scale != 1.0):
-                dt = dt_mechanics * ti.static(scale)      # the thermal step
+            dt = dt_mechanics * scale()      # the thermal step
             if ti.static(moisture and compensated):
                 # in f64 throughout, then split back (engine/precision.py)
                 t_new, x_new, inv_c, dm = drying.heat_and_dry(

@@ -230,7 +230,8 @@ class GasGapWall(_GasGap):
         s = ctx.state
         ratio_table = self.ratio_table if widened else None
         diffusivity = self.diffusivity if widened else None
-        thermal_dt = ctx.dt * self.time_scale        # a step of thermal time (s)
+        # a step of thermal time, S dt (s), read at run time (engine/values.py)
+        thermal_dt = ctx.values.scalar("thermal_dt", ctx.dt * self.time_scale)
         per_log = (RATIO_TIMES - 1) / math.log(LAST_TIME / FIRST_TIME)
 
         @ti.func
@@ -250,7 +251,7 @@ class GasGapWall(_GasGap):
                     factor = 1.0 + 0.0 * value
                     if a_s > 0.0:
                         # Fourier number at the middle of this step's thermal time
-                        age = (s.wall_contact_steps[i] + 0.5) * ti.static(thermal_dt)
+                        age = (s.wall_contact_steps[i] + 0.5) * thermal_dt()
                         fourier = ti.max(age * a_s / (c.radius_i * c.radius_i),
                                          ti.static(FIRST_TIME))
                         x = ti.min(ti.log(fourier / ti.static(FIRST_TIME)) * ti.static(per_log),

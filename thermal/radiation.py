@@ -64,11 +64,14 @@ class Radiation(Effect):
         """Books the radiant heat of the step, q dt (J, thermal time S dt), into the run's
         total, an f64 sum."""
         s, radiated = ctx.state, self.radiated
-        time_scale = float(self.thermal.time_scale)
+        # thermal.time_scale, read at run time (engine/values.py; the same slot as the
+        # temperature update's)
+        time_scale = ctx.values.scalar("thermal_time_scale", float(self.thermal.time_scale))
 
         @ti.func
         def book_radiation(i, load, dt):
-            radiated[0] += ti.cast(s.radiated_power[i], ti.f64) * ti.cast(dt, ti.f64) * time_scale
+            radiated[0] += (ti.cast(s.radiated_power[i], ti.f64) * ti.cast(dt, ti.f64)
+                            * ti.cast(time_scale(), ti.f64))
         return book_radiation
 
     def sample(self, values: dict, n: int, measured: dict) -> None:
