@@ -326,24 +326,32 @@ class Convection(Effect):
     def particle_func(self, ctx):
         s = ctx.state
         gas = self.gas
-        gas_velocity = ti.Vector(list(gas.velocity))
-        prandtl_cube_root = (gas.heat_capacity * gas.viscosity / gas.conductivity) ** (1.0 / 3.0)
-        density_over_viscosity = gas.density / gas.viscosity
+        # the gas's values read at run time (engine/values.py): a changed gas compiles
+        # nothing new; the correlation is compiled in
+        values = ctx.values
+        gas_velocity = values.vector("convection_gas_velocity", tuple(gas.velocity))
+        prandtl_cube_root = values.scalar(
+            "convection_prandtl_cube_root",
+            (gas.heat_capacity * gas.viscosity / gas.conductivity) ** (1.0 / 3.0))
+        density_over_viscosity = values.scalar("convection_density_over_viscosity",
+                                               gas.density / gas.viscosity)
         gunn = gas.correlation == "gunn"
-        porosity = gas.porosity
+        porosity = values.scalar("convection_porosity", gas.porosity)
+        k_gas = values.scalar("convection_gas_conductivity", gas.conductivity)
+        t_gas = values.scalar("convection_gas_temperature", gas.temperature)
 
         @ti.func
         def convection(i, load):
             diameter = 2.0 * s.radius[i]
-            reynolds = density_over_viscosity * diameter * (gas_velocity - s.velocity[i]).norm()
+            reynolds = (density_over_viscosity() * diameter
+                        * (gas_velocity() - s.velocity[i]).norm())
             nusselt = 0.0
             if ti.static(gunn):
-                nusselt = gas_convection.nusselt_gunn(reynolds, prandtl_cube_root, porosity)
+                nusselt = gas_convection.nusselt_gunn(reynolds, prandtl_cube_root(), porosity())
             else:
-                nusselt = gas_convection.nusselt_ranz_marshall(reynolds, prandtl_cube_root)
-            h_gas = gas_convection.convective_conductance(ti.static(gas.conductivity), nusselt,
-                                                          diameter)
-            load.heat += h_gas * (ti.static(gas.temperature) - s.temperature[i])
+                nusselt = gas_convection.nusselt_ranz_marshall(reynolds, prandtl_cube_root())
+            h_gas = gas_convection.convective_conductance(k_gas(), nusselt, diameter)
+            load.heat += h_gas * (t_gas() - s.temperature[i])
             load.conductance += h_gas
             return load
 
@@ -368,7 +376,7 @@ class PlugFlowGas(Effect):
         self.stream = AxialPlugFlowGas(self.gas, ctx.state, tree, ctx.real)
 
     def prepare(self, ctx):
-        self.stream.compile()
+        self.stream.compile(ctx.values)
 
     def sample(self, values: dict, n: int, measured: dict) -> None:
         """The gas stream's series (gas/...: thermal/plug_flow.py)."""
@@ -383,11 +391,12 @@ class PlugFlowGas(Effect):
         """``after_pairs`` as a ti.func (n, dt) for a loop that is already serial
         (engine/drivers.py run_steps, several steps in one launch)."""
         exchange = self.stream.exchange_serial
-        time_scale = self.time_scale
+        # thermal.time_scale, read at run time (engine/values.py)
+        time_scale = ctx.values.scalar("thermal_time_scale", self.time_scale)
 
         @ti.func
         def gas_march(n, dt):
-            exchange(n, dt * time_scale)
+            exchange(n, dt * time_scale())
         return gas_march
 
     def particle_func(self, ctx):
@@ -584,10 +593,17 @@ class Temperature(Effect):
         compensated = self.compensated
         moisture = drying_effect is not None
         compensated_add, split_f64 = make_compensated_add(real)
-        t_evap = latent = c_water = critical = 0.0
+        critical = 0.0
         evaporated = None
+        # the drying constants read at run time (engine/values.py): a changed evaporation
+        # temperature, latent heat or water heat capacity compiles nothing new (the critical
+        # moisture stays compiled in: 0 compiles the falling rate away)
+        t_evap_of = latent_of = c_water_of = None
         if moisture:
-            t_evap, latent, c_water = drying_effect.constants
+            t_e, l_v, c_w = drying_effect.constants
+            t_evap_of = ctx.values.scalar("evaporation_temperature", t_e)
+            latent_of = ctx.values.scalar("latent_heat", l_v)
+            c_water_of = ctx.values.scalar("water_heat_capacity", c_w)
             critical = drying_effect.critical_moisture
             evaporated = drying_effect.evaporated
 
@@ -605,7 +621,8 @@ class Temperature(Effect):
                     ti.cast(s.moisture[i], ti.f64) + s.moisture_residual[i],
                     ti.cast(s.inverse_thermal_mass[i], ti.f64),
                     ti.cast(s.mass[i], ti.f64), ti.cast(dt * heat, ti.f64),
-                    t_evap, latent, c_water, critical)
+                    ti.cast(t_evap_of(), ti.f64), ti.cast(latent_of(), ti.f64),
+                    ti.cast(c_water_of(), ti.f64), critical)
                 t_part, t_rest = split_f64(t_new)
                 s.temperature[i] = t_part
                 s.temperature_residual[i] = t_rest
@@ -618,7 +635,7 @@ class Temperature(Effect):
             elif ti.static(moisture):
                 t_new, x_new, inv_c, dm = drying.heat_and_dry(
                     s.temperature[i], s.moisture[i], s.inverse_thermal_mass[i],
-                    s.mass[i], dt * heat, t_evap, latent, c_water, critical)
+                    s.mass[i], dt * heat, t_evap_of(), latent_of(), c_water_of(), critical)
                 s.temperature[i] = t_new
                 if dm > 0.0:
                     s.moisture[i] = x_new

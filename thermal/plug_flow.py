@@ -71,22 +71,30 @@ class AxialPlugFlowGas:
         self.state = state
         self.real = real
 
-    def compile(self):
+    def compile(self, values):
+        """The stream's ti.funcs and kernel. The gas's values (its axis, span, speed, mass
+        flow, inlet temperature and properties) are read at run time from ``values``
+        (engine/values.py RuntimeValues): a changed value compiles nothing new; the number of
+        cells, the flow's direction and the correlation are compiled in."""
         g = self.gas
         s = self.state
         n_cells = self.cells
-        p0 = ti.Vector(list(g.axis_point))
-        axis = ti.Vector(list(g.axis_direction))
-        u_gas = ti.Vector(list(g.velocity))
-        inv_dx = n_cells / g.length
-        length = g.length
-        capacity_rate = g.mass_flow * g.heat_capacity          # m_dot c_g, W/K
-        t_in = g.temperature
+        p0 = values.vector("plug_flow_axis_point", tuple(g.axis_point))
+        axis = values.vector("plug_flow_axis_direction", tuple(g.axis_direction))
+        u_gas = values.vector("plug_flow_velocity", tuple(g.velocity))
+        inv_dx = values.scalar("plug_flow_inverse_cell_length", n_cells / g.length)
+        length = values.scalar("plug_flow_length", g.length)
+        # m_dot c_g, W/K
+        capacity_rate = values.scalar("plug_flow_capacity_rate", g.mass_flow * g.heat_capacity)
+        t_in = values.scalar("plug_flow_inlet_temperature", g.temperature)
         along = g.flow == "along_axis"
-        re_factor = g.density / g.viscosity
-        prandtl_cube_root = (g.heat_capacity * g.viscosity / g.conductivity) ** (1.0 / 3.0)
+        re_factor = values.scalar("plug_flow_density_over_viscosity", g.density / g.viscosity)
+        prandtl_cube_root = values.scalar(
+            "plug_flow_prandtl_cube_root",
+            (g.heat_capacity * g.viscosity / g.conductivity) ** (1.0 / 3.0))
         gunn = g.correlation == "gunn"
-        porosity, k_gas = g.porosity, g.conductivity
+        porosity = values.scalar("plug_flow_porosity", g.porosity)
+        k_gas = values.scalar("plug_flow_conductivity", g.conductivity)
         cell_of, G, GC, SC = self.cell_of, self.conductance, self.cell_conductance, self.cell_weighted
         TC, TX, totals = self.cell_temperature, self.exit_temperature, self.totals
         phi = ti.func(_phi)
@@ -101,17 +109,19 @@ class AxialPlugFlowGas:
             c = -1
             h_area = 0.0
             if s.alive[i] != 0:
-                axial = (s.position[i] - p0).dot(axis)
-                if axial >= 0.0 and axial < length:
-                    c = ti.min(ti.cast(axial * inv_dx, ti.i32), n_cells - 1)
+                axial = (s.position[i] - p0()).dot(axis())
+                if axial >= 0.0 and axial < length():
+                    c = ti.min(ti.cast(axial * inv_dx(), ti.i32), n_cells - 1)
                     diameter = 2.0 * s.radius[i]
-                    reynolds = re_factor * diameter * (u_gas - s.velocity[i]).norm()
+                    reynolds = re_factor() * diameter * (u_gas() - s.velocity[i]).norm()
                     nusselt = 0.0
                     if ti.static(gunn):
-                        nusselt = gas_convection.nusselt_gunn(reynolds, prandtl_cube_root, porosity)
+                        nusselt = gas_convection.nusselt_gunn(reynolds, prandtl_cube_root(),
+                                                              porosity())
                     else:
-                        nusselt = gas_convection.nusselt_ranz_marshall(reynolds, prandtl_cube_root)
-                    h_area = gas_convection.convective_conductance(k_gas, nusselt, diameter)
+                        nusselt = gas_convection.nusselt_ranz_marshall(reynolds,
+                                                                       prandtl_cube_root())
+                    h_area = gas_convection.convective_conductance(k_gas(), nusselt, diameter)
             cell_of[i] = c
             G[i] = h_area
             return c, h_area
@@ -120,7 +130,7 @@ class AxialPlugFlowGas:
         def march(dt):
             """The gas from the inlet cell by cell: each cell's exchange with the particles in
             it (the sums GC, SC of this step), then those sums cleared; dt: the thermal step, s."""
-            t_gas = ti.cast(t_in, self.real)
+            t_gas = ti.cast(t_in(), self.real)
             total = 0.0
             for k in range(n_cells):
                 c = k
@@ -137,11 +147,11 @@ class AxialPlugFlowGas:
                 t_seen = t_gas
                 if g_c > 0.0:
                     t_particles = SC[c] / g_c
-                    ntu = g_c / capacity_rate
+                    ntu = g_c / capacity_rate()
                     f = phi(ntu)                      # (1 - e^-NTU) / NTU
                     t_out = t_gas - (t_gas - t_particles) * ntu * f
                     t_seen = t_particles + (t_gas - t_particles) * f    # T_pc + Q_c / G_c
-                    total += capacity_rate * (t_gas - t_out)
+                    total += capacity_rate() * (t_gas - t_out)
                 TC[c] = t_seen
                 TX[c] = t_out
                 GC[c] = 0.0

@@ -37,18 +37,36 @@ def test_changed_values_compile_nothing_new():
 
 
 @pytest.mark.slow
-def test_a_changed_thermal_time_scale_compiles_nothing_new(tmp_path):
+def test_a_changed_thermal_time_scale_or_gas_compiles_nothing_new(tmp_path):
     """The thermal time scale S (and with it the thermal step S dt) is read at run time: the
     temperature update, its stability sum and the radiation's booking compiled it in before
-    (2 kernels of the main demo compiled again for S = 2). The scene: the resume tests' small
-    hot bed with its paddle, the gas and the wall conduction."""
+    (2 kernels of the main demo compiled again for S = 2); so is the fixed gas of the
+    convection (its temperature compiled in before). The scene: the resume tests' small hot
+    bed with its paddle, the gas and the wall conduction."""
     sys.path.insert(0, str(ROOT / "tests" / "unit"))
     from resume_scene import scene_text
     scene = tmp_path / "hot.toml"
     scene.write_text(scene_text("f32", count=100))
     with tempfile.TemporaryDirectory() as cache:
-        rows = compile_probe.run(str(scene), ["thermal.time_scale=4.0", "thermal.time_scale=12.5"],
-                                 30, cache)
+        rows = compile_probe.run(str(scene), ["thermal.time_scale=4.0", "thermal.time_scale=12.5",
+                                              "thermal.gas.temperature=320.0"], 30, cache)
+    assert rows[0]["new_kernels"] > 20 and rows[1]["new_kernels"] == 0
+    for row in rows[2:]:
+        assert row["recompiled"] == 0, (row["variant"], row["new_kernels"], row["first_used"])
+
+
+@pytest.mark.slow
+def test_changed_drying_and_plug_flow_gas_values_compile_nothing_new():
+    """The dryer demo (drying, radiation, the axial plug-flow gas with its drag): the drying
+    constants and the gas stream's values are read at run time (one kernel each compiled again
+    before: the gather, the gas's exchange)."""
+    with tempfile.TemporaryDirectory() as cache:
+        rows = compile_probe.run(str(ROOT / "demos" / "dryer_drum.toml"),
+                                 ["thermal.evaporation_temperature=360.0",
+                                  "thermal.latent_heat=2.3e6",
+                                  "thermal.gas.inlet_temperature=700 C",
+                                  "thermal.gas.mass_flow=0.3 kg/s",
+                                  "thermal.time_scale=2.0"], 20, cache)
     assert rows[0]["new_kernels"] > 20 and rows[1]["new_kernels"] == 0
     for row in rows[2:]:
         assert row["recompiled"] == 0, (row["variant"], row["new_kernels"], row["first_used"])
