@@ -26,9 +26,11 @@ import taichi as ti
 
 from ..setup.memory import bucket  # noqa: F401  (the capacity buckets: the kernels' shapes)
 
-# room for the values of one simulation (a few dozen are used; asked for more, it says so)
-REAL_SLOTS = 96
-INT_SLOTS = 32
+# room for the values of one simulation: the dryer demo uses 75 reals; each outlet adds 6 and
+# each mass-flow plane 13, so a scene with a dozen sensors needs a few hundred (asked for more,
+# it says so). 1,024 reals are 8 KiB.
+REAL_SLOTS = 1024
+INT_SLOTS = 256
 
 
 class RuntimeValues:
