@@ -482,33 +482,44 @@ class DryerDrum(Process):
         pilot on the correlations."""
         from dataclasses import replace
         from .dryer import answer
-        from .dryer_command import load, report, run
+        from .dryer_command import report, run
         d, a, spread = run(DEMOS_DIR / self.DESIGN)
         print(f"summary: the dryer this demo stands for ({self.DESIGN}, `taichi-dem dryer`), "
               "marched along its length:")
         print(report(d, a, spread, "aggregate dryer"))
-        m = answer(load(DEMOS_DIR / self.DESIGN_ON_MAP))
+        _, m, moved = run(DEMOS_DIR / self.DESIGN_ON_MAP, capacity=False)
+        # each figure's change with the closures moved by the map's standard errors
+        pm = {k: v or 0.0 for k, v in moved["combined"].items()}
         print(f"summary: the same dryer on the DEM map of its own drum's slices "
-              f"({self.DESIGN_ON_MAP}: 18 flights, the calibrated aggregate as 24 mm spheres): "
-              f"residence {m['residence_time'] / 60:.3g} min (the correlations' "
+              f"({self.DESIGN_ON_MAP}: 18 flights, the calibrated aggregate as 24 mm spheres; "
+              "+- the closures moved by the map's standard errors): "
+              f"residence {m['residence_time'] / 60:.3g} +- "
+              f"{pm.get('residence_time', 0.0) / 60:.2g} min (the correlations' "
               f"{a['residence_time'] / 60:.3g}), gas-solids {m['conductance_per_metre']:.3g} "
               f"W/(m K) per metre ({a['conductance_per_metre']:.3g}); the solids leave at "
               f"{m['solids_outlet_temperature'] - 273.15:.0f} C with "
-              f"{m['solids_outlet_moisture']:.2%} moisture, the gas at "
-              f"{m['gas_outlet_temperature'] - 273.15:.0f} C; drive torque "
-              f"{m['drive_torque'] / 1e3:.3g} kN m.")
-        pilot = load(DEMOS_DIR / self.PILOT)
-        on_map = answer(pilot)
+              f"{m['solids_outlet_moisture']:.2%} +- {pm.get('solids_outlet_moisture', 0.0):.2%} "
+              f"moisture, the gas at {m['gas_outlet_temperature'] - 273.15:.0f} +- "
+              f"{pm.get('gas_outlet_temperature', 0.0):.2g} C; drive torque "
+              f"{m['drive_torque'] / 1e3:.3g} kN m (the map's torque at the marched hold-up).")
+        pilot, on_map, pilot_moved = run(DEMOS_DIR / self.PILOT, capacity=False)
         on_correlations = answer(replace(pilot, residence_time=None, conductance_per_metre=None,
                                          map_info=None, drive_torque=None))
         words = []
-        for label, x in (("on the DEM map of this drum's slices", on_map),
-                         ("on the correlations", on_correlations)):
-            words.append(f"{label}: residence {x['residence_time'] / 60:.3g} min, gas-solids "
+        # the map's figures with their change when its closures move by their standard errors
+        # (the correlations' have no measured scatter)
+        errors = {k: v or 0.0 for k, v in pilot_moved["combined"].items()}
+        for label, x, err in (("on the DEM map of this drum's slices", on_map, errors),
+                              ("on the correlations", on_correlations, None)):
+            def pm(name, scale=1.0, fmt=".2g"):
+                return f" +- {err.get(name, 0.0) * scale:{fmt}}" if err is not None else ""
+            words.append(f"{label}: residence {x['residence_time'] / 60:.3g}"
+                         f"{pm('residence_time', 1 / 60)} min, gas-solids "
                          f"{x['conductance_per_metre']:.3g} W/(m K) per metre, the solids leave at "
                          f"{x['solids_outlet_temperature'] - 273.15:.0f} C with "
                          f"{x['solids_outlet_moisture']:.1%} moisture, the gas at "
-                         f"{x['gas_outlet_temperature'] - 273.15:.0f} C")
+                         f"{x['gas_outlet_temperature'] - 273.15:.0f}"
+                         f"{pm('gas_outlet_temperature')} C")
         print(f"summary: this drum as a {pilot.length:g} m pilot dryer fed "
               f"{pilot.feed * 3.6 * (1 + pilot.feed_moisture):.3g} t/h ({self.PILOT}): "
               + "; ".join(words) + ". The map's aggregate is calibrated as far as spheres go "

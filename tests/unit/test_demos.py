@@ -70,3 +70,21 @@ def test_a_copy_takes_the_files_the_scene_names(tmp_path):
     scene.write_text('[[particles]]\nmaterial = "glass"\nfile = "beads.csv"\n'
                      'note = "not/a/file"\n')
     assert demos._named_files(scene) == [__import__("pathlib").Path("beads.csv")]
+
+
+def test_the_dryer_demo_gives_the_maps_answers_with_their_uncertainty(capsys):
+    """The dryer demo's whole-dryer lines (the real-size design on its slices' map, the pilot
+    dryer on the 1 m drum's maps): each map figure a user acts on carries its change when the
+    map's closures move by their standard errors, the same figures `taichi-dem dryer` prints."""
+    from taichi_dem.app.dryer_command import run
+    demos.get("dryer_drum")._whole_dryer()
+    out = capsys.readouterr().out
+    _, m, moved = run(demos.DEMOS_DIR / "dryers" / "aggregate_dryer_map.toml", capacity=False)
+    line = next(x for x in out.splitlines() if "same dryer on the DEM map" in x)
+    assert (f"residence {m['residence_time'] / 60:.3g} +- "
+            f"{moved['combined']['residence_time'] / 60:.2g} min") in line
+    assert f"the gas at {m['gas_outlet_temperature'] - 273.15:.0f} +- " in line
+    pilot = next(x for x in out.splitlines() if "pilot dryer fed" in x)
+    on_map, on_correlations = pilot.split("; on the correlations")
+    assert "residence" in on_map and " +- " in on_map.split("residence", 1)[1]
+    assert " +- " not in on_correlations.split(". The map's")[0]
