@@ -48,6 +48,13 @@ def _skips_coarse(effect, ctx):
     return coarse_grained
 
 
+def _as_uploaded(ctx, name):
+    """The material-pair table ``name`` as the device holds it (cast to the scene's precision),
+    in f64 on the host: what reading the field back would give, without a copy kernel."""
+    npf = np.float64 if ctx.real == ti.f64 else np.float32
+    return np.asarray(ctx.table_values[name]).astype(npf).astype(np.float64)
+
+
 def _gas_over_solid(scene, tables, k_gas):
     """(M, M) table: [a, b] = k_g / k_s of material a (the row's), for the solid-resistance
     gas-gap model; 0 where a material has no conductivity (then isothermal)."""
@@ -114,7 +121,7 @@ class _GasGap(Effect):
 
     def _offsets(self, ctx):
         """l + delta_a + delta_b (m) of each material pair (the "schlunder" law), numpy."""
-        return ctx.table["gap_offset"].to_numpy().astype(np.float64)
+        return _as_uploaded(ctx, "gap_offset")
 
     def _tabulate(self, ctx) -> bool:
         species = getattr(ctx, "species", None)
@@ -131,7 +138,7 @@ class _GasGap(Effect):
         """k_g / k_s of each material (0: isothermal), from the engine's table."""
         if not self.solid:
             return None
-        return ctx.table["gas_over_solid"].to_numpy()[:, 0].astype(np.float64)
+        return _as_uploaded(ctx, "gas_over_solid")[:, 0]
 
     def _kernel_inputs(self, ctx):
         """What both contact laws close over: (solid, voronoi, porosity, the k_g/k_s table,
@@ -193,6 +200,7 @@ class GasGapWall(_GasGap):
             self._allocate_tables(ctx, tree, "gas_gap_wall", (len(ctx.species),))
 
     def upload(self, ctx):
+        writes = []
         if self.widened:
             names = list(ctx.material_names)
             ratios = np.ones((len(names), RATIO_TIMES))
@@ -201,10 +209,10 @@ class GasGapWall(_GasGap):
                 if name in self.first_layer_ratios:
                     diffusivity[a], ratios[a] = self.first_layer_ratios[name]
             npf = np.float64 if ctx.real == ti.f64 else np.float32
-            self.ratio_table.from_numpy(ratios.astype(npf))
-            self.diffusivity.from_numpy(diffusivity.astype(npf))
+            writes += [(self.ratio_table, ratios.astype(npf)),
+                       (self.diffusivity, diffusivity.astype(npf))]
         if self.species_tabulated is None:
-            return
+            return writes
         _, lens, min_gap = self.parameters
         ratio = self._ratios(ctx)
         values, ranges = [], []
@@ -213,8 +221,8 @@ class GasGapWall(_GasGap):
                                               self.model, self.porosity))
             ranges.append(gas_gap.table_range(radius, radius, lens, min_gap) + (min_gap,))
         npf = np.float64 if ctx.real == ti.f64 else np.float32
-        self.table.from_numpy(np.array(values, npf))
-        self.table_range.from_numpy(np.array(ranges, npf))
+        return writes + [(self.table, np.array(values, npf)),
+                         (self.table_range, np.array(ranges, npf))]
 
     def contact_func(self, ctx):
         k_gas, lens, min_gap = self.parameters
@@ -354,7 +362,7 @@ class GasGapPair(_GasGap):
 
     def upload(self, ctx):
         if self.species_tabulated is None:
-            return
+            return []
         _, lens, min_gap = self.parameters
         ratio = self._ratios(ctx)
         offsets = self._offsets(ctx) if self.widened else None
@@ -385,8 +393,7 @@ class GasGapPair(_GasGap):
                 ranges[a, b] = ranges[b, a] = gas_gap.table_range(
                     min(ra, rb), max(ra, rb), lens, gap) + (gap,)
         npf = np.float64 if ctx.real == ti.f64 else np.float32
-        self.table.from_numpy(values.astype(npf))
-        self.table_range.from_numpy(ranges.astype(npf))
+        return [(self.table, values.astype(npf)), (self.table_range, ranges.astype(npf))]
 
     def contact_func(self, ctx):
         k_gas, lens, min_gap = self.parameters

@@ -80,8 +80,8 @@ class Radiation(Effect):
 
     def upload(self, ctx):
         npf = np.float64 if ctx.real == ti.f64 else np.float32
-        self.emissivity.from_numpy(np.array(
-            [self.emissivities.get(k) or 0.0 for k in ctx.material_names], npf))
+        return [(self.emissivity, np.array(
+            [self.emissivities.get(k) or 0.0 for k in ctx.material_names], npf))]
 
     def particle_func(self, ctx):
         s = ctx.state

@@ -11,6 +11,7 @@ summed per particle without atomics and flushed into per-body totals.
 import numpy as np
 import taichi as ti
 
+from ..engine import transfer
 from .kinematics import MAX_SCHEDULE, triangle_arrays
 
 
@@ -41,13 +42,13 @@ class BodyTriangles:
         if not self.count:
             return
         tris, npf = self._tris, np.float64 if self.real == ti.f64 else np.float32
-        self.tri_a.from_numpy(tris[:, 0].astype(npf))
-        self.tri_b.from_numpy(tris[:, 1].astype(npf))
-        self.tri_c.from_numpy(tris[:, 2].astype(npf))
-        self.tri_body.from_numpy(self.owner.astype(np.int32))
         normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
         normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-        self.tri_normal.from_numpy(normal.astype(npf))
+        # one copy kernel for the five (from_numpy compiles one per field)
+        transfer.write([(self.tri_a, tris[:, 0].astype(npf)), (self.tri_b, tris[:, 1].astype(npf)),
+                        (self.tri_c, tris[:, 2].astype(npf)),
+                        (self.tri_body, self.owner.astype(np.int32)),
+                        (self.tri_normal, normal.astype(npf))])
 
 
 class BodyFrames:
@@ -93,20 +94,19 @@ class BodyFrames:
             mat[k] = self._material_index(b.material)
             if self._wall_conduction and b.temperature is not None:
                 temps[k] = b.temperature
-        self.axis_point.from_numpy(ap.astype(self._np_real()))
-        self.axis_direction.from_numpy(ad.astype(self._np_real()))
-        self.body_velocity.from_numpy(bv.astype(self._np_real()))
-        self.body_material.from_numpy(mat)
-        self.body_temperature.from_numpy(temps.astype(self._np_real()))
+        npf = self._np_real()
+        transfer.write([(self.axis_point, ap.astype(npf)), (self.axis_direction, ad.astype(npf)),
+                        (self.body_velocity, bv.astype(npf)), (self.body_material, mat),
+                        (self.body_temperature, temps.astype(npf))])
         self.upload_schedules()
 
     def upload_schedules(self):
         """The speed schedules again (a changed shaft speed: Simulation.set_speed, resume)."""
         times, speeds, angles, counts = self.kin.schedule_arrays()
-        self.sched_time.from_numpy(times.astype(self._np_real()))
-        self.sched_speed.from_numpy(speeds.astype(self._np_real()))
-        self.sched_angle.from_numpy(angles.astype(self._np_real()))
-        self.sched_count.from_numpy(counts)
+        npf = self._np_real()
+        transfer.write([(self.sched_time, times.astype(npf)), (self.sched_speed, speeds.astype(npf)),
+                        (self.sched_angle, angles.astype(npf)),
+                        (self.sched_count, np.asarray(counts, np.int32))])
 
     def compile(self):
         """``update_frames(time)`` (a kernel; a few bodies: always serial) and ``set_frames``
@@ -215,8 +215,7 @@ class BodyLoads:
         """Mean force (N), torque (N m) and heat flow (W) per body over ``steps`` steps
         (flushed already); resets the sums."""
         steps = max(steps, 1)
-        out = tuple(x.to_numpy().astype(np.float64)[: self.n_bodies] / steps
-                    for x in (self.force_sum, self.torque_sum, self.heat_sum))
-        for x in (self.force_sum, self.torque_sum, self.heat_sum):
-            x.fill(0.0)
+        sums = (self.force_sum, self.torque_sum, self.heat_sum)
+        out = tuple(x.astype(np.float64)[: self.n_bodies] / steps for x in transfer.read(sums))
+        transfer.zero(sums)
         return out

@@ -71,6 +71,8 @@ class EffectContext:
     max_radius = property(lambda self: self._model.max_radius, doc="the largest radius, m")
     values = property(lambda self: self._values, doc="scene values read at run time")
     table = property(lambda self: self._table, doc="material-pair device tables by name")
+    table_values = property(lambda self: self._model.table_values,
+                            doc="the same tables on the host (numpy, f64) by name")
     state = property(lambda self: self._state, doc="the particle state (engine/state.py)")
     broadphase = property(lambda self: self._parts.get("broadphase"),
                           doc="the neighbour cells and pair list, once built")
@@ -150,6 +152,12 @@ class Effect:
 
     def allocate(self, ctx, tree) -> None:
         """Allocate what the effect holds beyond its declared fields (e.g. a gas stream)."""
+
+    def upload(self, ctx) -> list:
+        """The first values of what ``allocate`` made: a list of (field, host array) pairs,
+        which the engine writes with the material-pair tables in one copy kernel
+        (engine/transfer.py; a ``from_numpy`` per field compiles a kernel each)."""
+        return []
 
     def prepare(self, ctx) -> None:
         """Compile what needs the engine's parts (the broadphase's cells, the mesh), once

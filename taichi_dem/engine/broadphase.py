@@ -22,6 +22,7 @@ import taichi as ti
 from .grid import GridSpec  # noqa: F401 (re-exported)
 from ..setup.memory import bucket
 from .state import PairState, grown_capacity
+from . import transfer
 from ..setup.tuning import FUSED_AFTER_QUIET_REBUILDS, LIST_GROWTH, SETTLED_ENTRIES_PER_PARTICLE
 from .workers import WORKER_TASK, make_barrier, worker_range
 
@@ -701,9 +702,8 @@ class Broadphase:
             if e.mesh is not None:
                 e.mesh.save_rows(n)
         else:
-            e.state.old_row_count_by_id.fill(0)
-            if e.mesh is not None:
-                e.mesh.old_count_by_id.fill(0)
+            transfer.zero([e.state.old_row_count_by_id]
+                          + ([e.mesh.old_count_by_id] if e.mesh is not None else []))
         self._sort_by_cell(n)
         alive = int(self.total[1])
         self._permute(n)

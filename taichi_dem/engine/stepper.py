@@ -150,13 +150,12 @@ class Engine:
         # (Broadphase.rebuild_on_workers); False: the separate kernels (tests compare the two)
         self.rebuilds_on_workers = True
         npf = np.float64 if real == ti.f64 else np.float32
+        # the tables, the walls and what the effects allocated: one copy kernel for them all
         transfer.write([(self.table[name], values.astype(np.int32 if values.dtype.kind in "iu"
                                                         else npf))
                         for name, values in model.table_values.items()]
-                       + self.plane_walls.writes())
-        for e in self.model.effect_list:
-            if hasattr(e, "upload"):
-                e.upload(self.context)
+                       + self.plane_walls.writes()
+                       + [w for e in self.model.effect_list for w in e.upload(self.context)])
         self.time = 0.0
         self.pairs: "PairState | None" = None
         self.broadphase = Broadphase(self)

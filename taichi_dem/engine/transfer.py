@@ -62,6 +62,7 @@ def _compile(direction: str, fields):
     # the flat index of element I of a field of this shape, before its components
     strides = [tuple(math.prod(shape[d + 1:]) for d in range(len(shape))) for shape, _ in groups]
     reading = direction == "read"
+    zeroing = direction == "zero"
 
     @ti.kernel
     def copy(flat: ti.types.ndarray(dtype=ti.f64, ndim=1)):
@@ -76,11 +77,15 @@ def _compile(direction: str, fields):
                             at = offsets[k] + element * components[k] + c
                             if ti.static(reading):
                                 flat[at] = ti.cast(fields[k][I][c], ti.f64)
+                            elif ti.static(zeroing):
+                                fields[k][I][c] = ti.cast(0, dtypes[k])
                             else:
                                 fields[k][I][c] = ti.cast(flat[at], dtypes[k])
                     else:
                         if ti.static(reading):
                             flat[offsets[k] + element] = ti.cast(fields[k][I], ti.f64)
+                        elif ti.static(zeroing):
+                            fields[k][I] = ti.cast(0, dtypes[k])
                         else:
                             fields[k][I] = ti.cast(flat[offsets[k] + element], dtypes[k])
     return copy, layout
@@ -134,3 +139,17 @@ def write(pairs) -> None:
             raise ValueError(f"array of shape {a.shape} for a field of shape {shape}")
         flat[o:o + a.size] = a.astype(dtype).reshape(-1)
     kernel(flat)
+
+
+def zero(fields) -> None:
+    """``field.fill(0)`` for each of ``fields``, by one kernel for the whole set (``fill``
+    compiles one per field)."""
+    fields = list(fields)
+    if not fields:
+        return
+    if not _supported(fields):
+        for f in fields:
+            f.fill(0)
+        return
+    kernel, _ = _kernel("zero", fields)
+    kernel(np.zeros(1, np.float64))

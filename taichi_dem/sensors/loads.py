@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 
+from ..engine import transfer
+
 
 class BodyLoads:
     """/series bodies/<name>/force, torque, axial_torque, angular_speed, power; for an
@@ -55,8 +57,10 @@ class WallLoads:
 
     def sample(self, values: dict, now) -> None:
         e = self.engine
-        wf = e.wall_force.to_numpy()
-        wq = e.wall_heat.to_numpy() if e.model.thermal else None
+        if e.model.thermal:
+            wf, wq = transfer.read((e.wall_force, e.wall_heat))
+        else:
+            (wf,), wq = transfer.read((e.wall_force,)), None
         for k, w in enumerate(self.walls):
             values[f"walls/{w.name}/force"] = wf[k].astype(np.float64)
             if wq is not None and e.model.wall_conduction and w.temperature is not None:

@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
+from ..engine import transfer
+
 
 class PlaneCrossings:
     """Fields and the ti.func that count crossings of the scene's mass-flow planes."""
@@ -70,11 +72,11 @@ class PlaneCrossings:
 
     def take(self):
         """(mass kg signed, count) crossed per mass-flow plane since the last call; reset."""
-        m = self.plane_mass.to_numpy()[: len(self.planes)].astype(np.float64)
-        c = self.plane_count.to_numpy()[: len(self.planes)].astype(np.int64)
-        self.plane_mass.fill(0.0)
-        self.plane_count.fill(0)
-        return m, c
+        sums = (self.plane_mass, self.plane_count)
+        m, c = transfer.read(sums)              # (one kernel for both, and one to zero them)
+        transfer.zero(sums)
+        return (m[: len(self.planes)].astype(np.float64),
+                c[: len(self.planes)].astype(np.int64))
 
 
 class MassFlowSensor:

@@ -5,13 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..engine import transfer
+
 
 def mass_inside(engine) -> float:
     """Mass of the particles in the simulation now, kg (float64 sum of the stored masses)."""
     s = engine.state
     n = engine.count
-    alive = s.alive.to_numpy()[:n] != 0
-    return float(np.sum(s.mass.to_numpy()[:n][alive].astype(np.float64)))
+    alive, mass = transfer.read((s.alive, s.mass))
+    return float(np.sum(mass[:n][alive[:n] != 0].astype(np.float64)))
 
 
 class ParticleSeries:

@@ -32,5 +32,10 @@ def test_bulk_copies_equal_the_per_field_copies(small_scene_text):
                 assert transfer.host_shape(f) == expected.shape
             with pytest.raises(ValueError, match="shape"):
                 transfer.write([(fields[0], np.zeros(10))])
+            # zero: every element of every field of the set (fill(0) on each), none outside it
+            transfer.zero(fields[:5])
+            for f in fields[:5]:
+                assert not f.to_numpy().any(), f
+            assert np.array_equal(fields[5].to_numpy(), np.asarray(values[5]))
         finally:
             tree.destroy()

@@ -164,14 +164,15 @@ class Mobility(Effect):
             beyond = (inside < 0.25).astype(np.int32)
             outside = (self.fraction_within(ctx, edges, point, axis, radius) == 0.0
                        ).astype(np.int32)
-        self._upload_volumes(ctx, np.maximum(vol, 1e-30).reshape(-1), beyond.reshape(-1))
-        self.block_outside.from_numpy(outside.reshape(-1))
-        self.particle_active.fill(1)
+        return (self._volumes(ctx, np.maximum(vol, 1e-30).reshape(-1), beyond.reshape(-1))
+                + [(self.block_outside, outside.reshape(-1)),
+                   (self.particle_active, np.ones(self.particle_active.shape, np.int32))])
 
-    def _upload_volumes(self, ctx, volume, beyond):
+    def _volumes(self, ctx, volume, beyond):
+        """The writes of the cells' volumes (m^3) and their flags of lying beyond the reach."""
         npf = np.float64 if ctx.real == ti.f64 else np.float32
-        self.block_volume.from_numpy(volume.astype(npf))
-        self.block_beyond.from_numpy(beyond.astype(np.int32))
+        return [(self.block_volume, volume.astype(npf)),
+                (self.block_beyond, beyond.astype(np.int32))]
 
     def frame_reach(self, ctx):
         """(axis point m, unit axis, radius m) of the cylinder that the frame body sweeps as it
@@ -495,8 +496,9 @@ class Mobility(Effect):
                   f"frame body as walls only when the body encloses the bed (a drum shell); "
                   f"judging with the plain cell volumes from now on", file=sys.stderr)
             self.reach_in_use = False
-            self._upload_volumes(ctx, self.plain_volume,
-                                 np.zeros(len(self.plain_volume), np.int32))
+            for field, values in self._volumes(ctx, self.plain_volume,
+                                               np.zeros(len(self.plain_volume), np.int32)):
+                field.from_numpy(values)            # (once, in this rare case)
             self.block_outside.fill(0)
             self._update(n, time)
 
