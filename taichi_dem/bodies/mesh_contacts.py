@@ -30,6 +30,7 @@ from ..contacts.history import history_members, make_history_io
 from ..contacts.law import has_effects, margin_fraction
 from ..effects.mesh_contact import closest_point_on_triangle
 from ..setup.tuning import LIST_GROWTH
+from ..setup.timestep import SKIN_MAX_DIAMETERS
 from ..engine.broadphase import exclusive_scan, previous_entry
 from ..engine import transfer
 from ..setup.memory import bucket
@@ -88,15 +89,19 @@ class MeshContacts:
         self.items_tree = None
         self.entries_tree = None
         self.scratch_tree = None
-        self._alloc_items(bucket(max(4 * self.n_triangles, 1024)))
+        # gas-gap conduction reaches a fluid lens beyond the contact (thermal/gas_gap.py)
+        self.lens = margin_fraction(engine.model.contact_effects, "surface")
+        self.expand = engine.model.max_radius * (1.0 + self.lens) + engine.model.skin
+        # room for the triangles binned into the cells of any skin (the skin follows dt: a
+        # smaller one made more, smaller cells and more items, which grew the list and
+        # compiled the binning and the rows again at the first rebuild)
+        self._alloc_items(bucket(max(4 * self.n_triangles, 1024,
+                                     int(self._items_bound() * LIST_GROWTH) + 16)))
         self._alloc_scratch(16)
         # one candidate entry per slot to start with (~90 bytes each): the seed's cooler slice
         # at 60 kg/m needs ~0.5 per sphere once the bed has packed, and a list that grows
         # mid-run compiles the step's kernels again (a quarter per slot grew at 0.11 s)
         self._alloc_entries(bucket(max(s.capacity, 1024)))
-        # gas-gap conduction reaches a fluid lens beyond the contact (thermal/gas_gap.py)
-        self.lens = margin_fraction(engine.model.contact_effects, "surface")
-        self.expand = engine.model.max_radius * (1.0 + self.lens) + engine.model.skin
         self.minimum_image = engine.model.grid.make_minimum_image()
         self.triangle_image, self.plane_side_range = make_triangle_image(engine.model.grid,
                                                                          self.expand)
@@ -114,6 +119,23 @@ class MeshContacts:
         self.frames.upload_schedules()
 
     # --------------------------------------------------------------- allocation
+    def _items_bound(self) -> int:
+        """The (triangle, cell) items of the triangles where they start, binned by their boxes
+        grown by the reach of the largest automatic skin (m), in cells of the smallest cutoff
+        (GridSpec.least_cutoff) wherever they fall: what the binning counts at any skin the
+        time step sets, or more (it also drops cells far from a triangle's plane). It does not
+        depend on dt nor, but for a triangle wider than the domain, on the domain."""
+        g = self.e.model.grid
+        if not self.n_triangles:
+            return 0
+        radius = self.e.model.max_radius
+        reach = max(radius * (1.0 + self.lens) + SKIN_MAX_DIAMETERS * 2.0 * radius, self.expand)
+        tris = self.triangles._tris
+        extent = tris.max(axis=1) - tris.min(axis=1) + 2.0 * reach
+        per_axis = np.minimum(np.ceil(extent / g.least_cutoff) + 1,
+                              np.ceil(np.asarray(g.span) / g.least_cutoff) + 1)
+        return int(np.prod(per_axis, axis=1).sum())
+
     def _alloc_items(self, capacity):
         if self.items_tree is not None:
             self.items_tree.destroy()

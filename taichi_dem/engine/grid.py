@@ -14,19 +14,21 @@ class GridSpec:
     """Cell layout over the domain: cell size >= the largest pair cutoff (2 R_max + skin);
     periodic axes are tiled exactly by a whole number of cells."""
 
-    def __init__(self, lo, hi, periodic: tuple[str, ...], cutoff: float, capacity: int):
+    def __init__(self, lo, hi, periodic: tuple[str, ...], cutoff: float, capacity: int,
+                 least_cutoff: float | None = None):
+        """``cutoff`` (m): the largest pair cutoff, the cells' least size; ``capacity``: the
+        particle slots; ``least_cutoff`` (m): the smallest cutoff a scene of this kind could
+        have (the skin is set by the time step), which sizes the cell arrays (see below)."""
         self.lo = np.asarray(lo, float)
         self.hi = np.asarray(hi, float)
         span = self.hi - self.lo
         self.periodic = tuple(int(a in periodic) for a in "xyz")
+        most_cells = max(MIN_CELLS, MAX_CELLS_PER_PARTICLE * capacity)
         size = cutoff
         coarsened = False
         while True:
-            dims = []
-            for k in range(3):
-                n = int(math.floor(span[k] / size)) if self.periodic[k] else int(math.ceil(span[k] / size))
-                dims.append(max(n, 1))
-            if np.prod(dims, dtype=np.int64) <= max(MIN_CELLS, MAX_CELLS_PER_PARTICLE * capacity):
+            dims = self._dims(span, size)
+            if np.prod(dims, dtype=np.int64) <= most_cells:
                 break
             size *= 1.25           # a huge, sparse domain: coarser cells, still correct
             coarsened = True
@@ -39,11 +41,29 @@ class GridSpec:
         # more or less share their kernels
         from .values import bucket
         self.cell_capacity = bucket(self.n_cells)
+        # the smallest cutoff (m): what other arrays binned by cell are sized for
+        self.least_cutoff = min(cutoff, least_cutoff or cutoff)
+        if least_cutoff is not None and least_cutoff < cutoff:
+            # room for the cells of the smallest cutoff too: the skin follows the time step
+            # (setup/timestep.py), so a 6x smaller dt made 10,000 cells of the main demo's
+            # 4,332 and compiled every kernel again; the loops run to the cells in use (read
+            # at run time), so the room costs memory only (a few ints a cell)
+            least = int(np.prod(self._dims(span, least_cutoff), dtype=np.int64))
+            self.cell_capacity = max(self.cell_capacity, bucket(min(least, most_cells)))
         if coarsened:
             # the count itself set the cells: room for what any count of its bucket could set
             self.cell_capacity = max(self.cell_capacity, bucket(
                 max(MIN_CELLS, MAX_CELLS_PER_PARTICLE * bucket(capacity))))
         self.values = None
+
+    def _dims(self, span, size: float) -> list[int]:
+        """Cells per axis of cells at least ``size`` (m) wide: periodic axes tiled exactly."""
+        dims = []
+        for k in range(3):
+            n = (int(math.floor(span[k] / size)) if self.periodic[k]
+                 else int(math.ceil(span[k] / size)))
+            dims.append(max(n, 1))
+        return dims
 
     def bind(self, values) -> None:
         """Read the layout at run time from ``values`` (engine/values.py RuntimeValues): the

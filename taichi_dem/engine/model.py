@@ -83,8 +83,10 @@ class Model:
         # the arrays are allocated for a bucket of slots, so that scenes whose counts differ
         # a little share their kernels; the factories fill no more than the scene's own
         slots = bucket(capacity)
+        # (the cell arrays sized for any skin: a skin set by the time step compiles nothing)
         grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
-                        (2.0 + pair_margin) * max_radius + skin, capacity)
+                        (2.0 + pair_margin) * max_radius + skin, capacity,
+                        least_cutoff=(2.0 + pair_margin) * max_radius)
         return cls(scene=scene, tables=tables, real=real, dt=dt, skin=skin,
                    max_radius=max_radius, capacity=slots, particle_limit=int(capacity),
                    species=species,

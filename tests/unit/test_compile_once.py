@@ -21,7 +21,11 @@ import compile_probe  # noqa: E402
 VARIANTS = ["simulation.gravity=[-0.8,0.0,-9.7]",        # a kernel constant before
             "bodies.0.motion.rotate.speed=30 rpm",
             "particles.0.count=+20",                        # within the slots' bucket
-            "domain.max=[0.02,0.06,0.06]"]                   # another grid of cells
+            "domain.max=[0.02,0.06,0.06]",                   # another grid of cells
+            # a small dt: the skin follows it, so smaller cells, more of them, and more
+            # triangle items (35 kernels compiled again before the cell arrays and the
+            # triangles' list were sized for any skin)
+            "simulation.dt=1e-5"]
 
 
 @pytest.mark.slow
