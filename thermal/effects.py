@@ -593,18 +593,19 @@ class Temperature(Effect):
         compensated = self.compensated
         moisture = drying_effect is not None
         compensated_add, split_f64 = make_compensated_add(real)
-        critical = 0.0
+        falling_rate = False
         evaporated = None
         # the drying constants read at run time (engine/values.py): a changed evaporation
-        # temperature, latent heat or water heat capacity compiles nothing new (the critical
-        # moisture stays compiled in: 0 compiles the falling rate away)
-        t_evap_of = latent_of = c_water_of = None
+        # temperature, latent heat, water heat capacity or critical moisture compiles nothing
+        # new (whether there is a falling rate, X_cr > 0, is compiled in: 0 compiles it away)
+        t_evap_of = latent_of = c_water_of = critical_of = None
         if moisture:
             t_e, l_v, c_w = drying_effect.constants
             t_evap_of = ctx.values.scalar("evaporation_temperature", t_e)
             latent_of = ctx.values.scalar("latent_heat", l_v)
             c_water_of = ctx.values.scalar("water_heat_capacity", c_w)
-            critical = drying_effect.critical_moisture
+            falling_rate = drying_effect.critical_moisture > 0.0
+            critical_of = ctx.values.scalar("critical_moisture", drying_effect.critical_moisture)
             evaporated = drying_effect.evaporated
 
         # thermal.time_scale S, read at run time (engine/values.py): one kernel for every S
@@ -622,7 +623,8 @@ class Temperature(Effect):
                     ti.cast(s.inverse_thermal_mass[i], ti.f64),
                     ti.cast(s.mass[i], ti.f64), ti.cast(dt * heat, ti.f64),
                     ti.cast(t_evap_of(), ti.f64), ti.cast(latent_of(), ti.f64),
-                    ti.cast(c_water_of(), ti.f64), critical)
+                    ti.cast(c_water_of(), ti.f64), ti.cast(critical_of(), ti.f64),
+                    ti.static(falling_rate))
                 t_part, t_rest = split_f64(t_new)
                 s.temperature[i] = t_part
                 s.temperature_residual[i] = t_rest
@@ -635,7 +637,8 @@ class Temperature(Effect):
             elif ti.static(moisture):
                 t_new, x_new, inv_c, dm = drying.heat_and_dry(
                     s.temperature[i], s.moisture[i], s.inverse_thermal_mass[i],
-                    s.mass[i], dt * heat, t_evap_of(), latent_of(), c_water_of(), critical)
+                    s.mass[i], dt * heat, t_evap_of(), latent_of(), c_water_of(), critical_of(),
+                    ti.static(falling_rate))
                 s.temperature[i] = t_new
                 if dm > 0.0:
                     s.moisture[i] = x_new

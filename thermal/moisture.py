@@ -24,10 +24,11 @@ import taichi as ti
 @ti.func
 def heat_and_dry(temperature, moisture, inverse_thermal_mass, dry_mass, energy,
                  evaporation_temperature, latent_heat, water_heat_capacity,
-                 critical_moisture: ti.template()):
+                 critical_moisture, falling_rate: ti.template()):
     """One explicit step with ``energy`` = Q dt J into the particle. Returns (temperature K,
     moisture kg/kg, inverse thermal mass 1/(J/K), evaporated water kg). ``critical_moisture``
-    (kg/kg, a Python number: 0 compiles the falling rate away)."""
+    kg/kg, read only when ``falling_rate`` (a Python bool: False compiles the falling rate
+    away; the scene's X_cr > 0)."""
     t_new = temperature + energy * inverse_thermal_mass
     x_new = moisture
     inv_new = inverse_thermal_mass
@@ -37,7 +38,7 @@ def heat_and_dry(temperature, moisture, inverse_thermal_mass, dry_mass, energy,
         surplus = thermal_mass * (t_new - evaporation_temperature)     # the enthalpy above T_e
         water = moisture * dry_mass
         evaporated = surplus / latent_heat
-        if ti.static(critical_moisture > 0.0):
+        if ti.static(falling_rate):
             if moisture < critical_moisture:
                 # falling rate: this step's heat above T_e only, a fraction X / X_cr of it
                 evaporated = (moisture / critical_moisture * thermal_mass

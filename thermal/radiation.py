@@ -91,8 +91,11 @@ class Radiation(Effect):
         plug_flow = stream is not None
         gas = th.gas
         radiate_to_gas = th.radiation_to == "gas"
-        radiation_temperature = (gas.temperature if (radiate_to_gas and not plug_flow)
-                                 else (th.radiation_temperature or 0.0))
+        # the surroundings' temperature (K), read at run time (engine/values.py): a changed
+        # one compiles nothing new
+        surroundings_of = ctx.values.scalar(
+            "radiation_temperature", float(gas.temperature if (radiate_to_gas and not plug_flow)
+                                           else (th.radiation_temperature or 0.0)))
         in_radiation_region = region_test(th.radiation_region, ctx.values, "radiation_region")
         emissivity = self.emissivity
 
@@ -100,7 +103,7 @@ class Radiation(Effect):
         def radiation(i, load):
             s.radiated_power[i] = 0.0
             if in_radiation_region(s.position[i]):
-                t_surroundings = ti.static(radiation_temperature) + 0.0 * load.heat
+                t_surroundings = surroundings_of() + 0.0 * load.heat
                 sees = 1
                 if ti.static(radiate_to_gas and plug_flow):
                     t_surroundings, sees = stream.local_temperature(i)

@@ -74,3 +74,25 @@ def test_changed_drying_and_plug_flow_gas_values_compile_nothing_new():
     assert rows[0]["new_kernels"] > 20 and rows[1]["new_kernels"] == 0
     for row in rows[2:]:
         assert row["recompiled"] == 0, (row["variant"], row["new_kernels"], row["first_used"])
+
+
+@pytest.mark.slow
+def test_a_changed_critical_moisture_or_radiation_temperature_compiles_nothing_new(tmp_path):
+    """The dryer demo with a falling-rate period (critical moisture 0.01) and radiation to an
+    enclosure at 900 K: the critical moisture and the enclosure's temperature are read at run
+    time (each compiled the gather again before). Whether there is a falling rate at all
+    (X_cr > 0) is still compiled in."""
+    import tomllib
+    from taichi_dem.app import overrides
+    demo = ROOT / "demos" / "dryer_drum.toml"
+    doc = overrides.apply(tomllib.loads(demo.read_text()),
+                          {"thermal.critical_moisture": 0.01, "thermal.radiation_to": 900.0},
+                          str(demo))
+    scene = tmp_path / "dryer_falling_rate.toml"
+    scene.write_text(overrides.to_text(doc))
+    with tempfile.TemporaryDirectory() as cache:
+        rows = compile_probe.run(str(scene), ["thermal.critical_moisture=0.02",
+                                              "thermal.radiation_to=1000.0"], 20, cache)
+    assert rows[0]["new_kernels"] > 20 and rows[1]["new_kernels"] == 0
+    for row in rows[2:]:
+        assert row["recompiled"] == 0, (row["variant"], row["new_kernels"], row["first_used"])
