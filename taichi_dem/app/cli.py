@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BackendError, CheckpointError, DivergenceError, SceneError, WindowError
+from ..run import interrupt
 
 def _fail(message: str, code: int = 2) -> int:
     print(f"taichi-dem: {message}", file=sys.stderr)
@@ -566,7 +567,9 @@ def _drive(sim, args, label: str, rrd, h5, t0: float, summary, setup=None) -> in
                 sim.close()
                 return _fail(str(err), 2)
         else:
-            sim.run(until, progress=not args.quiet)
+            # Ctrl-C stops at the next chunk of steps, where the state is whole (run/interrupt.py)
+            with interrupt.deferred():
+                sim.run(until, progress=not args.quiet)
         # a sample at the run's last instant: the report below reads the final state and the
         # series, which must describe the same moment (the last regular sample may be earlier)
         sim.sample_now()

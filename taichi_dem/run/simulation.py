@@ -22,6 +22,7 @@ from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
 from ..effects.base import Effect
 from ..engine import backend, transfer
+from . import interrupt
 from ..setup.tuning import MOST_SPECIES
 from ..errors import DivergenceError, SceneError, StaleSimulationError
 from ..scene.loader import load_scene, parse_scene
@@ -372,6 +373,7 @@ class Simulation:
                     self.factories.insert_due(self.step_count, self.time)
                 if self.step_count % self.output_every == 0:
                     self._sample()
+                interrupt.check()            # Ctrl-C on the command line lands here
         except DivergenceError as err:
             # the checkpoint writer writes the last good state and names it in the message
             for handle in self.on_divergence:

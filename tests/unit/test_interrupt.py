@@ -11,6 +11,7 @@ import sys
 import time
 
 import h5py
+import pytest
 
 from conftest import ROOT
 
@@ -50,3 +51,53 @@ def test_a_reader_that_stops_ends_the_output_quietly():
     err = child.stderr.read().decode()
     child.wait(timeout=120)
     assert child.returncode == 0 and "Traceback" not in err and "BrokenPipe" not in err, err
+
+
+class _Finaliser:
+    """Sends itself Ctrl-C from inside ``__del__`` and runs on there: where Python's own
+    handler's KeyboardInterrupt cannot propagate (it is printed as "Exception ignored" and
+    dropped)."""
+
+    def __del__(self):
+        os.kill(os.getpid(), signal.SIGINT)
+        for _ in range(10000):            # the handler runs at one of these bytecodes
+            pass
+
+
+def test_a_ctrl_c_inside_a_finaliser_is_not_lost(monkeypatch):
+    from taichi_dem.run import interrupt
+    dropped = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: dropped.append(u.exc_type))
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        # Python's handler: the interrupt is raised inside __del__ and dropped
+        finaliser = _Finaliser()
+        del finaliser
+        assert dropped == [KeyboardInterrupt]
+        # deferred: the flag survives the finaliser, and the run's next check raises
+        with interrupt.deferred():
+            finaliser = _Finaliser()
+            del finaliser
+            with pytest.raises(KeyboardInterrupt):
+                interrupt.check()
+            interrupt.check()             # (once only)
+        assert dropped == [KeyboardInterrupt]
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def test_a_deferred_ctrl_c_stops_the_run_where_its_clock_and_state_agree(small_scene_text):
+    """Requested before a step of ten output intervals: the run stops after the first chunk,
+    with the clock at that chunk's end (Python's handler could stop it anywhere inside
+    Engine.advance, the simulation's step count behind its engine's time)."""
+    import taichi_dem as td
+    from taichi_dem.run import interrupt
+    with td.Simulation.from_text(small_scene_text()) as sim, interrupt.deferred():
+        every = sim.output_every
+        os.kill(os.getpid(), signal.SIGINT)
+        for _ in range(10000):
+            pass
+        with pytest.raises(KeyboardInterrupt):
+            sim.step(10 * every)
+        assert sim.step_count == every
+        assert sim.time == pytest.approx(sim.engine.time, rel=0, abs=1e-12)
