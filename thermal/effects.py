@@ -458,8 +458,11 @@ class Drying(Effect):
     energy_terms = {"thermal/vapour_heat": -1.0}
 
     def sample(self, values: dict, n: int, measured: dict) -> None:
-        """thermal/vapour_heat: J the evaporated water carried off since the start."""
+        """particles/mean_moisture (kg/kg), particles/evaporated_mass (kg so far) and
+        thermal/vapour_heat: J the evaporated water carried off since the start."""
         t_e, latent, c_w = self.constants
+        values["particles/mean_moisture"] = measured["mean_moisture"]
+        values["particles/evaporated_mass"] = measured["evaporated_mass"]
         values["thermal/vapour_heat"] = measured["evaporated_mass"] * (latent + c_w * t_e)
 
     def allocate(self, ctx, tree):
@@ -517,6 +520,10 @@ class Temperature(Effect):
                                 "inverse_thermal_mass": (False, "real")}
         if compensated:
             self.particle_fields["temperature_residual"] = (False, "f64")
+
+    def sample(self, values: dict, n: int, measured: dict) -> None:
+        """particles/mean_temperature: K, weighted by the particles' heat capacities."""
+        values["particles/mean_temperature"] = measured["mean_temperature"]
 
     def allocate(self, ctx, tree):
         # f64 sums at a sample (an f32 sum of m c T at 723 K would round a heat balance away):

@@ -40,6 +40,10 @@ _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
 
 # the series the heat effects write besides the sensors' (taichi_dem/sensors/series.py)
 SERIES = (
+    Series("particles/mean_temperature", "K", "mass- and heat-capacity-weighted mean; NaN "
+           "while no particle is inside"),
+    Series("particles/mean_moisture", "1", "drying: kg water per kg dry solid, mean; NaN while "
+           "no particle is inside"),
     Series("particles/evaporated_mass", "kg", "drying: water evaporated so far"),
     Series("thermal/vapour_heat", "J", "drying: carried off by the vapour so far, "
            "(L + c_w T_e) per kg"),

@@ -1,6 +1,6 @@
 """Whole-population series: particles/count, kinetic_energy, lost (and lost_mass in
-process/accounting.py), mass; thermal: mean temperature, mean moisture, evaporated mass and
-the plug-flow gas stream's series."""
+process/accounting.py), mass; and the effects' own (the heat effects': mean temperature, mean
+moisture, evaporated mass, the plug-flow gas stream's)."""
 from __future__ import annotations
 
 import numpy as np
@@ -17,25 +17,18 @@ def mass_inside(engine) -> float:
 
 
 class ParticleSeries:
-    """particles/count, kinetic_energy, lost; thermal scenes: mean_temperature (mean_moisture,
-    evaporated_mass when drying); and the series of every effect that writes its own
-    (``sample``: the gas stream's, the drag's, the collisions')."""
+    """particles/count, kinetic_energy, lost; and the series of every effect that writes its
+    own (``sample``: the temperature's mean, the drying's moisture, the gas stream's, the
+    drag's, the collisions')."""
 
     def __init__(self, engine):
         self.engine = engine
 
     def sample(self, values: dict, now) -> None:
         e, m = self.engine, now.measured
-        thermal = {}
-        if e.model.thermal:
-            thermal["particles/mean_temperature"] = m["mean_temperature"]
-            if e.model.moisture:
-                thermal["particles/mean_moisture"] = m["mean_moisture"]
-                thermal["particles/evaporated_mass"] = m["evaporated_mass"]
         values["particles/count"] = e.alive_count
         values["particles/kinetic_energy"] = m["kinetic_energy"]
         values["particles/lost"] = e.lost
-        values.update(thermal)
         for effect in e.model.effect_list:
             # an effect's own series (declared with its keys: SERIES in its settings module)
             if hasattr(effect, "sample"):

@@ -32,10 +32,6 @@ SERIES = (
     Series("particles/lost", "1", "particles that left the domain so far"),
     Series("particles/lost_mass", "kg", "mass that left the domain so far"),
     Series("particles/mass", "kg", "mass inside"),
-    Series("particles/mean_temperature", "K", "mass- and heat-capacity-weighted mean; NaN "
-           "while no particle is inside"),
-    Series("particles/mean_moisture", "1", "kg water per kg dry solid, mean; NaN while no "
-           "particle is inside"),
     Series("bodies/*/force", "N", "on the body from the particles", "(3,)", interval="mean"),
     Series("bodies/*/torque", "N m", "about the body's rotation axis point", "(3,)",
            interval="mean"),
