@@ -149,10 +149,10 @@ def pairs_within(sim, cutoff_extra: float) -> set:
 #
 # 1. Files go out slowest first (longest-processing-time order, --no-loadscope-reorder in
 #    tasks.py keeps this order): a long file handed out last would leave the other worker
-#    idle for its whole duration. SLOW_FILES lists the files that take over ~20 s (seconds
-#    measured on a two-core machine in a two-worker run, cold kernel cache, 2026-12-03 stop
-#    23: BENCHMARKS.md "Stop 23"); the rest keep their
-#    collection order after them. Only the order of the files changes, never a test.
+#    idle for its whole duration. SLOW_FILES lists the files that take over ~15 s (seconds
+#    measured on a two-core machine in a two-worker run, cold kernel cache, with
+#    TAICHI_DEM_SUITE_PROFILE, 2026-12-06: `python bench/suite_profile.py`); the rest keep
+#    their collection order after them. Only the order of the files changes, never a test.
 # 2. Tests marked ``two_cores`` (the engine's own worker threads: two threads meeting at spin
 #    barriers) run while the other pytest worker waits between its tests: a barrier whose
 #    partner thread has lost its core spins until the OS preempts it, which made those tests
@@ -160,57 +160,48 @@ def pairs_within(sim, cutoff_extra: float) -> set:
 #    test takes an exclusive lock, every other test a shared one (both through a gate lock,
 #    so that a waiting exclusive request is served before new shared ones).
 SLOW_FILES = {
-    "tests/unit/test_loop_mode.py": 296,
-    "tests/unit/test_mobility.py": 145,
-    "tests/unit/test_sweep_runs.py": 137,
-    "tests/verification/test_packed_bed.py": 155,     # two more beds (2026-12-05)
-    "tests/verification/test_coarse_grained_wall.py": 190,  # its two drums alone 166 s (2026-12-05)
-    "tests/unit/test_checkpoint.py": 105,
-    "tests/regression/test_slot_hopper_mobility.py": 93,
-    "tests/verification/test_resume.py": 93,
-    "tests/verification/test_process.py": 90,
-    "tests/regression/test_hopper_beverloo.py": 82,
-    "tests/stability/test_periodic_slices.py": 80,
-    "tests/verification/test_thermal_gas.py": 78,
-    "tests/regression/test_cooler.py": 75,
-    "tests/verification/test_gas_gap_table.py": 74,
-    "tests/verification/test_drum_wall_heat.py": 240,   # four drums of 32-58 s (2026-12-05)
-    "tests/unit/test_slice_map.py": 90,        # (2026-12-04: ~35 s, and the Dask map ~40 s)
-    "tests/verification/test_saeman_drum.py": 120,
-    "tests/verification/test_flight_unloading.py": 70,   # a 469-sphere flighted slice, 12 s
-    "tests/verification/test_direct_check.py": 60,   # a 3-row cooler inlet to outlet, 40 s   # a 900-particle drum slice, 8 s (2026-12-04)
-    "tests/unit/test_engine_surface.py": 73,
-    "tests/unit/test_compile_once.py": 45,     # six fresh processes on one scene (2026-12-05)
-    "tests/verification/test_thermal.py": 72,
-    "tests/verification/test_energy.py": 70,
-    "tests/regression/test_angle_of_repose.py": 65,
-    "tests/regression/test_hard_cases.py": 62,
-    "tests/verification/test_mesh_contacts.py": 59,
-    "tests/verification/test_energy_balance.py": 59,
-    "tests/unit/test_checkpoint_cli.py": 58,
-    "tests/verification/test_drum.py": 56,
-    "tests/unit/test_plots.py": 53,
-    "tests/verification/test_sheet_inlet.py": 52,
-    "tests/verification/test_gas_gap_wall.py": 47,
-    "tests/verification/test_gas_gap_pair.py": 45,
-    "tests/unit/test_neighbour_search.py": 42,
-    "tests/verification/test_drag.py": 38,
-    "tests/verification/test_chung_ooi.py": 36,
-    "tests/verification/test_screw.py": 36,
-    "tests/regression/test_drum_torque.py": 35,
-    "tests/unit/test_rerun.py": 34,
-    "tests/regression/test_chute_steady.py": 33,
-    "tests/stability/test_far_drum.py": 26,
-    "tests/stability/test_polydisperse_bed.py": 22,
-    "tests/verification/test_rolling_friction.py": 22,
-    "tests/verification/test_heat_transfer_coefficient.py": 20,
-    "tests/verification/test_thermal_f32.py": 20,
-    "tests/stability/test_thin_paddle.py": 18,
-    "tests/verification/test_periodic.py": 17,
-    "tests/verification/test_time_scale.py": 17,
-    "tests/unit/test_change_speed_demo.py": 17,
-    "tests/stability/test_steel_bed.py": 16,
-    "tests/unit/test_sweep_outputs.py": 16,
+    "tests/verification/test_drum_wall_heat.py": 182,
+    "tests/verification/test_packed_bed.py": 115,
+    "tests/verification/test_coarse_grained_wall.py": 82,
+    "tests/verification/test_saeman_drum.py": 74,
+    "tests/unit/test_loop_mode.py": 69,
+    "tests/verification/test_heated_bed.py": 69,
+    "tests/unit/test_slice_map.py": 57,
+    "tests/unit/test_checkpoint.py": 44,
+    "tests/unit/test_compile_once.py": 44,
+    "tests/unit/test_sweep_runs.py": 43,
+    "tests/verification/test_process.py": 42,
+    "tests/verification/test_direct_check.py": 41,
+    "tests/unit/test_engine_surface.py": 41,
+    "tests/regression/test_cooler.py": 39,
+    "tests/verification/test_thermal_gas.py": 38,
+    "tests/regression/test_hard_cases.py": 36,
+    "tests/verification/test_gas_gap_pair.py": 36,
+    "tests/regression/test_angle_of_repose.py": 34,
+    "tests/unit/test_mobility.py": 32,
+    "tests/regression/test_hopper_beverloo.py": 32,
+    "tests/verification/test_gas_gap_table.py": 30,
+    "tests/regression/test_slot_hopper_mobility.py": 30,
+    "tests/verification/test_mesh_contacts.py": 29,
+    "tests/verification/test_thermal.py": 29,
+    "tests/verification/test_resume.py": 28,
+    "tests/verification/test_gas_gap_wall.py": 27,
+    "tests/verification/test_flight_unloading.py": 27,
+    "tests/stability/test_periodic_slices.py": 26,
+    "tests/verification/test_drum.py": 24,
+    "tests/unit/test_checkpoint_cli.py": 24,
+    "tests/verification/test_sheet_inlet.py": 21,
+    "tests/unit/test_plots.py": 21,
+    "tests/verification/test_drag.py": 20,
+    "tests/unit/test_neighbour_search.py": 19,
+    "tests/regression/test_drum_torque.py": 19,
+    "tests/verification/test_chung_ooi.py": 19,
+    "tests/unit/test_calibrate.py": 19,
+    "tests/fuzz/test_bad_files.py": 19,
+    "tests/verification/test_screw.py": 17,
+    "tests/verification/test_dryer_march.py": 16,
+    "tests/verification/test_energy_balance.py": 16,
+    "tests/verification/test_first_layer.py": 16,
 }
 
 
