@@ -15,7 +15,6 @@ integration error (< 1e-4 in e), for every target in (0, 1].
 """
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -75,7 +74,7 @@ def _table():
     return c, e
 
 
-@functools.lru_cache(maxsize=256)
+@disk_cached           # (its secant step integrates the ODE twice: ~0.1 s per value, per start)
 def damping_ratio(restitution: float) -> float:
     """zeta for F_d = -zeta sqrt(S_n m*) v_n so that a clamped Hertz contact rebounds with
     ``restitution`` (dimensionless; 0 for e = 1)."""

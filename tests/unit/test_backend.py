@@ -57,6 +57,22 @@ def double():
 double()
 double()
 print("values", x.to_numpy().tolist())
+
+
+@ti.data_oriented
+class Tripler:
+    def __init__(self):
+        self.y = ti.field(float, 3)
+
+    @ti.kernel
+    def fill(self):
+        for i in self.y:
+            self.y[i] = 3.0 * i
+
+
+tripler = Tripler()
+tripler.fill()
+print("method", tripler.y.to_numpy().tolist())
 try:
     fill()
 except Exception as err:
@@ -77,8 +93,10 @@ def test_the_front_end_savings_keep_taichis_kernels_and_error_positions(tmp_path
                          timeout=120, check=False).stdout
     assert "applied True" in out
     assert "values [0.0, 2.0, 4.0, 6.0]" in out
+    # a kernel in a class body is still told from one in a function (_quick_class_test)
+    assert "method [0.0, 3.0, 6.0]" in out
     assert "TaichiNameError" in out
-    assert f'File "{script}", line 11, in fill:' in out
+    assert f'File "{script}", line 11, in fill:' in out, out
     assert "        x[i] = undefined_name + 1.0\n               ^^^^^^^^^^^^^^\n" in out
 
 
