@@ -8,7 +8,8 @@ depend on the simulation:
 
 1. **The source of each function**, read again and re-indented for every instantiation
    (``inspect.getsourcelines`` tokenises the whole file): here kept per code object, so each
-   function's source is read once per process. ``ast.parse`` still runs every time (Taichi
+   function's source is read once per process, and on disk (setup/memo.py's folder, keyed by
+   the file's path and contents), so once per version of its file. ``ast.parse`` still runs every time (Taichi
    writes into the tree it transforms).
 2. **The position text of each statement** (``ASTTransformerContext.get_pos_info``): the file,
    line and function, the source line and a ``^^^`` marker under the expression, for the
@@ -69,10 +70,13 @@ def _cache_sources() -> None:
             return None
         found = sources.get(code)
         if found is None:
-            file = k.getsourcefile(func)
-            src, start_lineno = k.getsourcelines(func)
-            src = [textwrap.fill(line, tabsize=4, width=9999) for line in src]
-            found = (file, src, start_lineno, textwrap.dedent("\n".join(src)))
+            found = _stored_source(code)
+            if found is None:
+                file = k.getsourcefile(func)
+                src, start_lineno = k.getsourcelines(func)
+                src = [textwrap.fill(line, tabsize=4, width=9999) for line in src]
+                found = (file, src, start_lineno, textwrap.dedent("\n".join(src)))
+                _store_source(code, found)
             sources[code] = found
         return found
 
@@ -96,6 +100,64 @@ def _cache_sources() -> None:
             is_real_function=is_real_function)
 
     k._get_tree_and_ctx = get_tree_and_ctx
+
+
+_file_digests: dict = {}
+
+
+def _source_path(code):
+    """Where the source of ``code`` is kept on disk (setup/memo.py's folder), keyed by its
+    file's path and contents (a digest, once per file and process), its first line and name;
+    None without a cache or a file."""
+    import hashlib
+    from ..setup.memo import cache_dir
+    folder = cache_dir()
+    if folder is None:
+        return None
+    digest = _file_digests.get(code.co_filename)
+    if digest is None:
+        try:
+            with open(code.co_filename, "rb") as f:
+                digest = hashlib.sha256(f.read()).hexdigest()
+        except (OSError, TypeError):
+            return None
+        _file_digests[code.co_filename] = digest
+    key = repr((code.co_filename, digest, code.co_firstlineno, code.co_qualname))
+    return folder / "sources" / (hashlib.sha256(key.encode()).hexdigest()[:32] + ".pkl"), key
+
+
+def _stored_source(code):
+    """The source of ``code`` as ``source_of`` read it in an earlier process, or None: reading
+    it (Taichi tokenises the file up to the function and scans sys.modules for its module)
+    took ~0.15 s of the main demo's start."""
+    import pickle
+    found = _source_path(code)
+    if found is None:
+        return None
+    path, key = found
+    try:
+        with open(path, "rb") as f:
+            stored_key, value = pickle.load(f)
+        return value if stored_key == key else None
+    except Exception:            # absent, damaged or unreadable: read the source
+        return None
+
+
+def _store_source(code, value) -> None:
+    import pickle
+    import tempfile
+    found = _source_path(code)
+    if found is None:
+        return
+    path, key = found
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+        with os.fdopen(fd, "wb") as f:
+            pickle.dump((key, value), f)
+        os.replace(tmp, path)
+    except Exception:            # a read-only or full disk: the source is still right
+        pass
 
 
 def _plain_positions() -> None:

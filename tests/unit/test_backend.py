@@ -89,8 +89,15 @@ def test_the_front_end_savings_keep_taichis_kernels_and_error_positions(tmp_path
     import sys
     script = tmp_path / "typo.py"
     script.write_text(KERNEL_WITH_A_TYPO)
-    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                         timeout=120, check=False).stdout
+    env = dict(__import__("os").environ, TAICHI_DEM_CACHE=str(tmp_path / "cache"))
+
+    def run():
+        return subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                              timeout=120, check=False, env=env).stdout
+    first = run()
+    assert list((tmp_path / "cache" / "memo" / "sources").glob("*.pkl"))
+    out = run()                 # the functions' sources now read from the disk
+    assert out == first
     assert "applied True" in out
     assert "values [0.0, 2.0, 4.0, 6.0]" in out
     # a kernel in a class body is still told from one in a function (_quick_class_test)
@@ -98,6 +105,9 @@ def test_the_front_end_savings_keep_taichis_kernels_and_error_positions(tmp_path
     assert "TaichiNameError" in out
     assert f'File "{script}", line 11, in fill:' in out, out
     assert "        x[i] = undefined_name + 1.0\n               ^^^^^^^^^^^^^^\n" in out
+    # the file edited (same length): the kernel's new source is read, not the kept one
+    script.write_text(KERNEL_WITH_A_TYPO.replace("2.0 * i", "5.0 * i"))
+    assert "values [0.0, 5.0, 10.0, 15.0]" in run()
 
 
 def test_the_ir_optimisation_level(monkeypatch):
