@@ -123,7 +123,8 @@ def test_the_parcel_step_is_the_particle_model(critical):
         capacity = d.solids_heat_capacity + x * d.water_heat_capacity   # per kg dry solid
         t_new, x_new, _, evaporated = particle_step(t, x, 1.0 / capacity, 1.0, energy,
                                                     d.evaporation_temperature, d.latent_heat,
-                                                    d.water_heat_capacity, critical)
+                                                    d.water_heat_capacity, critical,
+                                                    ti.static(critical > 0.0))
         out[k, 0], out[k, 1], out[k, 2] = t_new, x_new, evaporated
 
     for k, (t, x, energy) in enumerate(cases):
