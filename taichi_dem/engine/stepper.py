@@ -155,7 +155,7 @@ class Engine:
                                                         else npf))
                         for name, values in model.table_values.items()]
                        + self.plane_walls.writes()
-                       + [w for e in self.model.effect_list for w in e.upload(self.context)])
+                       + [w for e in self.model.effect_list for w in (e.upload(self.context) or [])])
         self.time = 0.0
         self.pairs: "PairState | None" = None
         self.broadphase = Broadphase(self)
