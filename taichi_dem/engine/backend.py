@@ -38,12 +38,14 @@ def real_type(precision: str):
     return ti.f64 if precision == "f64" else ti.f32
 
 
-# Taichi holds its kernel cache's lock file only while it reads or writes the cache (well under a
-# second); a process killed meanwhile leaves the file behind, and from then on every run fails
-# to take the lock ("Lock ... ticache.lock failed"), reads no cache and compiles every kernel
-# again (the main demo: 3 min 2 s instead of 2 min 33 s, measured 2026-12-02). A lock this old
-# is such a leftover.
-STALE_CACHE_LOCK_SECONDS = 600.0
+# Taichi holds its kernel cache's lock file only while it reads or writes the cache (at most
+# 0.1 s, watched over a whole test suite); a process killed meanwhile leaves the file behind,
+# and from then on every run fails to take the lock ("Lock ... ticache.lock failed"), reads no
+# cache and compiles every kernel again (the main demo: 3 min 2 s instead of 2 min 33 s,
+# measured 2026-12-02). A lock this old is such a leftover. (It was 600 s: a test that kills
+# a sweep as it writes the cache left one in a suite run, and the runtimes started in the next
+# ten minutes compiled 4,919 kernels, 385 s of the two workers' time.)
+STALE_CACHE_LOCK_SECONDS = 15.0
 
 # Taichi's own IR optimisation (``opt_level``): 1, Taichi's default, runs its simplification
 # passes before LLVM; 0 skips them (LLVM optimises at -O3 either way). On this CPU 0 compiles
@@ -78,7 +80,7 @@ def clear_stale_cache_lock(cache_dir: "Path | str | None" = None,
     except OSError:
         return False
     print(f"taichi-dem: note: removed a stale lock of Taichi's kernel cache ({lock}, "
-          f"{age / 3600:.1f} h old, left by a process killed while writing the cache); "
+          f"{age:.0f} s old, left by a process killed while writing the cache); "
           f"without it every run compiled all its kernels again", file=sys.stderr)
     return True
 
