@@ -17,8 +17,7 @@ def make_triangle_image(grid, reach: float):
     axis plus the reach is under half the period. A longer triangle (a floor plate or drum
     shell spanning a periodic slice) is tested against the neighbouring images as well, as
     many as its extent needs, and the image closest to the triangle wins: three closest-point
-    searches for a drum shell's strip, less those whose distance to the triangle's box is
-    already no shorter than the best (most, away from the strip's ends). The side range lets a caller that needs only the plane
+    searches for a drum shell's strip. The side range lets a caller that needs only the plane
     test (most candidates fail it) skip that search: an image shifted by s periods moves the
     plane distance by s (P . normal), zero for a strip along the periodic axis. ``reach``: the
     largest contact search distance (largest radius + skin), m."""
@@ -30,9 +29,8 @@ def make_triangle_image(grid, reach: float):
 
     @ti.func
     def images(x, a, b, c):
-        """(base, n_side, span_v, lo_t, hi_t): the image of x nearest the triangle's box
-        centre, the images worth testing on each side per axis, the period vector (1 on other
-        axes) and the triangle's box (m)."""
+        """(base, n_side, span_v): the image of x nearest the triangle's box centre, the
+        images worth testing on each side per axis and the period vector (1 on other axes)."""
         lo_t = ti.min(a, b, c)
         hi_t = ti.max(a, b, c)
         mid = 0.5 * (lo_t + hi_t)
@@ -48,13 +46,13 @@ def make_triangle_image(grid, reach: float):
             if ti.static(periodic[k]):
                 n_side[k] = ti.max(ti.cast(ti.ceil((0.5 * (hi_t[k] - lo_t[k]) + reach)
                                                    / span_v[k] - 0.5), ti.i32), 0)
-        return base, n_side, span_v, lo_t, hi_t
+        return base, n_side, span_v
 
     @ti.func
     def triangle_image(x, a, b, c):
         best = x
         if ti.static(any_periodic):
-            base, n_side, span_v, lo_t, hi_t = images(x, a, b, c)
+            base, n_side, span_v = images(x, a, b, c)
             best = base
             if n_side.sum() > 0:
                 q, region = closest_point_on_triangle(base, a, b, c)
@@ -64,18 +62,11 @@ def make_triangle_image(grid, reach: float):
                         for sz in range(-n_side[2], n_side[2] + 1):
                             if sx != 0 or sy != 0 or sz != 0:
                                 trial = base + ti.Vector([sx, sy, sz]) * span_v
-                                # the distance to the triangle's box bounds the distance to
-                                # the triangle: an image whose box distance is no shorter
-                                # than the best cannot win (the test below is strict), and
-                                # a shell strip's neighbouring images mostly lie a good part
-                                # of a period beyond its ends
-                                gap = ti.max(ti.max(lo_t - trial, trial - hi_t), 0.0)
-                                if gap.norm_sqr() < best_sq:
-                                    q2, region2 = closest_point_on_triangle(trial, a, b, c)
-                                    d_sq = (trial - q2).norm_sqr()
-                                    if d_sq < best_sq:
-                                        best = trial
-                                        best_sq = d_sq
+                                q2, region2 = closest_point_on_triangle(trial, a, b, c)
+                                d_sq = (trial - q2).norm_sqr()
+                                if d_sq < best_sq:
+                                    best = trial
+                                    best_sq = d_sq
         return best
 
     @ti.func
@@ -84,7 +75,7 @@ def make_triangle_image(grid, reach: float):
         lo = side
         hi = side
         if ti.static(any_periodic):
-            base, n_side, span_v, _, _ = images(x, a, b, c)
+            base, n_side, span_v = images(x, a, b, c)
             side = (base - a).dot(normal)
             lo = side
             hi = side
