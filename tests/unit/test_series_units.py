@@ -16,7 +16,9 @@ WRITERS = [ROOT / "taichi_dem" / "sensors" / n for n in
             "energy.py")] + [
     ROOT / "taichi_dem" / "process" / "accounting.py",
     ROOT / "taichi_dem" / "process" / "factories.py",
-    ROOT / "thermal" / "plug_flow.py"] + sorted(
+    ROOT / "thermal" / "plug_flow.py",
+    # the heat effects' ``sample``: the mean temperature, the drying's, the radiation's
+    ROOT / "thermal" / "effects.py", ROOT / "thermal" / "radiation.py"] + sorted(
     # an effect's ``sample`` writes its own series
     (ROOT / "taichi_dem" / "effects").glob("*/effect.py"))
 
