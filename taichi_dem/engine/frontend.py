@@ -9,8 +9,8 @@ depend on the simulation:
 1. **The source of each function**, read again and re-indented for every instantiation
    (``inspect.getsourcelines`` tokenises the whole file): here kept per code object, so each
    function's source is read once per process, and on disk (setup/memo.py's folder, keyed by
-   the file's path and contents), so once per version of its file. ``ast.parse`` still runs every time (Taichi
-   writes into the tree it transforms).
+   the file's path and contents), so once per version of its file. ``ast.parse`` still runs
+   every time (Taichi writes into the tree it transforms).
 2. **The position text of each statement** (``ASTTransformerContext.get_pos_info``): the file,
    line and function, the source line and a ``^^^`` marker under the expression, for the
    message of a compile error. Taichi wraps the line and the marker at 80 columns with
@@ -20,8 +20,9 @@ depend on the simulation:
    caller's source line (~0.3 ms a kernel, ~370 kernels defined per simulation, ~0.1 s of the
    main demo's start): here from the caller frame's namespace (``_quick_class_test``).
 
-All three keep Taichi's behaviour otherwise; they are applied only to the Taichi versions they were
-written against (1.7.x) and not at all with ``TAICHI_DEM_PLAIN_TAICHI=1`` in the environment.
+All three keep Taichi's behaviour otherwise; they are applied only to the Taichi versions they
+were written against (1.7.x) and not at all with ``TAICHI_DEM_PLAIN_TAICHI=1`` in the
+environment.
 """
 from __future__ import annotations
 
@@ -122,7 +123,9 @@ def _source_path(code):
         except (OSError, TypeError):
             return None
         _file_digests[code.co_filename] = digest
-    key = repr((code.co_filename, digest, code.co_firstlineno, code.co_qualname))
+    # (co_qualname is Python 3.11's; 3.10 has the name only, with the first line beside it)
+    key = repr((code.co_filename, digest, code.co_firstlineno,
+                getattr(code, "co_qualname", code.co_name)))
     return folder / "sources" / (hashlib.sha256(key.encode()).hexdigest()[:32] + ".pkl"), key
 
 
