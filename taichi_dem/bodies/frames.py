@@ -37,18 +37,17 @@ class BodyTriangles:
         self.tri_body = t.add("tri_body", ti.i32, nt)
         self.tri_normal = t.add("tri_normal", real, nt, vector=True)     # unit, reference frame
 
-    def upload(self):
-        """The vertices, owners and normals."""
+    def writes(self) -> list:
+        """(field, host array) pairs of the vertices, owners and normals (engine/transfer.write:
+        one copy kernel with the frames', where from_numpy compiles one per field)."""
         if not self.count:
-            return
+            return []
         tris, npf = self._tris, np.float64 if self.real == ti.f64 else np.float32
         normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
         normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-        # one copy kernel for the five (from_numpy compiles one per field)
-        transfer.write([(self.tri_a, tris[:, 0].astype(npf)), (self.tri_b, tris[:, 1].astype(npf)),
-                        (self.tri_c, tris[:, 2].astype(npf)),
-                        (self.tri_body, self.owner.astype(np.int32)),
-                        (self.tri_normal, normal.astype(npf))])
+        return [(self.tri_a, tris[:, 0].astype(npf)), (self.tri_b, tris[:, 1].astype(npf)),
+                (self.tri_c, tris[:, 2].astype(npf)), (self.tri_body, self.owner.astype(np.int32)),
+                (self.tri_normal, normal.astype(npf))]
 
 
 class BodyFrames:
@@ -84,8 +83,9 @@ class BodyFrames:
     def _np_real(self):
         return np.float64 if self.real == ti.f64 else np.float32
 
-    def upload(self):
-        """The reference axes, velocities, materials, temperatures and schedules."""
+    def writes(self) -> list:
+        """(field, host array) pairs of the reference axes, velocities, materials,
+        temperatures and schedules (engine/transfer.write)."""
         bodies, nb = self.kin.bodies, max(self.n_bodies, 1)
         ap, ad, bv = np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros((nb, 3))
         mat, temps = np.zeros(nb, np.int32), np.full(nb, -1.0)
@@ -95,18 +95,21 @@ class BodyFrames:
             if self._wall_conduction and b.temperature is not None:
                 temps[k] = b.temperature
         npf = self._np_real()
-        transfer.write([(self.axis_point, ap.astype(npf)), (self.axis_direction, ad.astype(npf)),
-                        (self.body_velocity, bv.astype(npf)), (self.body_material, mat),
-                        (self.body_temperature, temps.astype(npf))])
-        self.upload_schedules()
+        return [(self.axis_point, ap.astype(npf)), (self.axis_direction, ad.astype(npf)),
+                (self.body_velocity, bv.astype(npf)), (self.body_material, mat),
+                (self.body_temperature, temps.astype(npf))] + self.schedule_writes()
+
+    def schedule_writes(self) -> list:
+        """(field, host array) pairs of the speed schedules."""
+        times, speeds, angles, counts = self.kin.schedule_arrays()
+        npf = self._np_real()
+        return [(self.sched_time, times.astype(npf)), (self.sched_speed, speeds.astype(npf)),
+                (self.sched_angle, angles.astype(npf)),
+                (self.sched_count, np.asarray(counts, np.int32))]
 
     def upload_schedules(self):
         """The speed schedules again (a changed shaft speed: Simulation.set_speed, resume)."""
-        times, speeds, angles, counts = self.kin.schedule_arrays()
-        npf = self._np_real()
-        transfer.write([(self.sched_time, times.astype(npf)), (self.sched_speed, speeds.astype(npf)),
-                        (self.sched_angle, angles.astype(npf)),
-                        (self.sched_count, np.asarray(counts, np.int32))])
+        transfer.write(self.schedule_writes())
 
     def compile(self):
         """``update_frames(time)`` (a kernel; a few bodies: always serial) and ``set_frames``
@@ -216,6 +219,4 @@ class BodyLoads:
         (flushed already); resets the sums."""
         steps = max(steps, 1)
         sums = (self.force_sum, self.torque_sum, self.heat_sum)
-        out = tuple(x.astype(np.float64)[: self.n_bodies] / steps for x in transfer.read(sums))
-        transfer.zero(sums)
-        return out
+        return tuple(x.astype(np.float64)[: self.n_bodies] / steps for x in transfer.take(sums))

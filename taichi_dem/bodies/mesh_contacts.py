@@ -84,8 +84,8 @@ class MeshContacts:
         self.old_start_by_id = t.add("old_mesh_start_by_id", ti.i32, s.capacity)
         self.old_count_by_id = t.add("old_mesh_count_by_id", ti.i32, s.capacity)
         t.finalize()
-        self.triangles.upload()
-        self.frames.upload()
+        # the triangles and the frames: one copy kernel for both
+        transfer.write(self.triangles.writes() + self.frames.writes())
         self.items_tree = None
         self.entries_tree = None
         self.scratch_tree = None

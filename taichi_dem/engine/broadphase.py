@@ -54,25 +54,29 @@ def previous_entry(old_key: ti.template(), start, count, key):
     return found
 
 
-def _slot_moves(order, f, shadow, wall):
-    """ti.funcs k -> (slot k of ``shadow`` takes slot order[k] of ``f``; slot k of ``f``
-    takes it back): a permutation's two halves for one field (``wall``: its column)."""
-    if wall is None:
-        @ti.func
-        def into_shadow(k):
-            shadow[k] = f[order[k]]
+def _slot_moves(order, pairs, walls: int):
+    """ti.funcs k -> (slot k of each field's shadow takes slot order[k] of the field; slot k
+    of each field takes it back): a permutation's two halves for every (field, shadow) of
+    ``pairs`` at once (a per-wall field: each of its ``walls`` columns)."""
+    plain = [(f, sh) for f, sh in pairs if len(f.shape) == 1]
+    per_wall = [(f, sh) for f, sh in pairs if len(f.shape) == 2]
 
-        @ti.func
-        def back(k):
-            f[k] = shadow[k]
-    else:
-        @ti.func
-        def into_shadow(k):
-            shadow[k] = f[order[k], wall]
+    @ti.func
+    def into_shadow(k):
+        source = order[k]
+        for q in ti.static(range(len(plain))):
+            plain[q][1][k] = plain[q][0][source]
+        for q in ti.static(range(len(per_wall))):
+            for w in ti.static(range(walls)):
+                per_wall[q][1][k, w] = per_wall[q][0][source, w]
 
-        @ti.func
-        def back(k):
-            f[k, wall] = shadow[k]
+    @ti.func
+    def back(k):
+        for q in ti.static(range(len(plain))):
+            plain[q][0][k] = plain[q][1][k]
+        for q in ti.static(range(len(per_wall))):
+            for w in ti.static(range(walls)):
+                per_wall[q][0][k, w] = per_wall[q][1][k, w]
     return into_shadow, back
 
 
@@ -115,7 +119,6 @@ class Broadphase:
         g = self.grid
         n_cells_of = g.layout_funcs()[5]
         cell_count, cell_start, cell_fill, total = self.cell_count, self.cell_start, self.cell_fill, self.total
-        vec_fields, real_fields, int_fields, wall_fields, f64_fields = s.reorder_groups()
         n_walls = s.n_walls
         cell_of = g.make_cell_of()[1]
 
@@ -187,29 +190,18 @@ class Broadphase:
             s.reference_position[k] = s.position[k]
 
         # new slot k takes old particle order[k]; every per-particle array moves together,
-        # each through its shadow: per field (and wall column) the two halves per slot k
+        # through its own shadow: all of them into the shadows in one loop, back in another
         # (not reference_position, which settle sets)
-        moves = []
-        vec_fields = [f for f in vec_fields if f is not s.reference_position]
-        groups = ([(f, s.shadow_vec) for f in vec_fields] + [(f, s.shadow_real) for f in real_fields]
-                  + [(f, s.shadow_int) for f in int_fields] + [(f, s.shadow_f64) for f in f64_fields])
-        for f, shadow in groups:
-            moves.append(_slot_moves(s.order, f, shadow, None))
-        for f in wall_fields:
-            for w in range(n_walls):
-                moves.append(_slot_moves(s.order, f, s.shadow_vec, w))
+        into_shadows, back = _slot_moves(s.order, s.reorder_pairs(), n_walls)
 
         @ti.func
         def permute_body(n, serial_loops: ti.template()):
-            for move in ti.static(moves):
-                ti.loop_config(serialize=serial_loops)
-                for k in range(n):
-                    move[0](k)
-                ti.loop_config(serialize=serial_loops)
-                for k in range(n):
-                    move[1](k)
             ti.loop_config(serialize=serial_loops)
             for k in range(n):
+                into_shadows(k)
+            ti.loop_config(serialize=serial_loops)
+            for k in range(n):
+                back(k)
                 settle(k)
 
         @ti.kernel
@@ -222,7 +214,8 @@ class Broadphase:
         self.bodies.update(save_rows=save_rows_body, sort_by_cell=sort_by_cell_body,
                            permute=permute_body)
         self.row_funcs.update(save_row=save_row, clear_cell=clear_cell, bin_particle=bin_particle,
-                              put_in_cell_order=put_in_cell_order, moves=moves, settle=settle)
+                              put_in_cell_order=put_in_cell_order,
+                              moves=(into_shadows, back), settle=settle)
         self.drop_one_launch_rebuilds()
         self._compile_search(self.FIRST_SCRATCH_WIDTH)
 
@@ -637,14 +630,11 @@ class Broadphase:
                             save_pair_row(i)
                     arrived = meet(arrived)
                     # (2) every array moved into that order
-                    for move in ti.static(moves):
-                        for k in range(first, last):
-                            move[0](k)          # into the shadow
-                        arrived = meet(arrived)
-                        for k in range(first, last):
-                            move[1](k)          # back
-                        arrived = meet(arrived)
                     for k in range(first, last):
+                        moves[0](k)             # into the shadows
+                    arrived = meet(arrived)
+                    for k in range(first, last):
+                        moves[1](k)             # back
                         settle(k)
                     arrived = meet(arrived)
                     # (3) the rows: search, their starts, the lists with their history

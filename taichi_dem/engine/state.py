@@ -148,12 +148,16 @@ class ParticleState:
             for name in contact_fields:
                 self._add_wall("wall_" + name)
                 self.wall_fields.append("wall_" + name)
-        # scratch for reordering: one shadow per dtype/shape
+        # scratch for reordering: a shadow per permuted field, so that the reorder moves every
+        # field into its shadow in one loop and back in another (engine/broadphase.py). One
+        # loop per field instead (a shadow per dtype) made the kernel ~40 loops: each loop is
+        # a task that Taichi compiles, and loads from its cache, on its own (~5 ms each warm)
         t = self.tree
-        self.shadow_vec = t.add("shadow_vec", real, capacity, vector=True)
-        self.shadow_real = t.add("shadow_real", real, capacity)
-        self.shadow_int = t.add("shadow_int", ti.i32, capacity)
-        self.shadow_f64 = t.add("shadow_f64", ti.f64, capacity) if self.compensated else None
+        self.shadows = {}
+        for name in self.reordered_names():
+            f = getattr(self, name)
+            self.shadows[name] = t.add("shadow_" + name, f.dtype, tuple(f.shape),
+                                       vector=name in self.wall_fields or self.spec[name][0])
         # force (N) and torque (N m) of the pairs this particle owns, summed by the pair kernel
         self.owned_force = t.add("owned_force", real, capacity, vector=True)
         self.owned_torque = t.add("owned_torque", real, capacity, vector=True)
@@ -192,15 +196,15 @@ class ParticleState:
         setattr(self, name, f)
         self.names.append(name)
 
-    def reorder_groups(self):
-        """(vector fields, real scalar fields, int fields, per-wall vector fields, f64 scalar
-        fields) to permute together when particles are put back into cell order."""
-        vec = [getattr(self, n) for n, (v, k) in self.spec.items() if v]
-        real = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "real"]
-        ints = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "int"]
-        walls = [getattr(self, n) for n in self.wall_fields]
-        doubles = [getattr(self, n) for n, (v, k) in self.spec.items() if not v and k == "f64"]
-        return vec, real, ints, walls, doubles
+    def reordered_names(self) -> list[str]:
+        """The per-particle fields that move together when particles are put back into cell
+        order (every declared one and the per-wall ones; not ``reference_position``, which
+        the reorder sets from the new positions)."""
+        return [n for n in self.spec if n != "reference_position"] + list(self.wall_fields)
+
+    def reorder_pairs(self) -> list[tuple]:
+        """(field, its shadow) for each of ``reordered_names``."""
+        return [(getattr(self, n), self.shadows[n]) for n in self.reordered_names()]
 
     def destroy(self):
         self.tree.destroy()

@@ -48,46 +48,63 @@ def _supported(fields) -> bool:
 
 
 def _compile(direction: str, fields):
-    """The copy kernel of ``fields`` and its layout: one loop per distinct field shape (an
-    offloaded task each: the compile time grows with their number), copying every field of
-    that shape at each index."""
+    """The copy kernel of ``fields`` and its layout: one loop over the largest field's
+    elements, copying element t of every field that has one (each loop is a task that Taichi
+    compiles and loads from its cache on its own, ~5 ms each warm: one loop per distinct
+    field shape made a set of mixed shapes cost several)."""
     layout = _Layout(fields)
     offsets = [o for o, _, _ in layout.entries]
     components = [getattr(f, "n", 0) if hasattr(f, "m") else 0 for f in fields]
     dtypes = [f.dtype for f in fields]
-    by_shape: dict = {}
-    for k, f in enumerate(fields):
-        by_shape.setdefault(tuple(f.shape), []).append(k)
-    groups = [(shape, tuple(ks)) for shape, ks in by_shape.items()]
-    # the flat index of element I of a field of this shape, before its components
-    strides = [tuple(math.prod(shape[d + 1:]) for d in range(len(shape))) for shape, _ in groups]
-    reading = direction == "read"
+    shapes = [tuple(f.shape) for f in fields]
+    sizes = [math.prod(shape) for shape in shapes]
+    largest = max(sizes)
+    # element t of a field of this shape: its index along each axis (row-major, as numpy)
+    strides = [tuple(math.prod(shape[d + 1:]) for d in range(len(shape))) for shape in shapes]
+    reading = direction in ("read", "take")
     zeroing = direction == "zero"
+    taking = direction == "take"            # read, then zero
+
+    axes = [len(shape) for shape in shapes]
+
+    @ti.func
+    def index_of(k: ti.template(), t):
+        """Element t of field k: t itself, or its index along each axis (row-major)."""
+        if ti.static(axes[k] == 1):
+            return t
+        else:
+            I = ti.Vector([0] * axes[k])
+            for d in ti.static(range(axes[k])):
+                I[d] = (t // strides[k][d]) % shapes[k][d]
+            return I
 
     @ti.kernel
     def copy(flat: ti.types.ndarray(dtype=ti.f64, ndim=1)):
-        for g in ti.static(range(len(groups))):
-            for I in ti.grouped(fields[groups[g][1][0]]):
-                element = 0
-                for d in ti.static(range(len(strides[g]))):
-                    element += I[d] * strides[g][d]
-                for k in ti.static(groups[g][1]):
+        for t in range(largest):
+            for k in ti.static(range(len(fields))):
+                # (a field smaller than the largest: only its own elements)
+                if ti.static(sizes[k] == largest) or t < sizes[k]:
+                    I = index_of(k, t)
                     if ti.static(components[k]):
                         for c in ti.static(range(components[k])):
-                            at = offsets[k] + element * components[k] + c
                             if ti.static(reading):
-                                flat[at] = ti.cast(fields[k][I][c], ti.f64)
+                                flat[offsets[k] + t * components[k] + c] = ti.cast(
+                                    fields[k][I][c], ti.f64)
+                                if ti.static(taking):
+                                    fields[k][I][c] = ti.cast(0, dtypes[k])
                             elif ti.static(zeroing):
                                 fields[k][I][c] = ti.cast(0, dtypes[k])
                             else:
-                                fields[k][I][c] = ti.cast(flat[at], dtypes[k])
-                    else:
-                        if ti.static(reading):
-                            flat[offsets[k] + element] = ti.cast(fields[k][I], ti.f64)
-                        elif ti.static(zeroing):
+                                fields[k][I][c] = ti.cast(flat[offsets[k] + t * components[k] + c],
+                                                          dtypes[k])
+                    elif ti.static(reading):
+                        flat[offsets[k] + t] = ti.cast(fields[k][I], ti.f64)
+                        if ti.static(taking):
                             fields[k][I] = ti.cast(0, dtypes[k])
-                        else:
-                            fields[k][I] = ti.cast(flat[offsets[k] + element], dtypes[k])
+                    elif ti.static(zeroing):
+                        fields[k][I] = ti.cast(0, dtypes[k])
+                    else:
+                        fields[k][I] = ti.cast(flat[offsets[k] + t], dtypes[k])
     return copy, layout
 
 
@@ -104,19 +121,29 @@ def _kernel(direction: str, fields):
     return kernel, layout
 
 
-def read(fields) -> list[np.ndarray]:
+def read(fields, direction: str = "read") -> list[np.ndarray]:
     """Host copies of ``fields``, each as ``field.to_numpy()`` gives it (same shape, dtype
     and values), by one kernel for the whole set."""
     fields = list(fields)
     if not fields:
         return []
     if not _supported(fields):
-        return [f.to_numpy() for f in fields]
-    kernel, layout = _kernel("read", fields)
+        out = [f.to_numpy() for f in fields]
+        if direction == "take":
+            for f in fields:
+                f.fill(0)
+        return out
+    kernel, layout = _kernel(direction, fields)
     flat = np.zeros(layout.size, np.float64)
     kernel(flat)
     return [flat[o:o + math.prod(shape)].reshape(shape).astype(dtype)
             for o, shape, dtype in layout.entries]
+
+
+def take(fields) -> list[np.ndarray]:
+    """``read(fields)`` and then ``zero(fields)`` (sums emptied as they are sampled), by one
+    kernel for the whole set."""
+    return read(fields, "take")
 
 
 def write(pairs) -> None:

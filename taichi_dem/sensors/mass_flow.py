@@ -73,8 +73,7 @@ class PlaneCrossings:
     def take(self):
         """(mass kg signed, count) crossed per mass-flow plane since the last call; reset."""
         sums = (self.plane_mass, self.plane_count)
-        m, c = transfer.read(sums)              # (one kernel for both, and one to zero them)
-        transfer.zero(sums)
+        m, c = transfer.take(sums)              # (one kernel reads and zeroes both)
         return (m[: len(self.planes)].astype(np.float64),
                 c[: len(self.planes)].astype(np.int64))
 

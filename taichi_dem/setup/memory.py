@@ -46,13 +46,16 @@ def device_memory_bytes(arch: str) -> tuple[int, str]:
 
 def estimated_device_bytes(slots: int, precision: str) -> int:
     """Device memory (bytes) for ``slots`` particle slots: per particle 6 vectors and 4 reals
-    of state, 15 ints of shadows and rows, 4 reals more; the neighbour entries the first list
+    of state, 15 ints of shadows and rows, 4 reals more, and the reorder's shadows of the
+    state (engine/state.py: 4 vectors, 3 reals and 2 ints beyond those ints); the neighbour
+    entries the first list
     is allocated with (SETTLED_ENTRIES_PER_PARTICLE per slot, in a bucket; more than
     LIST_ENTRIES_PER_PARTICLE with the growth headroom) of 3 ints and 5 vectors each; and
     CELLS_PER_PARTICLE grid cells of 2 ints."""
     from .tuning import LIST_GROWTH, SETTLED_ENTRIES_PER_PARTICLE
     real_bytes = 8 if precision == "f64" else 4
-    per_particle = (6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes
+    per_particle = ((6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes
+                    + (4 * 3 + 3) * real_bytes + 2 * 4)
     per_entry = 3 * 4 + 5 * 3 * real_bytes
     # the first list has room for every slot settled (engine/broadphase.py), in a bucket
     entries = bucket(int(max(LIST_GROWTH * LIST_ENTRIES_PER_PARTICLE,
