@@ -18,6 +18,15 @@ def _checkout_folders() -> None:
 
 _checkout_folders()
 
+
+def _hook_taichi() -> None:
+    # two of the front end's savings, applied while Taichi is imported (_taichi_hooks.py)
+    from ._taichi_hooks import install
+    install()
+
+
+_hook_taichi()
+
 _ERRORS = ("SceneError", "GeometryError", "BackendError", "DivergenceError",
            "StaleSimulationError", "CheckpointError", "WindowError")
 

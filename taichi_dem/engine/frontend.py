@@ -247,16 +247,9 @@ def _quick_class_test() -> None:
     through linecache), ~0.3 ms a kernel, and a simulation defines ~370 kernels (~0.1 s of the
     main demo's start). A class body's frame is known by its namespace, which Python gives
     ``__module__`` and ``__qualname__`` before the body runs: the same answer, from the frame."""
-    import sys
-    from taichi.lang import kernel_impl as k
+    from taichi.lang import impl, kernel_impl as k, snode, util
 
-    def inside_class(level_of_class_stackframe):
-        # Taichi reads the line of the frame at this depth, the one running the ``class``
-        # statement; the frame just below it is the class body, whose namespace tells
-        try:
-            names = sys._getframe(level_of_class_stackframe - 1).f_locals
-        except ValueError:           # (no frame that deep)
-            return False
-        return "__module__" in names and "__qualname__" in names
-
+    from .._taichi_hooks import declaration_trace, inside_class
     k._inside_class = inside_class
+    # (and the fields' declaration trace, without source lines: _taichi_hooks.py)
+    util.get_traceback = impl.get_traceback = snode.get_traceback = declaration_trace

@@ -25,13 +25,21 @@ class FieldTree:
         self._builder = ti.FieldsBuilder()
         self._tree = None
         self.fields: dict[str, object] = {}
+        # fields whose values mean nothing between kernels (scratch): not checkpointed
+        self.scratch: set[str] = set()
 
-    def add(self, name: str, dtype, shape, vector: bool = False):
+    def add(self, name: str, dtype, shape, vector: bool = False, scratch: bool = False):
         f = ti.Vector.field(VEC, dtype) if vector else ti.field(dtype)
         axes = ti.axes(*range(len(shape))) if isinstance(shape, tuple) else ti.i
         self._builder.dense(axes, shape).place(f)
         self.fields[name] = f
+        if scratch:
+            self.scratch.add(name)
         return f
+
+    def kept(self) -> dict:
+        """The fields that hold state (name -> field): all but the scratch ones."""
+        return {n: f for n, f in self.fields.items() if n not in self.scratch}
 
     def finalize(self):
         self._tree = self._builder.finalize()
@@ -157,7 +165,8 @@ class ParticleState:
         for name in self.reordered_names():
             f = getattr(self, name)
             self.shadows[name] = t.add("shadow_" + name, f.dtype, tuple(f.shape),
-                                       vector=name in self.wall_fields or self.spec[name][0])
+                                       vector=name in self.wall_fields or self.spec[name][0],
+                                       scratch=True)
         # force (N) and torque (N m) of the pairs this particle owns, summed by the pair kernel
         self.owned_force = t.add("owned_force", real, capacity, vector=True)
         self.owned_torque = t.add("owned_torque", real, capacity, vector=True)

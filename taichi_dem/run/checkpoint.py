@@ -159,7 +159,7 @@ def capture(sim) -> Snapshot:
     """The simulation's whole state now, copied to host memory."""
     from ..engine import transfer      # (here: the CLI imports this module without Taichi)
     e = sim.engine
-    fields = {label: dict(zip(tree.fields, transfer.read(tree.fields.values())))
+    fields = {label: dict(zip(tree.kept(), transfer.read(tree.kept().values())))
               for label, tree in field_trees(e).items()}
     host_attrs = {}
     for owner_name, attr in HOST_ATTRIBUTES:
@@ -283,7 +283,7 @@ def restore(sim, snap: Snapshot) -> None:
     zero_between_steps = e.state.ZERO_BETWEEN_STEPS
     for label, tree in field_trees(e).items():
         saved = snap.fields.get(label, {})
-        for name, f in tree.fields.items():
+        for name, f in tree.kept().items():
             if name not in saved:
                 if tree is e.state.tree and name in zero_between_steps:
                     f.fill(0)          # (a checkpoint from before these sums existed)
