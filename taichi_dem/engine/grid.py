@@ -40,7 +40,8 @@ class GridSpec:
         # the cell arrays' length: a bucket (engine/values.py), so that domains of a few cells
         # more or less share their kernels
         from .values import bucket
-        self.cell_capacity = bucket(self.n_cells)
+        from ..setup.tuning import MIN_CELL_SLOTS
+        self.cell_capacity = max(bucket(self.n_cells), MIN_CELL_SLOTS)
         # the smallest cutoff (m): what other arrays binned by cell are sized for
         self.least_cutoff = min(cutoff, least_cutoff or cutoff)
         if least_cutoff is not None and least_cutoff < cutoff:

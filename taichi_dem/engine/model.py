@@ -14,6 +14,7 @@ from ..effects import enabled_effects
 from ..setup.pair_tables import PairTables
 from .grid import GridSpec
 from .values import bucket
+from ..setup.tuning import MIN_PARTICLE_SLOTS
 
 # In f32, positions farther than this from the origin (m) carry a residual (split positions:
 # engine/precision.py): the f32 spacing there, 1.2e-7 m, is what a resting bed would jitter by
@@ -82,7 +83,7 @@ class Model:
                 table_values.setdefault(name, values)
         # the arrays are allocated for a bucket of slots, so that scenes whose counts differ
         # a little share their kernels; the factories fill no more than the scene's own
-        slots = bucket(capacity)
+        slots = max(bucket(capacity), MIN_PARTICLE_SLOTS)
         # (the cell arrays sized for any skin: a skin set by the time step compiles nothing)
         grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
                         (2.0 + pair_margin) * max_radius + skin, capacity,

@@ -61,3 +61,15 @@ MOST_SPECIES = 8
 # anyway: they grow the arrays). Waiting costs < 0.1 s per growth in a long run; a short run
 # (a test, a check) never pays the compile. BENCHMARKS.md "Stop 23".
 FUSED_AFTER_QUIET_REBUILDS = 500
+
+# The least particle slots and grid cells the arrays are allocated with (a floor under their
+# buckets, setup/memory.py bucket): the arrays' lengths are part of every kernel (Taichi's
+# kernel cache keys name the fields' shapes), so small scenes that differ only in their
+# counts or domains shared nothing; above the floors they still differ. A suite run's compile
+# log (BENCHMARKS.md "Where the compiles go") put 159 kinds of simulation at 131 with these
+# floors. They cost memory only (~8 MB for a scene of a few hundred particles: the slots'
+# state, the first neighbour list sized for them, the cell arrays); every loop runs to the
+# counts in use. Results do not change: the grid's cells and every count are the scene's.
+MIN_PARTICLE_SLOTS = 4096
+MIN_CELL_SLOTS = 16384
+
