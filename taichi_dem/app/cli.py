@@ -273,7 +273,8 @@ def describe_scene(scene) -> str:
     from ..effects import enabled_effects
     from ..setup.pair_tables import build_pair_tables
     from ..setup.placement import place_fills
-    from ..setup.memory import bucket, estimated_device_bytes, memory_problem, particle_slots
+    from ..setup.memory import (allocated_slots, estimated_device_bytes, memory_problem,
+                                particle_slots)
     from ..setup.timestep import choose_step_and_skin
 
     # before anything the size of the scene is allocated (placement, the tables)
@@ -298,7 +299,8 @@ def describe_scene(scene) -> str:
     n = n + _factory_capacity(scene)
     # setup/memory.py: state, neighbour lists, cells (memory_problem refused more than the
     # machine has above, from the same estimate)
-    memory = estimated_device_bytes(bucket(particle_slots(scene)), scene.simulation.precision)
+    memory = estimated_device_bytes(allocated_slots(particle_slots(scene)),
+                                    scene.simulation.precision)
     steps = scene.simulation.end_time / ts.dt
     lines = [f"scene: {scene.source}", "effects (compiled and run, in step order):"]
     for e in enabled_effects(scene):

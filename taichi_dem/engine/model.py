@@ -13,8 +13,7 @@ from ..contacts.law import margin_fraction
 from ..effects import enabled_effects
 from ..setup.pair_tables import PairTables
 from .grid import GridSpec
-from .values import bucket
-from ..setup.tuning import MIN_PARTICLE_SLOTS
+from ..setup.memory import allocated_slots
 
 # In f32, positions farther than this from the origin (m) carry a residual (split positions:
 # engine/precision.py): the f32 spacing there, 1.2e-7 m, is what a resting bed would jitter by
@@ -81,9 +80,10 @@ class Model:
         for e in effect_list:
             for name, values in e.table_values(scene, tables).items():
                 table_values.setdefault(name, values)
-        # the arrays are allocated for a bucket of slots, so that scenes whose counts differ
-        # a little share their kernels; the factories fill no more than the scene's own
-        slots = max(bucket(capacity), MIN_PARTICLE_SLOTS)
+        # the arrays are allocated for a bucket of slots (no fewer than a floor), so that
+        # scenes whose counts differ a little share their kernels; the factories fill no
+        # more than the scene's own
+        slots = allocated_slots(capacity)
         # (the cell arrays sized for any skin: a skin set by the time step compiles nothing)
         grid = GridSpec(scene.domain.min, scene.domain.max, scene.domain.periodic,
                         (2.0 + pair_margin) * max_radius + skin, capacity,

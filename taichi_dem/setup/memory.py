@@ -94,6 +94,13 @@ def bucket(n: int, floor: int = 64) -> int:
     return three_quarters if three_quarters >= n else p
 
 
+def allocated_slots(n: int) -> int:
+    """The particle slots the engine allocates for ``n`` particles: their bucket, no fewer
+    than the floor MIN_PARTICLE_SLOTS (setup/tuning.py)."""
+    from .tuning import MIN_PARTICLE_SLOTS
+    return max(bucket(n), MIN_PARTICLE_SLOTS)
+
+
 def particle_slots(scene) -> int:
     """Slots the engine allocates: the fills' particles plus the factories' capacity
     (``factory_capacity``, which honours max_particles)."""
@@ -117,7 +124,7 @@ def memory_problem(scene, arch: str = "cpu", precision: Optional[str] = None):
     estimate and the machine's figure in the reason), else None. Nothing is allocated."""
     precision = precision or scene.simulation.precision
     slots = particle_slots(scene)
-    need = estimated_device_bytes(bucket(slots), precision)   # as allocated (a bucket)
+    need = estimated_device_bytes(allocated_slots(slots), precision)   # as allocated
     have, what = device_memory_bytes(arch)
     if have and need > have:
         return (_blamed_key(scene),
