@@ -7,9 +7,10 @@ later on the same path), so that they also cover Taichi's own definitions at imp
   (``inspect.getframeinfo``, ~0.3 ms each: ~40 ms of ``import taichi``); here from the frame's
   namespace (``inside_class``);
 - ``util.get_traceback``: the declaration trace Taichi keeps with every field and SNode for
-  its error messages, made by ``traceback.extract_stack`` (which reads each frame's source
-  line, ~0.05 ms a field, ~700 fields per simulation); here the same frames as
-  ``File "...", line N, in f`` lines, without the source lines (``declaration_trace``).
+  its error messages (and prints under its warnings), made by ``traceback.extract_stack``
+  (which reads each frame's source line, ~0.05 ms a field, ~700 fields per simulation); here
+  the same frames as ``File "...", line N, in f`` lines, without the source lines
+  (``declaration_trace``; tests/unit/test_backend.py compares the frames).
 
 ``install()`` (called by taichi_dem/__init__.py, before anything imports Taichi) adds an import
 hook that applies both as Taichi's modules are executed; engine/frontend.py applies them again

@@ -67,9 +67,9 @@ FUSED_AFTER_QUIET_REBUILDS = 500
 # kernel cache keys name the fields' shapes), so small scenes that differ only in their
 # counts or domains shared nothing; above the floors they still differ. A suite run's compile
 # log (BENCHMARKS.md "Where the compiles go") put 159 kinds of simulation at 131 with these
-# floors. They cost memory only (~8 MB for a scene of a few hundred particles: the slots'
-# state, the first neighbour list sized for them, the cell arrays); every loop runs to the
-# counts in use. Results do not change: the grid's cells and every count are the scene's.
+# floors. They cost memory only (~6 MB in f32, ~10 MB in f64 by setup/memory.py's estimate
+# for a scene of a few hundred particles: the slots' state, the first neighbour list sized
+# for them, the cell arrays); every loop runs to the counts in use. Results do not change: the grid's cells and every count are the scene's.
 MIN_PARTICLE_SLOTS = 4096
 MIN_CELL_SLOTS = 16384
 

@@ -2,6 +2,7 @@
 Taichi's IR optimisation level."""
 import os
 import time
+from pathlib import Path
 
 import pytest
 
@@ -148,3 +149,54 @@ def test_a_bad_level_is_a_clear_error_from_the_command_line(tmp_path):
                          capture_output=True, text=True)
     assert out.returncode == 2
     assert "TAICHI_DEM_OPT_LEVEL='fast'" in out.stderr and "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize("plain", ["0", "1"])
+def test_import_hook_patches_taichi_while_it_loads(plain, tmp_path):
+    """``import taichi_dem`` before Taichi: Taichi's class-body test and its fields'
+    declaration trace are the quick ones (_taichi_hooks.py) from Taichi's own import on; a
+    kernel in a ``ti.data_oriented`` class still compiles as a method; the trace lists the
+    same frames as traceback.extract_stack. With TAICHI_DEM_PLAIN_TAICHI=1 Taichi is left as
+    it is."""
+    import os
+    import subprocess
+    import sys
+    code = """
+import taichi_dem
+import taichi as ti
+from taichi.lang import kernel_impl, util
+from taichi_dem import _taichi_hooks as h
+print(kernel_impl._inside_class is h.inside_class, util.get_traceback is h.declaration_trace)
+ti.init(arch=ti.cpu, offline_cache=False)
+
+@ti.data_oriented
+class Holder:
+    def __init__(self):
+        self.x = ti.field(ti.i32, 3)
+
+    @ti.kernel
+    def fill(self, v: ti.i32):
+        for i in range(3):
+            self.x[i] = v
+
+h2 = Holder()
+h2.fill(7)
+print(int(h2.x.to_numpy().sum()))
+import re, traceback
+def frames():
+    quick, full = util.get_traceback(0), traceback.extract_stack()
+    listed = re.findall(r'File "(.*)", line (\\d+), in (\\S+)', quick)
+    return listed == [(x.filename, str(x.lineno), x.name) for x in full]
+print(frames())
+"""
+    env = dict(os.environ, TAICHI_DEM_PLAIN_TAICHI=plain)
+    script = tmp_path / "hooked.py"          # (Taichi reads the kernels' source from a file)
+    script.write_text(code)
+    env["TAICHI_DEM_CACHE"] = str(tmp_path / "memo")
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env,
+                         cwd=str(Path(__file__).resolve().parents[2]), timeout=300)
+    assert out.returncode == 0, out.stderr
+    lines = [x for x in out.stdout.splitlines() if not x.startswith("[Taichi]")]
+    patched = "False False" if plain == "1" else "True True"
+    assert lines == [patched, "21", "True"]
+

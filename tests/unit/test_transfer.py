@@ -39,3 +39,25 @@ def test_bulk_copies_equal_the_per_field_copies(small_scene_text):
             assert np.array_equal(fields[5].to_numpy(), np.asarray(values[5]))
         finally:
             tree.destroy()
+
+
+def test_take_reads_then_leaves_zero(small_scene_text):
+    """transfer.take: the values read gives, and every element zero afterwards, fields of
+    different shapes in one set (the sums a sample empties)."""
+    with td.Simulation.from_text(small_scene_text()):       # (a live runtime)
+        tree = FieldTree()
+        fields = [tree.add("a", ti.f32, 5), tree.add("b", ti.i32, (3, 4)),
+                  tree.add("c", ti.f64, 2, vector=True)]
+        tree.finalize()
+        try:
+            values = [np.arange(5.0) + 0.5, np.arange(12).reshape(3, 4) - 6,
+                      np.array([[1.0, -2.0, 3.0], [4.0, 5.0, -6.0]])]
+            transfer.write(zip(fields, values))
+            taken = transfer.take(fields)
+            for got, v in zip(taken, values):
+                assert np.array_equal(got, v)
+            for f in fields:
+                assert not f.to_numpy().any(), f
+        finally:
+            tree.destroy()
+
