@@ -159,6 +159,10 @@ def pairs_within(sim, cutoff_extra: float) -> set:
 #    ten times slower with another process on the second core. The gate: a ``two_cores``
 #    test takes an exclusive lock, every other test a shared one (both through a gate lock,
 #    so that a waiting exclusive request is served before new shared ones).
+#    ``two_cores(while_spinning=True)``: the test runs the workers in this process, and only
+#    the launches of the kernels that spin (SPINNING_KERNELS) need both cores; the test holds
+#    a shared lock and takes the exclusive one around each of those launches, its kernel
+#    compiled before (compiling is one thread's work: the other pytest worker goes on).
 SLOW_FILES = {
     "tests/verification/test_drum_wall_heat.py": 182,
     "tests/verification/test_packed_bed.py": 115,
@@ -246,6 +250,47 @@ class _CoreGate:
         if exclusive:
             fcntl.flock(self.gate, fcntl.LOCK_UN)
 
+    def exclusive_within(self):
+        """From a shared hold to the exclusive one and back (a context manager). The shared
+        hold is let go first: waiting for the gate while holding it could deadlock with the
+        other worker doing the same."""
+        import contextlib
+
+        @contextlib.contextmanager
+        def upgraded():
+            self.release(False)
+            self.acquire(True)
+            try:
+                yield
+            finally:
+                self.release(True)
+                self.acquire(False)
+        return upgraded()
+
+
+# the kernels whose threads meet at spin barriers (engine/workers.py, drivers.py, broadphase.py)
+SPINNING_KERNELS = frozenset({"probe", "run_worker_steps", "rebuild_on_workers"})
+
+
+def _exclusive_spinning_launches(gate):
+    """Kernel launches in SPINNING_KERNELS made exclusive on ``gate`` (each compiled first,
+    outside the exclusive hold); returns the function that undoes it."""
+    from taichi.lang import impl, kernel_impl
+    launch = kernel_impl.Kernel.launch_kernel
+
+    def gated(self, t_kernel, *args):
+        if self.func.__name__ not in SPINNING_KERNELS:
+            return launch(self, t_kernel, *args)
+        prog = impl.get_runtime().prog
+        prog.compile_kernel(prog.config(), prog.get_device_caps(), t_kernel)   # kept in memory
+        with gate.exclusive_within():
+            return launch(self, t_kernel, *args)
+    kernel_impl.Kernel.launch_kernel = gated
+
+    def undo():
+        kernel_impl.Kernel.launch_kernel = launch
+    return undo
+
 
 _gate: list = []
 
@@ -269,13 +314,19 @@ def pytest_runtest_protocol(item, nextitem):
         profile.close()
         _forget_last_exception()
         return
-    exclusive = item.get_closest_marker("two_cores") is not None
+    marker = item.get_closest_marker("two_cores")
+    exclusive = marker is not None and not marker.kwargs.get("while_spinning", False)
     gate.acquire(exclusive)
+    undo = None
+    if marker is not None and not exclusive:
+        undo = _exclusive_spinning_launches(gate)
     profile = _TestProfile(item)
     try:
         yield
     finally:
         profile.close()
+        if undo is not None:
+            undo()
         gate.release(exclusive)
         _forget_last_exception()
 
@@ -322,7 +373,8 @@ def _profile_start() -> None:
     import time
     from taichi.lang import kernel_impl
     from taichi_dem.engine import backend
-    _profile.update(folder=Path(folder), kernels=0, kernel_s=0.0, inits=0, slow=0)
+    _profile.update(folder=Path(folder), kernels=0, kernel_s=0.0, inits=0, slow=0,
+                    front_s=0.0, compiled=[])
     launch = kernel_impl.Kernel.launch_kernel
     # the compiled kernels launched so far (held, so that no id is reused for another)
     seen: set = set()
@@ -340,7 +392,20 @@ def _profile_start() -> None:
             _profile["kernels"] += 1
             _profile["kernel_s"] += dt
             _profile["slow"] += int(dt > 0.08)      # compiled, not read from the cache
+            if dt > 0.08:
+                _profile["compiled"].append((self.func.__name__, round(dt, 3)))
     kernel_impl.Kernel.launch_kernel = timed
+    materialize = kernel_impl.Kernel.materialize
+
+    def front_end(self, *a, **k):
+        # the front end (Python AST -> Taichi IR) runs for every new kernel instance, cached
+        # or not: Taichi's offline cache is keyed by the IR it produces
+        t0 = time.perf_counter()
+        try:
+            return materialize(self, *a, **k)
+        finally:
+            _profile["front_s"] += time.perf_counter() - t0
+    kernel_impl.Kernel.materialize = front_end
     acquire = backend.acquire
 
     def counted(*a, **k):
@@ -372,6 +437,8 @@ class _TestProfile:
             _profile_start()
             self.start = (_profile["kernels"], _profile["kernel_s"], _profile["inits"],
                           _profile["slow"], time.perf_counter())
+            self.front = _profile["front_s"]
+            _profile["compiled"] = []
 
     def close(self) -> None:
         if not self.on:
@@ -383,7 +450,8 @@ class _TestProfile:
         row = {"test": self.item.nodeid, "wall_s": time.perf_counter() - t0,
                "kernels": _profile["kernels"] - k0, "kernel_s": _profile["kernel_s"] - s0,
                "inits": _profile["inits"] - i0, "slow_kernels": _profile["slow"] - c0,
-               "alive_after": _alive_simulations(), "end": time.time()}
+               "front_s": _profile["front_s"] - self.front, "compiled": _profile["compiled"],
+               "end": time.time(), "alive_after": _alive_simulations()}
         worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
         _profile["folder"].mkdir(parents=True, exist_ok=True)
         with open(_profile["folder"] / f"{worker}.jsonl", "a") as out:

@@ -103,8 +103,7 @@ class MeshContacts:
         # mid-run compiles the step's kernels again (a quarter per slot grew at 0.11 s)
         self._alloc_entries(bucket(max(s.capacity, 1024)))
         self.minimum_image = engine.model.grid.make_minimum_image()
-        self.triangle_image, self.plane_side_range = make_triangle_image(engine.model.grid,
-                                                                         self.expand)
+        self.triangle_image = make_triangle_image(engine.model.grid, self.expand)
         self.binned_time = 0.0
         self.interval_steps = 0
         # the ti.func bodies of the kernels (Broadphase.fused_rebuild runs them in one launch)
@@ -170,6 +169,19 @@ class MeshContacts:
         self.mesh_point = t.add("mesh_point", real, capacity, vector=True)
         self.old_tri = t.add("old_mesh_tri", ti.i32, capacity)
         self.old_contact = t.add("old_mesh_contact", ti.u8, capacity)
+        # each candidate placed once per step (make_place_candidates), before the pair stage:
+        # its triangle in the world frame now (vertex a, edges e1 = b - a, e2 = c - a; m) and
+        # the particle's periodic image nearest it (m); scratch, remade every step
+        self.candidate_a = t.add("candidate_a", real, capacity, vector=True, scratch=True)
+        self.candidate_e1 = t.add("candidate_e1", real, capacity, vector=True, scratch=True)
+        self.candidate_e2 = t.add("candidate_e2", real, capacity, vector=True, scratch=True)
+        self.candidate_image = t.add("candidate_image", real, capacity, vector=True,
+                                     scratch=True)
+        # and what the shields test first: e1 x e2 (m^2) and that image's side of the plane,
+        # (image - a) . (e1 x e2) (m^3)
+        self.candidate_normal = t.add("candidate_normal", real, capacity, vector=True,
+                                      scratch=True)
+        self.candidate_side = t.add("candidate_side", real, capacity, scratch=True)
         # the history values the enabled effects keep (contact_fields), per mesh contact and
         # for the previous list, under the names checkpoints know (mesh_history: the
         # tangential spring; mesh_rolling_history: EPSD's)
@@ -478,10 +490,10 @@ class MeshContacts:
                 pivot = m.frames.axis_point[body]
                 x_world = xi
                 if ti.static(periodic):
-                    # the particle's image nearest the whole triangle: a triangle longer than
-                    # half the period is nearer another image than the one near its vertex
-                    wa, wb, wc = m.world_triangle(t)
-                    x_world = m.triangle_image(xi, wa, wb, wc)
+                    # the particle's image nearest the whole triangle (a triangle longer than
+                    # half the period is nearer another image than the one near its vertex),
+                    # found this step before the pair stage (make_place_candidates)
+                    x_world = m.candidate_image[k]
                 m.mesh_status[k] = ti.u8(2)
                 # the particle and the triangle relative to the body's pivot: with split
                 # positions (f32 far from the origin, engine/precision.py) the differences of
@@ -570,23 +582,56 @@ class MeshContacts:
 
         return particle_contacts
 
-    def make_shields(self):
-        """ti.func (i, j, d) -> True when a triangle near particle i or j (its contact
-        candidates) lies across the line between their centres (``d`` = x_i - x_j, minimum image, m):
-        a plate between two spheres, which then are not a contact (a zero-thickness paddle or
-        flight would otherwise let the spheres on its two faces push each other through it).
-        Only particles with mesh candidates look: the test is a segment-triangle intersection
-        (Moeller & Trumbore 1997) per candidate, after a cheaper test that the two centres lie
-        on the two sides of the triangle's plane."""
+    def make_place_candidates(self):
+        """ti.func place_candidates(i): particle i's candidate triangles in the world frame now
+        and its periodic image nearest each (candidate_a, candidate_e1, candidate_e2,
+        candidate_image). Run for every particle once per step, after the bodies' frames are
+        set and before the pair stage: the shields of every pair near a body (make_shields)
+        and the particle's own mesh contacts in the gather read them, where each placed the
+        triangle again (the shields per pair and candidate: 22 % of a flighted drum's step,
+        19 % of the seed's cooler slice; BENCHMARKS "The shields")."""
         m = self
 
         @ti.func
-        def crosses_plane(side, across, origin, wa, e1, e2, segment):
-            """Moeller-Trumbore for the segment origin -> origin + segment and the triangle
-            (wa, wa + e1, wa + e2), ``side`` = (origin - wa) . (e1 x e2), ``across`` =
-            segment . (e1 x e2)."""
+        def place_candidates(i):
+            x = m.e.state.position[i]
+            for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
+                wa, wb, wc = m.world_triangle(m.mesh_tri[k])
+                e1 = wb - wa
+                e2 = wc - wa
+                normal = e1.cross(e2)
+                # (x itself without periodic axes)
+                image = m.triangle_image(x, wa, wb, wc)
+                m.candidate_a[k] = wa
+                m.candidate_e1[k] = e1
+                m.candidate_e2[k] = e2
+                m.candidate_image[k] = image
+                m.candidate_normal[k] = normal
+                m.candidate_side[k] = (image - wa).dot(normal)
+
+        return place_candidates
+
+    def make_shields(self):
+        """ti.func shields(i, j, d) -> True when a triangle near particle i or j (its contact
+        candidates) lies across the line between their centres (``d`` = x_i - x_j, minimum
+        image, m): a plate between two spheres, which then are not a contact (a zero-thickness
+        paddle or flight would otherwise let the spheres on its two faces push each other
+        through it). Only particles with mesh candidates look: per candidate, whether the two
+        centres lie on the two sides of the triangle's plane (most fail here), then a
+        segment-triangle intersection (Moeller & Trumbore 1997). It reads the candidates as
+        placed this step (make_place_candidates)."""
+        m = self
+
+        @ti.func
+        def crosses(k, segment):
+            """Whether the segment from the image of entry k's particle nearest its triangle
+            along ``segment`` (m) crosses that triangle."""
+            side = m.candidate_side[k]
+            across = segment.dot(m.candidate_normal[k])
             hit = False
             if side * (side + across) < 0.0:
+                origin, wa = m.candidate_image[k], m.candidate_a[k]
+                e1, e2 = m.candidate_e1[k], m.candidate_e2[k]
                 pvec = segment.cross(e2)
                 det = e1.dot(pvec)
                 inv = 1.0 / det
@@ -598,27 +643,6 @@ class MeshContacts:
             return hit
 
         @ti.func
-        def crosses(k, x, segment):
-            """Whether the segment x -> x + segment crosses the triangle of entry k."""
-            wa, wb, wc = m.world_triangle(m.mesh_tri[k])
-            e1 = wb - wa
-            e2 = wc - wa
-            normal = e1.cross(e2)
-            hit = False
-            # the two ends on the two sides of the plane (most candidates fail here): the side
-            # lies strictly between 0 and -segment . normal. Whether any image the triangle's
-            # image search may choose can pass (its three closest-point searches for a shell's
-            # strip skipped when none can), with a slack of 1e-5 of the coordinates
-            lo, hi = m.plane_side_range(x, wa, wb, wc, normal)
-            across = segment.dot(normal)
-            slack = 1e-5 * (ti.abs(x).max() + ti.abs(wa).max()) * normal.norm()
-            if hi > ti.min(0.0, -across) - slack and lo < ti.max(0.0, -across) + slack:
-                origin = m.triangle_image(x, wa, wb, wc)
-                side = (origin - wa).dot(normal)
-                hit = crosses_plane(side, across, origin, wa, e1, e2, segment)
-            return hit
-
-        @ti.func
         def shields(i, j, d):
             # every candidate triangle of either sphere, not only those touched at the last
             # step: a triangle across a segment shorter than 2 r is within r of one of its
@@ -626,10 +650,10 @@ class MeshContacts:
             hit = False
             for k in range(m.mesh_start[i], m.mesh_start[i] + m.mesh_count[i]):
                 if not hit:
-                    hit = crosses(k, m.e.state.position[i], -d)
+                    hit = crosses(k, -d)
             for k in range(m.mesh_start[j], m.mesh_start[j] + m.mesh_count[j]):
                 if not hit:
-                    hit = crosses(k, m.e.state.position[j], d)
+                    hit = crosses(k, d)
             return hit
 
         return shields

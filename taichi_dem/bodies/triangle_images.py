@@ -8,19 +8,16 @@ from ..engine.values import reader
 
 
 def make_triangle_image(grid, reach: float):
-    """ti.funcs ``triangle_image(x, a, b, c)`` -> the periodic image of point x (m) nearest to
-    the triangle abc (world frame, m), x itself without periodic axes; and
-    ``plane_side_range(x, a, b, c, normal)`` -> (lo, hi): bounds on (y - a) . normal over every
-    image y that ``triangle_image`` may choose (``normal`` any vector, m^2 for e1 x e2).
+    """ti.func ``triangle_image(x, a, b, c)`` -> the periodic image of point x (m) nearest to
+    the triangle abc (world frame, m), x itself without periodic axes.
 
     The image nearest one vertex is right only while the triangle's extent along a periodic
     axis plus the reach is under half the period. A longer triangle (a floor plate or drum
     shell spanning a periodic slice) is tested against the neighbouring images as well, as
     many as its extent needs, and the image closest to the triangle wins: three closest-point
-    searches for a drum shell's strip. The side range lets a caller that needs only the plane
-    test (most candidates fail it) skip that search: an image shifted by s periods moves the
-    plane distance by s (P . normal), zero for a strip along the periodic axis. ``reach``: the
-    largest contact search distance (largest radius + skin), m."""
+    searches for a drum shell's strip. Each particle's candidates are imaged once per step
+    (MeshContacts.make_place_candidates), for its mesh contacts and the shields. ``reach``:
+    the largest contact search distance (largest radius + skin), m."""
     periodic = grid.periodic
     minimum_image = grid.make_minimum_image()
     any_periodic = any(periodic)
@@ -69,22 +66,4 @@ def make_triangle_image(grid, reach: float):
                                     best_sq = d_sq
         return best
 
-    @ti.func
-    def plane_side_range(x, a, b, c, normal):
-        side = (x - a).dot(normal)
-        lo = side
-        hi = side
-        if ti.static(any_periodic):
-            base, n_side, span_v = images(x, a, b, c)
-            side = (base - a).dot(normal)
-            lo = side
-            hi = side
-            for k in ti.static(range(3)):
-                if ti.static(periodic[k]):
-                    # the images base + s span e_k, |s| <= n_side: side + s span n_k
-                    shift = ti.abs(n_side[k] * (span_v[k] * normal[k]))
-                    lo -= shift
-                    hi += shift
-        return lo, hi
-
-    return triangle_image, plane_side_range
+    return triangle_image

@@ -24,7 +24,9 @@ from .workers import WORKER_TASK, make_barrier
 class StepFunctions:
     """The step as ti.funcs of one engine (stepper.py): ``pair_particle(i, dt, full, scatter,
     copy)``, ``gather_particle(i, dt, record, then_drift, t_next, scatter)``,
-    ``begin_step(j, t, last, record_last, full_first, leader)``, the cell effects' ti.funcs
+    ``begin_step(j, t, last, record_last, full_first, leader)``, ``before_pairs(i)`` (None,
+    or what each particle prepares after begin_step for every particle's pair stage: run for
+    all before any pair), the cell effects' ti.funcs
     ``cell_funcs`` (n, dt), and what the drivers read: the engine's ``flags``, its particle
     ``state``, its precision ``real`` and whether one thread may add partners' shares to the
     partners directly (``scatter_ok``)."""
@@ -39,6 +41,8 @@ def compile_run_steps(step: StepFunctions):
     flags, real, scatter_ok = step.flags, step.real, step.scatter_ok
     pair_particle, gather_particle, begin_step = (step.pair_particle, step.gather_particle,
                                                   step.begin_step)
+    before_pairs = step.before_pairs
+    has_before_pairs = before_pairs is not None
     cell_funcs = step.cell_funcs
 
     @ti.kernel
@@ -60,6 +64,9 @@ def compile_run_steps(step: StepFunctions):
             t = t_first + j * dt_time
             last = j == steps - 1
             record, full = begin_step(j, t, last, record_last, full_first, True)
+            if ti.static(has_before_pairs):
+                for i in range(n):
+                    before_pairs(i)
             for i in range(n):
                 pair_particle(i, dt, full, ti.static(scatter_ok), 0)
             for cell_stage in ti.static(cell_funcs):
@@ -83,6 +90,8 @@ def compile_run_worker_steps(step: StepFunctions, pool):
     flags, real, s = step.flags, step.real, step.state
     pair_particle, gather_particle, begin_step = (step.pair_particle, step.gather_particle,
                                                   step.begin_step)
+    before_pairs = step.before_pairs
+    has_before_pairs = before_pairs is not None
     cell_funcs = step.cell_funcs
     workers = pool.workers
     arrivals, claims, outcome = pool.arrivals, pool.claims, pool.outcome
@@ -164,6 +173,22 @@ def compile_run_worker_steps(step: StepFunctions, pool):
                     last = j == steps - 1
                     # (worker 0 zeroes and sets what the particle stage reads after a barrier)
                     record, full = begin_step(j, t, last, record_last, full_first, w == 0)
+                    if ti.static(has_before_pairs):
+                        # what begin_step set (the bodies' frames), then every particle's
+                        # part of the pair stage (over claimed chunks), before any pair
+                        if w == 0:
+                            claims[(arrived + 1) % 3] = 0
+                        arrived += 1
+                        stalls += barrier(arrived, stall_spins)
+                        if w == 0:
+                            claims[(arrived + 1) % 3] = 0
+                        c = claim(arrived)
+                        while c < chunks:
+                            for i in range(c * chunk, ti.min(n, (c + 1) * chunk)):
+                                before_pairs(i)
+                            c = claim(arrived)
+                        arrived += 1
+                        stalls += barrier(arrived, stall_spins)
                     if w == 0:
                         claims[(arrived + 1) % 3] = 0
                     if ti.static(copies > 0):
@@ -267,8 +292,10 @@ def advance_in_runs(engine, steps: int, record_last: bool, on_workers: bool = Fa
         if on_workers:
             done, stalls = (int(v) for v in e._run_worker_steps(*args))
             pool.runs += 1
-            pool.count_stalls(stalls, done * (3 if e.model.cell_effects else 2)
-                              + (1 if pool.copies else 0))
+            # barriers per step: after the pair and the particle stage, the cell stage's,
+            # and two around the particles' part of the shields (bodies)
+            per_step = 2 + (1 if e.model.cell_effects else 0) + (2 if e.mesh is not None else 0)
+            pool.count_stalls(stalls, done * per_step + (1 if pool.copies else 0))
         else:
             done = int(e._run_steps(*args))
         if e.mesh is not None:

@@ -73,27 +73,27 @@ class PairStage:
     """The pair stage's ti.func ``pair_particle(i, dt, full, scatter, copy)`` and its kernel
     ``pair_forces(n, dt, full, serial_loops)``, with the shares' adders the gather reads."""
 
-    def __init__(self, e, p, geometry, pair_history, temperature_of, shields):
+    def __init__(self, e, p, geometry, pair_history, temperature_of, shields,
+                 before_pairs=None):
         """``e`` the Engine, ``p`` its PairState; ``geometry`` contacts/geometry.py's
         make_geometry; ``pair_history`` the history's load/store at the entries;
-        ``shields`` (i, j, d) -> whether a mesh plate lies between them, or None."""
+        ``shields`` (i, j, d) -> whether a mesh plate lies between them, or None;
+        ``before_pairs`` (i): run for every particle before any pair (or None)."""
         s, model = e.state, e.model
         real = model.real
         minimum_image = e.minimum_image
         pair_law = make_contact_law(model.effect_list, "pair", real, e.context)
         # a pair is handed to the law while its gap is below the margin an effect asks for
         pair_margin = model.pair_margin
-        pair_heat = model.pair_heat
-        thermal = model.thermal
+        pair_heat, thermal = model.pair_heat, model.thermal
         has_mesh = shields is not None
         holding = e.holding
         holds, particle_moves = holding.any, holding.moves
-        # held particles carried by a body's frame (engine/holding.py): the frozen core is
-        # carried by the frame's body, so what
-        # holds it there is a load on that body (booked in the gather); its inner contacts
+        # held particles carried by a body's frame (engine/holding.py): what holds the frozen
+        # core there is a load on that body (booked in the gather); its inner contacts
         # cancel in that sum and are left out of both sides
         core_internal = holding.carried
-        split = model.split_positions
+        split, has_before_pairs = model.split_positions, before_pairs is not None
         vec0 = ti.Vector([0.0, 0.0, 0.0])
 
         pair_contact = make_pair_contact(s, geometry, pair_margin, temperature_of)
@@ -213,7 +213,11 @@ class PairStage:
 
         @ti.kernel
         def pair_forces(n: ti.i32, dt: real, full: ti.i32, serial_loops: ti.template()):
-            """pair_particle over the particles; ``serial_loops``: one thread (Engine.serial)."""
+            """pair_particle over the particles (before_pairs first); ``serial_loops``: one thread."""
+            if ti.static(has_before_pairs):
+                ti.loop_config(serialize=serial_loops)
+                for i in range(n):
+                    before_pairs(i)
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 pair_particle(i, dt, full, ti.static(serial_loops and scatter_ok), 0)

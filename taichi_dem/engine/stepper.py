@@ -281,15 +281,18 @@ class Engine:
                 make_contact_law(effects, "plane", real, self.context), wall_history,
                 wall_force, wall_heat, thermal, temperature_of,
                 margin_fraction(model.contact_effects, "plane"))
-        mesh_contacts = shields = None
+        mesh_contacts = shields = place_candidates = None
         if self.mesh is not None:
             mesh_contacts = self.mesh.make_particle_contacts(
                 make_contact_law(effects, "triangle", real, self.context),
                 make_contact_law(effects, "surface", real, self.context), sphere_surface)
-            # a plate between two spheres: no pair contact through it
+            # a plate between two spheres: no pair contact through it; both read each
+            # particle's candidates as placed this step, before any pair (place_candidates)
             shields = self.mesh.make_shields()
+            place_candidates = self.mesh.make_place_candidates()
         has_mesh = mesh_contacts is not None
-        pairs = PairStage(self, p, geometry, pair_history, temperature_of, shields)
+        pairs = PairStage(self, p, geometry, pair_history, temperature_of, shields,
+                          place_candidates)
         gathers = GatherStage(self, p, temperature_of, plane_contacts, mesh_contacts)
         pair_particle, pair_forces = pairs.pair_particle, pairs.pair_forces
         gather_particle, gather = gathers.gather_particle, gathers.gather
@@ -331,7 +334,8 @@ class Engine:
         # the step's functions, which every driver runs (drivers.py)
         step = drivers.StepFunctions(
             pair_particle=pair_particle, gather_particle=gather_particle, begin_step=begin_step,
-            cell_funcs=cell_funcs, flags=flags, state=s, real=real, scatter_ok=scatter_ok)
+            before_pairs=place_candidates, cell_funcs=cell_funcs, flags=flags, state=s,
+            real=real, scatter_ok=scatter_ok)
         self._run_steps = drivers.compile_run_steps(step)
         self._run_worker_steps = (drivers.compile_run_worker_steps(step, pool) if pool.workers
                                   else None)

@@ -1,16 +1,17 @@
 """A zero-thickness plate shields two spheres on its two faces in a periodic slice, where the
 plate is longer than the period and tilted against the periodic axis (bodies/mesh_contacts.py
-``make_shields``, bodies/triangle_images.py ``plane_side_range``).
+``make_shields``, bodies/triangle_images.py ``triangle_image``).
 
-The plate test of a pair first bounds the side of the plane over every periodic image the
-triangle's image search may choose: an image shifted by s periods P moves it by s (P . n). A
-plate along the period (n . P = 0) leaves it alone. This one spans two periods (x from 0 to
-40 mm, the period 20 mm), tilted 20 deg about y, so each period moves the side by sin(20 deg) x
-20 mm = 6.8 mm, more than the spheres' 2 mm radius. Its box centre lies at x = 20 mm: for a
-sphere at x = 4 mm the image nearest that centre is at x = 24 mm, beside the plate's far half,
-6.8 mm from the plane, while the image that touches the plate is the sphere itself, one
-period back. A bound without the images' shift would skip the test there and let the pair
-push through the plate (measured: the test then fails at x = 4 mm). At x = 16 mm the image
+The plate test of a pair takes each sphere's periodic image nearest the triangle (placed once
+per step, ``make_place_candidates``): an image shifted by s periods P moves its side of the
+plane by s (P . n). A plate along the period (n . P = 0) leaves it alone. This one spans two
+periods (x from 0 to 40 mm, the period 20 mm), tilted 20 deg about y, so each period moves the
+side by sin(20 deg) x 20 mm = 6.8 mm, more than the spheres' 2 mm radius. Its box centre lies at
+x = 20 mm: for a sphere at x = 4 mm the image nearest that centre is at x = 24 mm, beside the
+plate's far half, 6.8 mm from the plane, while the image that touches the plate is the sphere
+itself, one period back. A test of the image nearest the box centre would find no crossing
+there and let the pair push through the plate (measured, with the former bound on the side
+that left the images' shift out: the test then fails at x = 4 mm). At x = 16 mm the image
 nearest the centre is the sphere itself.
 
 Two 2 mm steel spheres at rest, no gravity, each overlapping the plate by 5 % of its radius on
