@@ -7,7 +7,8 @@ writes with TAICHI_DEM_SUITE_PROFILE=FOLDER, by test file.
 
 Per file: the tests' wall time (set-up included, summed over both workers), the kernels'
 first launches and the seconds they took (compiling, or reading Taichi's offline cache), how
-many of those took over 0.08 s (compiled) and how many Taichi runtimes were started.
+many of those took over 0.08 s (compiled) and how many Taichi runtimes were started; then the
+front end's seconds and the compiled kernels by name.
 """
 from __future__ import annotations
 
@@ -59,6 +60,17 @@ def main(argv=None) -> int:
     print(f"{'all ' + str(len(files)) + ' files':60s} {total['tests']:5d} {total['wall_s']:7.1f} "
           f"{total['kernels']:7d} {total['kernel_s']:7.1f} {total['slow_kernels']:8d} "
           f"{total['inits']:5d}")
+    front = sum(row.get("front_s", 0.0) for row in rows)
+    compiled: dict = defaultdict(lambda: [0, 0.0])
+    for row in rows:
+        for name, seconds in row.get("compiled", []):
+            compiled[name][0] += 1
+            compiled[name][1] += seconds
+    if compiled or front:
+        print(f"Taichi's front end (AST -> IR, every new kernel instance, cached or not): {front:.1f} s")
+        print("compiled (first launch over 0.08 s), by kernel: " + ", ".join(
+            f"{name} {n} ({s:.1f} s)" for name, (n, s) in
+            sorted(compiled.items(), key=lambda kv: -kv[1][1])[:12]))
     workers = defaultdict(float)
     spans: dict = {}
     for row in rows:

@@ -159,10 +159,6 @@ def pairs_within(sim, cutoff_extra: float) -> set:
 #    ten times slower with another process on the second core. The gate: a ``two_cores``
 #    test takes an exclusive lock, every other test a shared one (both through a gate lock,
 #    so that a waiting exclusive request is served before new shared ones).
-#    ``two_cores(while_spinning=True)``: the test runs the workers in this process, and only
-#    the launches of the kernels that spin (SPINNING_KERNELS) need both cores; the test holds
-#    a shared lock and takes the exclusive one around each of those launches, its kernel
-#    compiled before (compiling is one thread's work: the other pytest worker goes on).
 SLOW_FILES = {
     "tests/verification/test_drum_wall_heat.py": 182,
     "tests/verification/test_packed_bed.py": 115,
@@ -250,47 +246,6 @@ class _CoreGate:
         if exclusive:
             fcntl.flock(self.gate, fcntl.LOCK_UN)
 
-    def exclusive_within(self):
-        """From a shared hold to the exclusive one and back (a context manager). The shared
-        hold is let go first: waiting for the gate while holding it could deadlock with the
-        other worker doing the same."""
-        import contextlib
-
-        @contextlib.contextmanager
-        def upgraded():
-            self.release(False)
-            self.acquire(True)
-            try:
-                yield
-            finally:
-                self.release(True)
-                self.acquire(False)
-        return upgraded()
-
-
-# the kernels whose threads meet at spin barriers (engine/workers.py, drivers.py, broadphase.py)
-SPINNING_KERNELS = frozenset({"probe", "run_worker_steps", "rebuild_on_workers"})
-
-
-def _exclusive_spinning_launches(gate):
-    """Kernel launches in SPINNING_KERNELS made exclusive on ``gate`` (each compiled first,
-    outside the exclusive hold); returns the function that undoes it."""
-    from taichi.lang import impl, kernel_impl
-    launch = kernel_impl.Kernel.launch_kernel
-
-    def gated(self, t_kernel, *args):
-        if self.func.__name__ not in SPINNING_KERNELS:
-            return launch(self, t_kernel, *args)
-        prog = impl.get_runtime().prog
-        prog.compile_kernel(prog.config(), prog.get_device_caps(), t_kernel)   # kept in memory
-        with gate.exclusive_within():
-            return launch(self, t_kernel, *args)
-    kernel_impl.Kernel.launch_kernel = gated
-
-    def undo():
-        kernel_impl.Kernel.launch_kernel = launch
-    return undo
-
 
 _gate: list = []
 
@@ -314,19 +269,13 @@ def pytest_runtest_protocol(item, nextitem):
         profile.close()
         _forget_last_exception()
         return
-    marker = item.get_closest_marker("two_cores")
-    exclusive = marker is not None and not marker.kwargs.get("while_spinning", False)
+    exclusive = item.get_closest_marker("two_cores") is not None
     gate.acquire(exclusive)
-    undo = None
-    if marker is not None and not exclusive:
-        undo = _exclusive_spinning_launches(gate)
     profile = _TestProfile(item)
     try:
         yield
     finally:
         profile.close()
-        if undo is not None:
-            undo()
         gate.release(exclusive)
         _forget_last_exception()
 

@@ -102,9 +102,9 @@ _skip_below_two_cores = pytest.mark.skipif(
 
 def needs_two_cores(test):
     """Skipped below two cores; marked ``two_cores``, which in a two-worker pytest run makes
-    the other worker wait between its tests while this one's workers spin (tests/conftest.py:
-    a spin barrier whose partner thread has lost its core waits for the OS to preempt it)."""
-    return pytest.mark.two_cores(while_spinning=True)(_skip_below_two_cores(test))
+    the other worker wait between its tests while this one runs (tests/conftest.py: a spin
+    barrier whose partner thread has lost its core waits for the OS to preempt it)."""
+    return pytest.mark.two_cores(_skip_below_two_cores(test))
 
 
 @pytest.fixture(autouse=True)
