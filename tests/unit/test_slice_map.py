@@ -124,8 +124,14 @@ def test_the_map_of_a_drum_slice(tmp_path):
         assert r["axial_mass_flow"] < 0.0 and r["axial_speed"] < 0.0       # downhill, -x
         assert 10.0 < r["dynamic_angle"] < 60.0
         assert r["shell/power_per_metre"] > 0.0                              # the drive works
-        # the bed spreads along the axis: D_ax > 0 with its error (app/dispersion.py)
-        assert r["axial_dispersion"] > 0.0 and math.isfinite(r["axial_dispersion_standard_error"])
+        # the bed's spread along the axis: D_ax with its error (app/dispersion.py; the estimator
+        # is checked against random walkers in test_dispersion.py). In 1.5 s neither row resolves
+        # it: +6.5 +- 3.9 and +2.9 +- 0.9 (1e-5 m^2/s, 10 and 25 % fill) with one build,
+        # +10.1 +- 3.0 and -0.1 +- 1.8 with another whose round-off differs (2026-12-07): the
+        # sign of a row is noise here, so it may not lie significantly below zero
+        d_ax, error = r["axial_dispersion"], r["axial_dispersion_standard_error"]
+        assert math.isfinite(d_ax) and math.isfinite(error) and error > 0.0
+        assert d_ax > -3.0 * error
     low, high = (abs(r["shell/torque_per_metre"]) for r in rows)
     assert high > 1.5 * low
     table = (out / "map.md").read_text()
