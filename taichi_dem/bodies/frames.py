@@ -12,6 +12,8 @@ import numpy as np
 import taichi as ti
 
 from ..engine import transfer
+from ..engine.state import fit_rows
+from ..setup.memory import triangle_slots
 from .kinematics import MAX_SCHEDULE, triangle_arrays
 
 
@@ -30,7 +32,10 @@ class BodyTriangles:
                      if len(tris) else np.zeros(0))
         self.owner = np.asarray(owner, np.int64)
         self.real = real
-        t, nt = tree, max(self.count, 1)
+        # slots in buckets with a floor (setup/memory.py triangle_slots): scenes whose meshes
+        # differ in their triangle count share their kernels; the loops run to ``count``
+        self.slots = triangle_slots(self.count)
+        t, nt = tree, self.slots
         self.tri_a = t.add("tri_a", real, nt, vector=True)
         self.tri_b = t.add("tri_b", real, nt, vector=True)
         self.tri_c = t.add("tri_c", real, nt, vector=True)
@@ -45,9 +50,11 @@ class BodyTriangles:
         tris, npf = self._tris, np.float64 if self.real == ti.f64 else np.float32
         normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
         normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-        return [(self.tri_a, tris[:, 0].astype(npf)), (self.tri_b, tris[:, 1].astype(npf)),
-                (self.tri_c, tris[:, 2].astype(npf)), (self.tri_body, self.owner.astype(np.int32)),
-                (self.tri_normal, normal.astype(npf))]
+        # (the slots past ``count`` zero: no loop reaches them)
+        return [(f, fit_rows(a, self.slots)) for f, a in (
+            (self.tri_a, tris[:, 0].astype(npf)), (self.tri_b, tris[:, 1].astype(npf)),
+            (self.tri_c, tris[:, 2].astype(npf)), (self.tri_body, self.owner.astype(np.int32)),
+            (self.tri_normal, normal.astype(npf)))]
 
 
 class BodyFrames:

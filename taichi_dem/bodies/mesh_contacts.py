@@ -235,7 +235,8 @@ class MeshContacts:
         g = self.e.model.grid
         lo_of, _, _, inv_cell_of, dims_of, n_cells_of = g.layout_funcs()
         cell_of_size = reader(g.values, "cell_size", tuple(g.cell_size))
-        nt = self.n_triangles
+        # the triangles' count read at run time (their arrays have bucketed slots)
+        count_of = reader(g.values, "triangle_count", self.n_triangles, integer=True)
         expand_of = reader(g.values, "triangle_reach", self.expand)
         half_diagonal_of = reader(g.values, "half_cell_diagonal",
                                         0.5 * float(np.linalg.norm(g.cell_size)))
@@ -282,7 +283,7 @@ class MeshContacts:
                 m.tri_cell_count[c] = 0
                 m.tri_cell_fill[c] = 0
             ti.loop_config(serialize=serial_loops)
-            for t in range(nt):
+            for t in range(count_of()):
                 visit_cells(t, False)
             n_cells = n_cells_of()
             exclusive_scan(m.tri_cell_count, m.tri_cell_start, n_cells)
@@ -295,7 +296,7 @@ class MeshContacts:
         @ti.func
         def fill_bins_body(serial_loops: ti.template()):
             ti.loop_config(serialize=serial_loops)
-            for t in range(nt):
+            for t in range(count_of()):
                 visit_cells(t, True)
 
         @ti.kernel

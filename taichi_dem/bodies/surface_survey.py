@@ -27,7 +27,7 @@ class SurfaceSurvey:
             # triangle: 1 where a particle touches it (zero between surveys)
             self.touching = tree.add("touching", ti.i32, max(nb, 1))
             self.deepest = tree.add("deepest", m.e.model.real, max(nb, 1))
-            self.touched = tree.add("touched_triangle", ti.i32, max(m.n_triangles, 1))
+            self.touched = tree.add("touched_triangle", ti.i32, m.triangles.slots)
             tree.finalize()
         touching, deepest, touched_triangle = self.touching, self.deepest, self.touched
 

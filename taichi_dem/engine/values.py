@@ -11,8 +11,8 @@ reads its kernels from the cache.
 What still specialises a kernel - the kind of scene - is what is ``ti.static``: the enabled
 effects, the precision, which axes are periodic, a periodic axis only one or two cells long
 (the neighbour stencil is unrolled for it), the materials' count (the pair tables' shape), the
-number of plane walls and bodies, and the capacity buckets (``bucket``) of the particle and
-cell arrays. docs/architecture.md "What compiles" lists them.
+number of plane walls and bodies, and the capacity buckets (``bucket``) of the particle,
+cell and triangle arrays. docs/architecture.md "What compiles" lists them.
 
 ``values.vector(name, v)`` and ``values.scalar(name, x)`` (and ``integer``/``integers``)
 return a ti.func that reads the value; the same name gets the same slot (the value is

@@ -80,6 +80,12 @@ class Snapshot:
 
 
 # ------------------------------------------------------------------------------ engine walk
+# the per-triangle arrays (bodies/frames.py BodyTriangles, bodies/surface_survey.py), allocated
+# with more slots than triangles since setup/tuning.py MIN_TRIANGLE_SLOTS
+TRIANGLE_SLOT_FIELDS = frozenset({"tri_a", "tri_b", "tri_c", "tri_body", "tri_normal",
+                                  "touched_triangle"})
+
+
 def field_trees(engine) -> dict:
     """Live FieldTrees of an engine by label (first field name; unique by construction)."""
     # (the run-time scene values are the scene's, not state: rebuilt, never saved)
@@ -297,6 +303,13 @@ def restore(sim, snap: Snapshot) -> None:
                     and arr.shape[0] in (saved_slots, saved_slots + 1)
                     and shape[0] - arr.shape[0] == e.state.capacity - saved_slots):
                 # per-slot rows of a checkpoint with fewer slots: the rest stay empty
+                padded = np.zeros(shape, arr.dtype)
+                padded[:arr.shape[0]] = arr
+                arr = padded
+            if (name in TRIANGLE_SLOT_FIELDS and arr.shape[1:] == shape[1:]
+                    and arr.shape[0] < shape[0]):
+                # the bodies' triangles of a checkpoint from before their slots had a floor
+                # (one row per triangle): the same triangles, the other slots empty
                 padded = np.zeros(shape, arr.dtype)
                 padded[:arr.shape[0]] = arr
                 arr = padded

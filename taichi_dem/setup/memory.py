@@ -101,6 +101,13 @@ def allocated_slots(n: int) -> int:
     return max(bucket(n), MIN_PARTICLE_SLOTS)
 
 
+def triangle_slots(n: int) -> int:
+    """The triangle slots the bodies' arrays are allocated with for ``n`` triangles: their
+    bucket, no fewer than the floor MIN_TRIANGLE_SLOTS (setup/tuning.py)."""
+    from .tuning import MIN_TRIANGLE_SLOTS
+    return max(bucket(n), MIN_TRIANGLE_SLOTS)
+
+
 def particle_slots(scene) -> int:
     """Slots the engine allocates: the fills' particles plus the factories' capacity
     (``factory_capacity``, which honours max_particles)."""

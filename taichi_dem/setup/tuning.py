@@ -72,4 +72,9 @@ FUSED_AFTER_QUIET_REBUILDS = 500
 # for them, the cell arrays); every loop runs to the counts in use. Results do not change: the grid's cells and every count are the scene's.
 MIN_PARTICLE_SLOTS = 4096
 MIN_CELL_SLOTS = 16384
+# The same for the bodies' triangles (issue 45 item 2): their arrays had each scene's own
+# length, so every mesh scene compiled its mesh kernels (the candidate search, the binning,
+# the step) afresh: 161 compiles of the candidate search in one suite run, ~30 s. Slots for
+# 1,024 triangles cost ~140 kB in f64; the loops run to the scene's count (a runtime value).
+MIN_TRIANGLE_SLOTS = 1024
 

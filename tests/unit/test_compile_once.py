@@ -25,7 +25,10 @@ VARIANTS = ["simulation.gravity=[-0.8,0.0,-9.7]",        # a kernel constant bef
             # a small dt: the skin follows it, so smaller cells, more of them, and more
             # triangle items (35 kernels compiled again before the cell arrays and the
             # triangles' list were sized for any skin)
-            "simulation.dt=1e-5"]
+            "simulation.dt=1e-5",
+            # another mesh: more triangles within their slots' floor (15 kernels compiled
+            # again before the triangles' arrays had bucketed slots)
+            "bodies.0.mesh.flights=6"]
 
 
 @pytest.mark.slow
