@@ -300,7 +300,7 @@ def describe_scene(scene) -> str:
     # setup/memory.py: state, neighbour lists, cells (memory_problem refused more than the
     # machine has above, from the same estimate)
     memory = estimated_device_bytes(allocated_slots(particle_slots(scene)),
-                                    scene.simulation.precision)
+                                    scene.simulation.precision, bool(scene.bodies))
     steps = scene.simulation.end_time / ts.dt
     lines = [f"scene: {scene.source}", "effects (compiled and run, in step order):"]
     for e in enabled_effects(scene):

@@ -98,9 +98,10 @@ class MeshContacts:
         self._alloc_items(bucket(max(4 * self.n_triangles, 1024,
                                      int(self._items_bound() * LIST_GROWTH) + 16)))
         self._alloc_scratch(16)
-        # one candidate entry per slot to start with (~90 bytes each): the seed's cooler slice
-        # at 60 kg/m needs ~0.5 per sphere once the bed has packed, and a list that grows
-        # mid-run compiles the step's kernels again (a quarter per slot grew at 0.11 s)
+        # one candidate entry per slot to start with (~300 bytes each in f64, setup/memory.py):
+        # the seed's cooler slice at 60 kg/m needs ~0.5 per sphere once the bed has packed, and
+        # a list that grows mid-run compiles the step's kernels again (a quarter per slot grew
+        # at 0.11 s)
         self._alloc_entries(bucket(max(s.capacity, 1024)))
         self.minimum_image = engine.model.grid.make_minimum_image()
         self.triangle_image = make_triangle_image(engine.model.grid, self.expand)

@@ -44,14 +44,16 @@ def device_memory_bytes(arch: str) -> tuple[int, str]:
     return host_memory_bytes(), "the machine's memory"
 
 
-def estimated_device_bytes(slots: int, precision: str) -> int:
+def estimated_device_bytes(slots: int, precision: str, bodies: bool = False) -> int:
     """Device memory (bytes) for ``slots`` particle slots: per particle 6 vectors and 4 reals
     of state, 15 ints of shadows and rows, 4 reals more, and the reorder's shadows of the
     state (engine/state.py: 4 vectors, 3 reals and 2 ints beyond those ints); the neighbour
     entries the first list
     is allocated with (SETTLED_ENTRIES_PER_PARTICLE per slot, in a bucket; more than
     LIST_ENTRIES_PER_PARTICLE with the growth headroom) of 3 ints and 5 vectors each; and
-    CELLS_PER_PARTICLE grid cells of 2 ints."""
+    CELLS_PER_PARTICLE grid cells of 2 ints. With mesh ``bodies``, their candidate entries
+    too (bodies/mesh_contacts.py: one per slot to start with, each ~3 ints, 2 reals and up to
+    11 vectors: the contact, the history now and before, the candidate placed this step)."""
     from .tuning import LIST_GROWTH, SETTLED_ENTRIES_PER_PARTICLE
     real_bytes = 8 if precision == "f64" else 4
     per_particle = ((6 * 3 + 4) * real_bytes + 15 * 4 + 4 * real_bytes
@@ -60,7 +62,9 @@ def estimated_device_bytes(slots: int, precision: str) -> int:
     # the first list has room for every slot settled (engine/broadphase.py), in a bucket
     entries = bucket(int(max(LIST_GROWTH * LIST_ENTRIES_PER_PARTICLE,
                              SETTLED_ENTRIES_PER_PARTICLE) * slots))
-    return slots * per_particle + entries * per_entry + CELLS_PER_PARTICLE * slots * 2 * 4
+    mesh = slots * (3 * 4 + (2 + 11 * 3) * real_bytes) if bodies else 0
+    return (slots * per_particle + entries * per_entry + CELLS_PER_PARTICLE * slots * 2 * 4
+            + mesh)
 
 
 def factory_capacity(scene) -> int:
@@ -131,7 +135,8 @@ def memory_problem(scene, arch: str = "cpu", precision: Optional[str] = None):
     estimate and the machine's figure in the reason), else None. Nothing is allocated."""
     precision = precision or scene.simulation.precision
     slots = particle_slots(scene)
-    need = estimated_device_bytes(allocated_slots(slots), precision)   # as allocated
+    need = estimated_device_bytes(allocated_slots(slots), precision,    # as allocated
+                                  bool(scene.bodies))
     have, what = device_memory_bytes(arch)
     if have and need > have:
         return (_blamed_key(scene),
