@@ -28,13 +28,19 @@ def _installed_name(folder: Path) -> str:
 
 def test_every_package_folder_is_found():
     """setup.py finds the packages (no list kept by hand): every folder with an __init__.py
-    under taichi_dem/ and the mapped top-level folders, and nothing else."""
+    under taichi_dem/ and the mapped top-level folders, the mapped folders' data-only
+    subfolders (namespace packages, so setuptools does not warn they are missing), and nothing
+    else."""
     import runpy
     found_by_setup = set(runpy.run_path(str(ROOT / "setup.py"))["packages"]())
     folders = [p.parent for top in ("taichi_dem", *MAPPED.values())
                for p in (ROOT / top).rglob("__init__.py")]
-    found = {_installed_name(f) for f in folders}
+    data_folders = [p for top in MAPPED.values() for p in (ROOT / top).rglob("*")
+                    if p.is_dir() and "__pycache__" not in p.parts
+                    and not (p / "__init__.py").exists()]
+    found = {_installed_name(f) for f in folders + data_folders}
     assert found == found_by_setup
+    assert "taichi_dem.demos.dryers" in found_by_setup
     assert {"taichi_dem.effects.drag", "taichi_dem.thermal", "taichi_dem.demos"} <= found_by_setup
     assert "packages" not in PYPROJECT["tool"]["setuptools"], "the list is setup.py's to find"
 
