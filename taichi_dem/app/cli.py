@@ -283,7 +283,7 @@ def describe_scene(scene) -> str:
         raise SceneError(scene.source, *problem)
     placed = place_fills(scene, np.random.default_rng(scene.simulation.seed))
     tables = build_pair_tables(scene)
-    from ..run.simulation import _factory_capacity, _fit_skin_to_periodic_axes, _sizes_to_expect
+    from ..run.simulation import _check_periodic_axes, _factory_capacity, _sizes_to_expect
     n = len(placed.radius)
     if n == 0 and not scene.factories:
         raise SceneError(scene.source, "particles", "the scene has no particles")
@@ -294,7 +294,7 @@ def describe_scene(scene) -> str:
                          f"the time step comes out as {ts.dt:g} s (set by {ts.limited_by}; "
                          f"Rayleigh time {ts.rayleigh_time:g} s): the scene's sizes, speeds "
                          "and material properties are absurd together")
-    skin = _fit_skin_to_periodic_axes(scene, float(np.max(radii)), skin, ts.notes, say=False)
+    _check_periodic_axes(scene, float(np.max(radii)))
     n_initial = n
     n = n + _factory_capacity(scene)
     # setup/memory.py: state, neighbour lists, cells (memory_problem refused more than the

@@ -138,7 +138,7 @@ def step_info(scene) -> dict:
     """The time step the engine picks for ``scene`` and why, without compiling anything (as
     ``taichi-dem check``): {"dt" s, "skin" m, "contact_time" s (Hertz, at the expected speed),
     "rayleigh_time" s, "limited_by"}. An explicit dt the engine refuses is a SceneError."""
-    from ..run.simulation import _fit_skin_to_periodic_axes, _sizes_to_expect
+    from ..run.simulation import _check_periodic_axes, _sizes_to_expect
     from ..setup.pair_tables import build_pair_tables
     from ..setup.placement import place_fills
     from ..setup.timestep import choose_step_and_skin
@@ -146,7 +146,7 @@ def step_info(scene) -> dict:
     tables = build_pair_tables(scene)
     radii, mats, speeds, fixed = _sizes_to_expect(scene, placed, tables.names)
     ts, skin = choose_step_and_skin(scene, radii, mats, tables.names, speeds, fixed)
-    skin = _fit_skin_to_periodic_axes(scene, float(np.max(radii)), skin, [], say=False)
+    _check_periodic_axes(scene, float(np.max(radii)))
     return {"dt": ts.dt, "skin": skin, "contact_time": ts.contact_time,
             "rayleigh_time": ts.rayleigh_time, "limited_by": ts.limited_by}
 

@@ -172,6 +172,6 @@ class GridSpec:
         return minimum_image
 
     def too_small_periodic_axes(self, cutoff: float) -> list[str]:
-        """Periodic axes shorter than two pair cutoffs (m): there a particle could meet two
+        """Periodic axes shorter than two interaction reaches (m): there a particle could meet two
         images of one partner, and the minimum image is no longer the only one in reach."""
         return [a for k, a in enumerate("xyz") if self.periodic[k] and self.span[k] < 2.0 * cutoff]

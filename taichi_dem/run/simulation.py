@@ -79,15 +79,17 @@ def _particle_species(scene: Scene, placed, names, most: int = MOST_SPECIES):
     return tuple(sorted(species))
 
 
-def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
-                               notes: list, say: bool = True, effects=None) -> float:
-    """The Verlet skin (m), shrunk where a periodic axis is thin.
+def _check_periodic_axes(scene: Scene, max_radius: float, effects=None) -> None:
+    """Refuse a periodic axis too short for one image of each partner to be the only one in
+    reach: its length must exceed two interaction reaches, 2 (2 r_max + lens), the contact
+    distance plus the gas gap's lens where pairs conduct through it.
 
-    A pair is unambiguous (one image of each partner within reach) while the period exceeds
-    two pair cutoffs, L > 2 (2 r_max + skin). A quasi-2D slab of 2.5 diameters (the seed-000
-    hopper) is below that with the usual skin, so the skin shrinks to fit (the lists are then
-    rebuilt more often: same forces, more rebuilds); a period of two contact distances
-    (4 r_max) or less cannot be simulated and is refused."""
+    The Verlet skin is not limited by the period: a pair stands once in the lists (the search
+    visits a wrapped cell once on an axis of one or two cells), its separation is the minimum
+    image at every step, and that distance changes by no more than the two partners' drift, so
+    a list built at a cutoff of reach + skin holds every pair within reach until a particle
+    has drifted half the skin. (Until 2026-12-07 the skin was shrunk below L/2 - reach, and a
+    quasi-2D slab of 2.5 diameters rebuilt its lists every 5 steps.)"""
     span = np.asarray(scene.domain.max, float) - np.asarray(scene.domain.min, float)
     contact = 2.0 * max_radius
     # pairs within a contact margin are listed too (the gas gap near contacts)
@@ -104,24 +106,13 @@ def _fit_skin_to_periodic_axes(scene: Scene, max_radius: float, skin: float,
                              f"contact distances, 2 x 2 r_max = {2.0 * contact:.4g} m (r_max = "
                              f"{max_radius:.4g} m): a particle would touch two images of one "
                              f"partner; enlarge the domain along {axis}")
-        # a hair under the limit so that the cell grid still tiles the axis with two cells
-        allowed = 0.5 * length * (1.0 - 1e-9) - contact - margin
-        if margin > 0.0 and allowed <= 0.0:
+        if margin > 0.0 and length <= 2.0 * (contact + margin):
             raise SceneError(scene.source, "thermal.gas_gap_lens",
                              f"the fluid lens reaches {margin:.4g} m beyond contact, and the "
                              f"periodic length along {axis} ({length:.4g} m) must exceed two "
                              f"pair reaches 2 (2 r_max + lens r_max) = "
                              f"{2.0 * (contact + margin):.4g} m; use a thinner lens, "
                              "gas_gap_pairs = false, or enlarge the domain")
-        if skin > allowed:
-            msg = (f"skin shrunk from {skin:.4g} m to {allowed:.4g} m so that the periodic "
-                   f"length along {axis} ({length:.4g} m) exceeds two pair cutoffs "
-                   f"2 (2 r_max + skin); neighbour lists are rebuilt more often")
-            notes.append(msg)
-            if say:
-                print(f"taichi-dem: note: {msg}")
-            skin = allowed
-    return skin
 
 
 # overlap (fraction of the radius) with a body beyond which particles are reported as pinched
@@ -204,8 +195,7 @@ class Simulation:
                                                         self.tables.names, speeds, fixed)
         # the enabled effects, built once (effects/registry.py)
         self._effects = enabled_effects(scene)
-        self.skin = _fit_skin_to_periodic_axes(scene, float(np.max(radii)), self.skin,
-                                               self.timestep.notes, effects=self._effects)
+        _check_periodic_axes(scene, float(np.max(radii)), effects=self._effects)
         self.dt = self.timestep.dt
         capacity = self.n_initial + _factory_capacity(scene)
 
@@ -214,13 +204,13 @@ class Simulation:
                             species=_particle_species(scene, placed, self.tables.names),
                             effects=self._effects)
         self.engine = Engine(model, parallel_from=parallel_from, parts=engine_parts(scene))
-        small = self.engine.model.grid.too_small_periodic_axes(
-            (2.0 + self.engine.model.pair_margin) * float(np.max(radii)) + self.skin)
-        if small:     # (_fit_skin_to_periodic_axes makes this unreachable; kept as a guard)
+        reach = (2.0 + self.engine.model.pair_margin) * float(np.max(radii))
+        small = self.engine.model.grid.too_small_periodic_axes(reach)
+        if small:     # (_check_periodic_axes makes this unreachable; kept as a guard)
             self.engine.destroy()
             raise SceneError(scene.source, "domain.periodic",
                              f"the periodic length along {', '.join(small)} is shorter than two "
-                             f"pair cutoffs ({2 * (2 * float(np.max(radii)) + self.skin):.4g} m)")
+                             f"interaction reaches ({2 * reach:.4g} m)")
         self._upload(placed)
         self._warn_biot()
         self.engine.start(self.n_initial)

@@ -218,7 +218,11 @@ interval = 0.05
 """
 
 
-def test_thin_slab_settles_with_every_pair_once(tmp_path):
+@pytest.mark.parametrize("skin, cells", [(0.5e-3, 2), (3e-3, 1)])
+def test_thin_slab_settles_with_every_pair_once(tmp_path, skin, cells):
+    """The lists of a slab 2.5 diameters deep hold every pair within reach once, with a skin
+    that leaves two cells along the periodic axis and with one that leaves one (its cutoff,
+    2 r + skin = 7 mm, is more than half the period: the skin is not limited by the period)."""
     depth = 2.5 * 2 * R           # the seed-000 hopper's periodic depth: 2.5 diameters
     body = f"""
 [[particles]]
@@ -227,22 +231,27 @@ radius = {R}
 count = 120
 region = {{ box = {{ min = [-0.028, 0.0, 0.004], max = [0.028, {depth!r}, 0.11] }} }}
 """
-    with td.Simulation.from_text(_slab_scene(depth, body), base_dir=str(tmp_path), arch="cpu",
-                                 precision="f64") as sim:
-        assert sim.engine.model.grid.dims[1] == 2        # a two-cell axis: the case being tested
+    with td.Simulation.from_text(_slab_scene(depth, body, skin=f"skin = {skin!r}"),
+                                 base_dir=str(tmp_path), arch="cpu", precision="f64") as sim:
+        assert sim.engine.model.grid.dims[1] == cells     # the case being tested
         sim.run()
+        # between rebuilds (as the run left them), every touching pair is listed
+        stale = {tuple(sorted(pair)) for pair in listed_pairs(sim)[0]}
+        touching = pairs_within(sim, 0.0)
         sim.engine.rebuild(sim.engine.count)      # the lists as of now, to compare exactly
         listed, _ = listed_pairs(sim)
         brute = pairs_within(sim, sim.skin)
         p = sim.particles()
         count = sim.particle_count
         ke = sim.kinetic_energy()
-        skin = sim.skin
-    print(f"\nthin slab {depth * 1e3:.1f} mm: skin {skin * 1e3:.3f} mm, {len(listed)} pairs "
+        used_skin = sim.skin
+    print(f"\nthin slab {depth * 1e3:.1f} mm: skin {used_skin * 1e3:.3f} mm, {len(listed)} pairs "
           f"listed, {len(brute)} by brute force, lowest centre {p['position'][:, 2].min():.5f} m")
     assert count == 120
+    assert used_skin == skin
     assert len(listed) == len(set(listed)), "a pair is listed twice"
     assert set(listed) == brute
+    assert touching and touching <= stale
     assert np.all(np.isfinite(p["position"]))
     assert p["position"][:, 2].min() > 0.9 * R
     # 120 beads from <= 0.11 m: potential energy ~ 120 m g 0.06 ~ 5e-3 J; settled far below
