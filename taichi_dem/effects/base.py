@@ -123,6 +123,10 @@ class Effect:
     # engine/holding.py (make_rigid_drift, make_rigid_velocity, make_carried_load)
     holds_particles = False
     carrier_body = -1
+    # the most steps the effect lets the neighbour lists age without a rebuild (its
+    # ``after_rebuild`` judges something that goes stale otherwise: mobility's cells in a bed
+    # that has come to rest, where nothing else asks for a rebuild); None: no limit
+    rebuild_within_steps: int | None = None
     # it conducts heat to walls and bodies that have a temperature (their heat series, the
     # walls' temperatures uploaded)
     heats_walls = False

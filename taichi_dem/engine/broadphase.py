@@ -97,6 +97,9 @@ class Broadphase:
         self.total = t.add("total", ti.i32, 3)
         t.finalize()
         self.rebuilds = 0
+        # steps stepped on the current lists (Engine.rebuild resets it; the drivers rebuild
+        # when it reaches Model.rebuild_within_steps)
+        self.list_age = 0
         # the ti.func bodies of the rebuild's kernels, for the one-launch rebuild of the serial
         # mode (fused_rebuild: compiled on use, dropped whenever one of them is recompiled)
         self.bodies = {}

@@ -239,19 +239,22 @@ def advance_per_stage(engine, steps: int, record_last: bool):
     host when the drift (or a body) asks for it."""
     e = engine
     dt = e.model.dt
+    oldest = e.model.rebuild_within_steps
+    lists = e.broadphase
     for k in range(steps):
         n = e.count
         if k == 0:
             # later steps drifted at the end of the previous gather
             e._drift(n, dt, e.time + dt)
         e.time += dt
-        rebuild = e.flags[Flag.REBUILD] != 0
+        rebuild = e.flags[Flag.REBUILD] != 0 or (oldest is not None and lists.list_age >= oldest)
         if e.mesh is not None:
             e.mesh.update_frames(e.time)
             e.mesh.interval_steps += 1
             rebuild = rebuild or e.mesh.needs_rebinning(e.time)
         if rebuild:
             e.rebuild(n)
+        lists.list_age += 1
         last = k == steps - 1
         record = 1 if (record_last and last) else 0
         if record:
@@ -272,13 +275,16 @@ def advance_in_runs(engine, steps: int, record_last: bool, on_workers: bool = Fa
     e = engine
     pool = e.worker_pool
     dt = e.model.dt
+    # an effect that judges at rebuilds (mobility) has the lists rebuilt at least this often
+    oldest = e.model.rebuild_within_steps
+    lists = e.broadphase
     k = 0
     while k < steps:
         n = e.count
         if k == 0:
             e._drift(n, dt, e.time + dt)   # later runs end with their drift done
         e.time += dt                       # the time of the drifted positions
-        rebuild = e.flags[Flag.REBUILD] != 0
+        rebuild = e.flags[Flag.REBUILD] != 0 or (oldest is not None and lists.list_age >= oldest)
         if e.mesh is not None:
             rebuild = rebuild or e.mesh.needs_rebinning(e.time)
         if rebuild:
@@ -286,6 +292,8 @@ def advance_in_runs(engine, steps: int, record_last: bool, on_workers: bool = Fa
         run = steps - k
         if e.mesh is not None:
             run = e.mesh.steps_before_rebinning(e.time, dt, run)
+        if oldest is not None:
+            run = min(run, max(oldest - lists.list_age, 1))
         final = k + run == steps
         args = (e.count, dt, e.time, dt, run, 1 if rebuild else 0,
                 1 if (record_last and final) else 0, 0 if final else 1)
@@ -300,5 +308,6 @@ def advance_in_runs(engine, steps: int, record_last: bool, on_workers: bool = Fa
             done = int(e._run_steps(*args))
         if e.mesh is not None:
             e.mesh.interval_steps += done
+        lists.list_age += done
         k += done
         e.time += (done - 1) * dt

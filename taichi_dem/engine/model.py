@@ -136,6 +136,14 @@ class Model:
         return any(e.heats_walls for e in self.effect_list)
 
     @property
+    def rebuild_within_steps(self) -> int | None:
+        """The most steps between neighbour rebuilds any enabled effect allows
+        (Effect.rebuild_within_steps), None where none limits it."""
+        limits = [x.rebuild_within_steps for x in self.effect_list
+                  if x.rebuild_within_steps is not None]
+        return min(limits) if limits else None
+
+    @property
     def rebuild_effects(self) -> tuple:
         """The effects with work after each neighbour-list rebuild (Effect.after_rebuild)."""
         from ..effects.base import Effect

@@ -374,6 +374,7 @@ class Engine:
                 self.removed_batches.append(batch)
         self.choose_loop_mode(n)
         self.count = self.broadphase.rebuild(n)
+        self.broadphase.list_age = 0
         self.flags[Flag.DEAD_IN_SLOTS] = 0
         for x in self.model.rebuild_effects:
             x.after_rebuild(self.context, self.count, self.time)

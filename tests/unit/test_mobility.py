@@ -206,6 +206,40 @@ def test_status_matches_a_host_recomputation(tmp_path):
 
 
 # --------------------------------------------------------------------------------- frozen bed
+def _inactive_by_id(sim) -> np.ndarray:
+    """Whether each particle (in id order, as Simulation.particles()) is inactive now."""
+    n = sim.engine.count
+    order = np.argsort(sim.engine.state.particle_id.to_numpy()[:n])
+    return sim.engine.model.effect("mobility").particle_active.to_numpy()[:n][order] == 0
+
+
+def test_a_bed_at_rest_is_judged_again_without_a_drifting_particle():
+    """Mobility judges its cells at rebuilds, and a bed at rest asks for none: the lists are
+    rebuilt for a judgement once they are JUDGE_WITHIN_STEPS steps old (Effect.
+    rebuild_within_steps). The same settled bed without [mobility] is not rebuilt at all."""
+    from taichi_dem.effects.mobility.effect import JUDGE_WITHIN_STEPS
+    base = small(count=1200, precision="f32").replace("end_time = 0.02", "end_time = 1.0")
+    base = base.replace("min = [-0.05, -0.05, -0.01]",
+                        "min = [-0.05, -0.05, -0.01]\nperiodic = [\"x\", \"y\"]")
+    rebuilds = {}
+    judged = ("\n[mobility]\nsolid_fraction_threshold = 0.2\ncell_size = 0.016\n"
+              "granular_temperature_threshold = 1e-6\n")
+    for name, extra in (("without", ""), ("with", judged)):
+        with td.Simulation.from_text(base + extra) as sim:
+            sim.run(until=0.5)
+            start = sim.engine.broadphase.rebuilds
+            ages = []
+            for _ in range(5):
+                sim.step(JUDGE_WITHIN_STEPS // 2)
+                ages.append(sim.engine.broadphase.list_age)
+            rebuilds[name] = sim.engine.broadphase.rebuilds - start
+            statistics = sim.engine.model.effect("mobility").statistics() if extra else None
+    assert rebuilds["without"] == 0, "the bed is not at rest: no test of a bed at rest"
+    # 5 x JUDGE_WITHIN_STEPS / 2 steps: two or three judgements, as the lists' age stood
+    assert rebuilds["with"] in (2, 3) and max(ages) <= JUDGE_WITHIN_STEPS
+    assert statistics["inactive_particles"] > 0
+
+
 def test_a_frozen_bed_still_loads_its_floor():
     """1200 spheres settled on a floor (0.5 s, threshold 1e-6 (m/s)^2), then judged: many are
     inactive and held, their mutual contacts frozen. Nothing inactive moves; the floor's load
@@ -222,14 +256,18 @@ def test_a_frozen_bed_still_loads_its_floor():
         st = sim.engine.model.effect("mobility").statistics()
         assert st["inactive_particles"] > 0.1 * sim.particle_count, st
         before = sim.particles()
+        held = _inactive_by_id(sim)
         sim.run(until=0.5 + sim.scene.output.interval)
         first = float(sim.series["walls/floor/force"][-1][2])
         sim.step(2000)
         sim.run(until=sim.time + sim.scene.output.interval)
         after = sim.particles()
-        order = np.argsort(sim.engine.state.particle_id.to_numpy()[:sim.engine.count])
-        inactive = sim.engine.model.effect("mobility").particle_active.to_numpy()[:sim.engine.count][order] == 0
-        assert np.array_equal(before["position"][inactive], after["position"][inactive])
+        # the 2000 steps pass a judgement forced by the lists' age (JUDGE_WITHIN_STEPS): the
+        # settled bed keeps what it froze and may freeze more; what was held throughout has
+        # not moved at all
+        inactive = _inactive_by_id(sim)
+        assert np.all(inactive[held])
+        assert np.array_equal(before["position"][held], after["position"][held])
         weight = float(np.sum(after["mass"])) * 9.81
         floor = float(sim.series["walls/floor/force"][-1][2])
         # the cells on the floor touch the empty cells under it, so they stay mobile and their

@@ -2,8 +2,9 @@
 move (the "adaptive sparse contacts" idea of seed 000 and of Lethe; written here from the
 description, not from their code).
 
-At every neighbour rebuild the particles, already sorted by contact cell (broadphase.py), are
-judged per *mobility cell*: a block of contact cells about ``cell_size`` across (3 largest
+At every neighbour rebuild, and at least every JUDGE_WITHIN_STEPS steps (a bed at rest asks for
+no rebuild; the lists are rebuilt for the judgement), the particles, already sorted by contact
+cell (broadphase.py), are judged per *mobility cell*: a block of contact cells about ``cell_size`` across (3 largest
 diameters by default; a contact cell of ~1.1 d holds about one particle, too few for a
 fluctuation or a solid fraction). For each mobility cell, over the particles whose centres lie in
 it:
@@ -78,6 +79,14 @@ import taichi as ti
 from ..base import Effect
 
 INACTIVE, ACTIVE, MOBILE, EMPTY = 0, 1, 2, 3
+# the most steps between two judgements. A rebuild costs about as much as 5 - 10 steps (the
+# chute's, BENCHMARKS.md), so one forced every 2000 steps costs under 0.5 % where nothing else
+# rebuilds, and a flowing bed rebuilds far more often on its own (the chute every ~33 steps).
+# Judged every 500 steps, a settling bed froze and thawed cells while it still rang (the
+# frozen forces of a bed not yet at rest, released at the next judgement), settled slower and
+# froze a quarter as much (1,200 spheres on a floor, tests/unit/test_mobility.py); at 2000
+# the forced judgements come after the bed has come to rest and change nothing there.
+JUDGE_WITHIN_STEPS = 2000
 
 
 class Mobility(Effect):
@@ -87,6 +96,10 @@ class Mobility(Effect):
 
     name, stage = "mobility", "detect"
     holds_particles = True      # (engine/holding.py: the step reads particle_active)
+    # the cells are judged at rebuilds; a bed that has come to rest asks for none, so the
+    # judgement made while it still moved would stand for good (nothing frozen, the
+    # bookkeeping paid: the heated bed ran 30 % slower with mobility, BENCHMARKS.md)
+    rebuild_within_steps = JUDGE_WITHIN_STEPS
 
     def __init__(self, description: str, settings, bodies=()):
         super().__init__(description)
