@@ -151,7 +151,8 @@ def pairs_within(sim, cutoff_extra: float) -> set:
 #    tasks.py keeps this order): a long file handed out last would leave the other worker
 #    idle for its whole duration. SLOW_FILES lists the files that take over ~15 s (seconds
 #    measured on a two-core machine in a two-worker run, cold kernel cache, with
-#    TAICHI_DEM_SUITE_PROFILE, 2026-12-06: `python bench/suite_profile.py`); the rest keep
+#    TAICHI_DEM_SUITE_PROFILE, 2026-12-06: `python bench/suite_profile.py`; the drum wall heat,
+#    packed and heated beds from `--durations` after their cuts of 2026-12-07); the rest keep
 #    their collection order after them. Only the order of the files changes, never a test.
 # 2. Tests marked ``two_cores`` (the engine's own worker threads: two threads meeting at spin
 #    barriers) run while the other pytest worker waits between its tests: a barrier whose
@@ -160,12 +161,12 @@ def pairs_within(sim, cutoff_extra: float) -> set:
 #    test takes an exclusive lock, every other test a shared one (both through a gate lock,
 #    so that a waiting exclusive request is served before new shared ones).
 SLOW_FILES = {
-    "tests/verification/test_drum_wall_heat.py": 182,
-    "tests/verification/test_packed_bed.py": 115,
+    "tests/verification/test_drum_wall_heat.py": 125,
+    "tests/verification/test_packed_bed.py": 100,
     "tests/verification/test_coarse_grained_wall.py": 82,
     "tests/verification/test_saeman_drum.py": 74,
     "tests/unit/test_loop_mode.py": 69,
-    "tests/verification/test_heated_bed.py": 69,
+    "tests/verification/test_heated_bed.py": 28,
     "tests/unit/test_slice_map.py": 57,
     "tests/unit/test_checkpoint.py": 44,
     "tests/unit/test_compile_once.py": 44,
