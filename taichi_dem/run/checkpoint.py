@@ -61,6 +61,9 @@ HOST_ATTRIBUTES = (
     ("sim", "_last_sample_time"), ("sim", "_next_frame_time"), ("sim", "_interval_tail"),
     ("engine", "time"), ("engine", "count"),
     ("broadphase", "rebuilds"), ("broadphase", "entries"),
+    # (the lists' age: an effect's forced rebuilds, Model.rebuild_within_steps, keep their
+    # schedule across a resume; a file without it resumes with the age at 0)
+    ("broadphase", "list_age"),
     ("mesh", "binned_time"), ("mesh", "interval_steps"),
 )
 

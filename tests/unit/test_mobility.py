@@ -240,6 +240,37 @@ def test_a_bed_at_rest_is_judged_again_without_a_drifting_particle():
     assert statistics["inactive_particles"] > 0
 
 
+def test_a_resumed_bed_keeps_the_judgements_schedule(tmp_path):
+    """The lists' age is checkpointed (run/checkpoint.py HOST_ATTRIBUTES): a settled bed with
+    mobility, saved between two forced judgements and resumed, steps on bit for bit as the run
+    that went straight on (f64, one thread), the next judgement at the same step."""
+    from taichi_dem.effects.mobility.effect import JUDGE_WITHIN_STEPS
+    text = small(count=1200, precision="f64").replace("end_time = 0.02", "end_time = 1.0")
+    text = text.replace("min = [-0.05, -0.05, -0.01]",
+                        "min = [-0.05, -0.05, -0.01]\nperiodic = [\"x\", \"y\"]")
+    text += ("\n[mobility]\nsolid_fraction_threshold = 0.2\ncell_size = 0.016\n"
+             "granular_temperature_threshold = 1e-6\n")
+    path = str(tmp_path / "bed.checkpoint.h5")
+    with td.Simulation.from_text(text, h5="", threads=1) as sim:
+        sim.run(until=0.5)             # at rest: only the forced judgements rebuild now
+        sim.step(sim.output_every - sim.step_count % sim.output_every)   # (at a sample)
+        age = sim.engine.broadphase.list_age
+        sim.checkpointer.path = path
+        sim.checkpointer.save(sim=sim)
+        before = sim.engine.broadphase.rebuilds
+        sim.step(JUDGE_WITHIN_STEPS)
+        straight = sim.particles()
+        straight_rebuilds = sim.engine.broadphase.rebuilds
+    assert 0 < age < JUDGE_WITHIN_STEPS and straight_rebuilds == before + 1
+    with td.Simulation.from_checkpoint(path, h5="", threads=1) as sim:
+        assert sim.engine.broadphase.list_age == age
+        sim.step(JUDGE_WITHIN_STEPS)
+        resumed = sim.particles()
+        assert sim.engine.broadphase.rebuilds == straight_rebuilds
+    assert np.array_equal(straight["position"], resumed["position"])
+    assert np.array_equal(straight["velocity"], resumed["velocity"])
+
+
 def test_a_frozen_bed_still_loads_its_floor():
     """1200 spheres settled on a floor (0.5 s, threshold 1e-6 (m/s)^2), then judged: many are
     inactive and held, their mutual contacts frozen. Nothing inactive moves; the floor's load
