@@ -46,7 +46,8 @@ SECTION = register(Section("mobility", "Skip the contacts and the integration of
 class MobilitySettings:
     """[mobility]: skip the contacts and the integration of particles that do not move
     (effects/mobility/effect.py). Cells of the mobility grid (blocks of contact cells about
-    ``cell_size`` across) are judged at every neighbour rebuild: *mobile* when the granular
+    ``cell_size`` across) are judged at every neighbour rebuild, and at least every 2000 steps
+    (a bed at rest asks for no rebuild; effect.py JUDGE_WITHIN_STEPS): *mobile* when the granular
     temperature of their particles (velocity fluctuation about the cell mean, (m/s)^2) or the
     squared mean velocity exceeds ``granular_temperature_threshold``, when their solid
     fraction is below ``solid_fraction_threshold``, when the rms acceleration of their
