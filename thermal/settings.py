@@ -38,8 +38,25 @@ SCHLUNDER_LENS = 0.4
 
 _P = dict(minimum=0.0, exclusive_minimum=True)      # > 0
 
-# the series the heat effects write besides the sensors' (taichi_dem/sensors/series.py)
+# the series of heat transfer (written by the heat effects, the sensors' loads and energy
+# balance, and the outlets; declared here, with the effects, not in taichi_dem/sensors/series.py)
 SERIES = (
+    Series("thermal_time", "s", "thermal time, thermal.time_scale x the simulated time"),
+    Series("bodies/*/heat_flow", "W", "into the body (an isothermal body)", interval="mean"),
+    Series("bodies/*/heat_transfer_coefficient", "W/(m^2 K)", "wall to bed", interval="mean"),
+    Series("walls/*/heat_flow", "W", "into the wall (an isothermal wall)"),
+    Series("outlets/*/mean_temperature", "K", "of the particles removed in the interval",
+           interval="weighted", weight="mass_flow"),
+    Series("outlets/*/mean_moisture", "1", "of the particles removed in the interval",
+           interval="weighted", weight="mass_flow"),
+    Series("thermal/energy_inside", "J", "sum m c T of the particles inside"),
+    Series("thermal/energy_fed", "J", "brought in by the factories so far"),
+    Series("thermal/energy_removed", "J", "taken out by the outlets so far"),
+    Series("thermal/particle_heat_loss", "J", "heat the particles gave off so far"),
+    Series("thermal/wall_heat", "J", "into walls and bodies so far"),
+    Series("thermal/gas_heat", "J", "into the gas so far"),
+    Series("thermal/source_heat", "J", "into the particles from the effects' own sources so "
+           "far (radiation in, less the vapour's enthalpy out)"),
     Series("particles/mean_temperature", "K", "mass- and heat-capacity-weighted mean; NaN "
            "while no particle is inside"),
     Series("particles/mean_moisture", "1", "drying: kg water per kg dry solid, mean; NaN while "

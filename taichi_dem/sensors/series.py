@@ -2,7 +2,8 @@
 
 The sensors' and the run's series are declared here; an effect's own series are declared in
 its settings module (``SERIES`` in effects/drag/settings.py, thermal/settings.py), beside its
-scene keys. The results file gives every series dataset a ``units`` attribute from these
+scene keys, the heat transfer's among them even where a sensor writes them (the walls' and
+bodies' heat flows, the energy balance, the outlets' temperatures). The results file gives every series dataset a ``units`` attribute from these
 (sensors/units.py gathers the declarations; a name none matches gets none, and
 tests/unit/test_series_units.py fails on it). Plain Python (no Taichi).
 
@@ -26,7 +27,6 @@ SERIES = (
     Series("sample_interval", "s", "the time the sample's interval means and counts cover: the "
            "output interval (0 at the start); a sample after a short interval (a run that ends "
            "between two regular samples) covers it and the interval before it"),
-    Series("thermal_time", "s", "thermal time, thermal.time_scale x the simulated time"),
     Series("particles/count", "1", "particles alive"),
     Series("particles/kinetic_energy", "J", "translational and rotational, of the moving ones"),
     Series("particles/lost", "1", "particles that left the domain so far"),
@@ -39,11 +39,8 @@ SERIES = (
            interval="mean"),
     Series("bodies/*/angular_speed", "rad/s", "its prescribed angular speed"),
     Series("bodies/*/power", "W", "drive power, -axial_torque x angular_speed", interval="mean"),
-    Series("bodies/*/heat_flow", "W", "into the body (an isothermal body)", interval="mean"),
     Series("bodies/*/covered_area", "m^2", "the area of its triangles the particles touch"),
-    Series("bodies/*/heat_transfer_coefficient", "W/(m^2 K)", "wall to bed", interval="mean"),
     Series("walls/*/force", "N", "on the wall from the particles", "(3,)"),
-    Series("walls/*/heat_flow", "W", "into the wall (an isothermal wall)"),
     Series("sensors/*/mass_flow", "kg/s", "through the sensor's plane over the interval",
            interval="mean"),
     Series("sensors/*/crossings", "1", "particles that crossed the plane in the interval",
@@ -87,16 +84,4 @@ SERIES = (
     Series("outlets/*/mass", "kg", "removed so far"),
     Series("outlets/*/count", "1", "particles removed so far"),
     Series("outlets/*/mass_flow", "kg/s", "removed over the interval", interval="mean"),
-    Series("outlets/*/mean_temperature", "K", "of the particles removed in the interval",
-           interval="weighted", weight="mass_flow"),
-    Series("outlets/*/mean_moisture", "1", "of the particles removed in the interval",
-           interval="weighted", weight="mass_flow"),
-    Series("thermal/energy_inside", "J", "sum m c T of the particles inside"),
-    Series("thermal/energy_fed", "J", "brought in by the factories so far"),
-    Series("thermal/energy_removed", "J", "taken out by the outlets so far"),
-    Series("thermal/particle_heat_loss", "J", "heat the particles gave off so far"),
-    Series("thermal/wall_heat", "J", "into walls and bodies so far"),
-    Series("thermal/gas_heat", "J", "into the gas so far"),
-    Series("thermal/source_heat", "J", "into the particles from the effects' own sources so "
-           "far (radiation in, less the vapour's enthalpy out)"),
 )
