@@ -92,6 +92,8 @@ class _GasGap(Effect):
 
     stage = "contact"
     MOST_SPECIES = MOST_SPECIES       # (setup/tuning.py)
+    margin_key = "thermal.gas_gap_lens"
+    margin_advice = "use a thinner lens, gas_gap_pairs = false"
 
     def __init__(self, description, conductivity, lens, min_gap, model="solid_resistance",
                  porosity=0.4, coarse_materials=False, free_path=0.0):

@@ -135,6 +135,10 @@ class Effect:
     # effect's ``sample`` (+1: into the particles, -1: out of them)
     energy_terms: dict = {}
     margin = 0.0
+    # the scene key that sets ``margin`` and how to do without it, named where the margin
+    # does not fit a periodic axis (run/simulation.py _check_periodic_axes)
+    margin_key = ""
+    margin_advice = ""
     particle_fields: dict = {}
     contact_fields: dict = {}
     pair_fields: dict = {}

@@ -92,10 +92,13 @@ def _check_periodic_axes(scene: Scene, max_radius: float, effects=None) -> None:
     quasi-2D slab of 2.5 diameters rebuilt its lists every 5 steps.)"""
     span = np.asarray(scene.domain.max, float) - np.asarray(scene.domain.min, float)
     contact = 2.0 * max_radius
-    # pairs within a contact margin are listed too (the gas gap near contacts)
+    # pairs within a contact margin are listed too (the gas gap near contacts): the effect
+    # that asks for the widest names its key
     if effects is None:
         effects = enabled_effects(scene)
     margin = margin_fraction(effects, "pair") * max_radius
+    widest = max((e for e in effects if e.stage == "contact" and "pair" in e.kinds),
+                 key=lambda e: e.margin, default=None)
     for k, axis in enumerate("xyz"):
         if axis not in scene.domain.periodic:
             continue
@@ -107,12 +110,13 @@ def _check_periodic_axes(scene: Scene, max_radius: float, effects=None) -> None:
                              f"{max_radius:.4g} m): a particle would touch two images of one "
                              f"partner; enlarge the domain along {axis}")
         if margin > 0.0 and length <= 2.0 * (contact + margin):
-            raise SceneError(scene.source, "thermal.gas_gap_lens",
-                             f"the fluid lens reaches {margin:.4g} m beyond contact, and the "
+            key = widest.margin_key or "domain.periodic"
+            advice = f"{widest.margin_advice}, or " if widest.margin_advice else ""
+            raise SceneError(scene.source, key,
+                             f"{widest.name} reaches {margin:.4g} m beyond contact, and the "
                              f"periodic length along {axis} ({length:.4g} m) must exceed two "
-                             f"pair reaches 2 (2 r_max + lens r_max) = "
-                             f"{2.0 * (contact + margin):.4g} m; use a thinner lens, "
-                             "gas_gap_pairs = false, or enlarge the domain")
+                             f"pair reaches 2 (2 r_max + {margin:.4g} m) = "
+                             f"{2.0 * (contact + margin):.4g} m; {advice}enlarge the domain")
 
 
 # overlap (fraction of the radius) with a body beyond which particles are reported as pinched

@@ -318,3 +318,41 @@ region = {{ box = {{ min = [-0.028, 0.0, 0.004], max = [0.028, {depth!r}, 0.11] 
                                 precision="f64")
     msg = str(err.value)
     assert "domain.periodic" in msg and "two contact distances" in msg and "along y" in msg
+
+
+@pytest.mark.parametrize("lens, refused", [(0.4, True), (0.1, False)])
+def test_slab_narrower_than_two_gas_gap_reaches_names_the_lens(tmp_path, lens, refused):
+    """A slab 2.2 contact distances deep (8.8 mm for 2 mm beads): pairs conducting through a
+    fluid lens of 0.4 r reach 4.8 mm, more than half the period, so one image of a partner is
+    no longer the only one in reach: refused, naming the key that sets the reach (the effect's
+    ``margin_key``). A lens of 0.1 r (4.2 mm) fits and runs (`check` refuses the same way)."""
+    depth = 2.2 * 2 * R
+    body = f"""
+[[particles]]
+material = "glass"
+radius = {R}
+count = 20
+temperature = 300.0
+region = {{ box = {{ min = [-0.028, 0.0, 0.004], max = [0.028, {depth!r}, 0.11] }} }}
+[thermal]
+conduction = true
+gas_gap = true
+gap_gas_conductivity = 0.026
+gas_gap_lens = {lens}
+"""
+    text = _slab_scene(depth, body).replace(
+        "poisson_ratio = 0.25\n", "poisson_ratio = 0.25\nthermal_conductivity = 1.0\n"
+        "heat_capacity = 840.0\n", 1)
+    if not refused:
+        with td.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64") as sim:
+            sim.step(10)
+            assert sim.particle_count == 20
+        return
+    with pytest.raises(td.SceneError) as err:
+        td.Simulation.from_text(text, base_dir=str(tmp_path), precision="f64")
+    msg = str(err.value)
+    assert "thermal.gas_gap_lens" in msg and "along y" in msg and "gas_gap_pairs = false" in msg
+    from taichi_dem.app.cli import main
+    scene = tmp_path / "slab.toml"
+    scene.write_text(text)
+    assert main(["check", str(scene)]) == 2
