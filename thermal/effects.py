@@ -453,7 +453,7 @@ class Drying(Effect):
         if compensated:
             self.particle_fields["moisture_residual"] = (False, "f64")
 
-    # J into the particles since the start (sensors/energy.py): the vapour leaves with
+    # J into the particles since the start (energy_balance.py): the vapour leaves with
     # L + c_w T_e per kg (moisture.py)
     energy_terms = {"thermal/vapour_heat": -1.0}
 
@@ -572,6 +572,12 @@ class Temperature(Effect):
                     "thermal_step_ratio": float(ratio), "non_finite": bool(bad > 0)}
 
         return reset, particle, [self.sums], read
+
+    def sensors(self, sim) -> dict:
+        """The particles' energy balance (energy_balance.py), under the name checkpoints
+        keep its state by."""
+        from .energy_balance import EnergyBalance
+        return {"energy": EnergyBalance(sim)}
 
     def check(self, sim, measured: dict) -> None:
         """The explicit update T += dt sum(Q)/(m c) is stable while dt sum(h)/(m c) < 1 for

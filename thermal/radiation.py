@@ -44,7 +44,7 @@ class Radiation(Effect):
     name = "radiation"
     stage = "particle"
 
-    # J into the particles since the start (sensors/energy.py books every declared term)
+    # J into the particles since the start (thermal/energy_balance.py books every declared term)
     energy_terms = {"thermal/radiated_heat": 1.0}
 
     def __init__(self, description, thermal, emissivities):

@@ -131,7 +131,7 @@ class Effect:
     # walls' temperatures uploaded)
     heats_walls = False
     # the energy the effect brings into the particles from outside the balance of
-    # sensors/energy.py: {series name: sign}, each series J since the start, written by the
+    # thermal/energy_balance.py: {series name: sign}, each series J since the start, written by the
     # effect's ``sample`` (+1: into the particles, -1: out of them)
     energy_terms: dict = {}
     margin = 0.0
@@ -174,6 +174,13 @@ class Effect:
     def after_rebuild(self, ctx, n: int, time: float) -> None:
         """Work after each neighbour-list rebuild, before the step that follows (``n``
         particle slots, at ``time`` s); only effects that override it are called."""
+
+    def sensors(self, sim) -> dict:
+        """The observers of the run this effect brings beside the sensors' ({name: an object
+        with ``sample(values, now)`` and ``state_dict``/``load_state_dict``}; the heat's energy
+        balance, thermal/energy_balance.py), built after the sensors (sensors/__init__.py
+        ``build_sensors``) so that they read the samples' loads and accounts."""
+        return {}
 
     def check(self, sim, measured: dict) -> None:
         """A stability check at every output sample (``measured``: Engine.measure()): raise

@@ -259,7 +259,7 @@ class FactorySet:
         self.next_serial += m
         arrays["birth_time"] = np.full(m, time)
         if "inverse_thermal_mass" in arrays:
-            # m c T brought in (J), for the energy balance (sensors/energy.py)
+            # m c T brought in (J), for the energy balance (thermal/energy_balance.py)
             self.inserted_energy += float(np.sum(arrays["temperature"] / arrays["inverse_thermal_mass"]))
         engine.insert(arrays)
 

@@ -13,6 +13,9 @@ inserted mass) take the same call.
     residence.py   residence times from a factory to an outlet (from the removal log)
     contacts.py    particles touching each body
     loads.py       body force, torque, power and heat flow; plane wall force and heat flow
+
+The enabled effects add their own observers after these (``Effect.sensors``): the heat
+transfer's energy balance (thermal/energy_balance.py).
 """
 from __future__ import annotations
 
@@ -60,7 +63,8 @@ def build_sensors(sim) -> dict:
         out["bodies"] = BodyLoads(scene, sim.engine)
     if scene.walls:
         out["walls"] = WallLoads(scene, sim.engine)
-    if scene.thermal is not None:
-        from .energy import EnergyBalance
-        out["energy"] = EnergyBalance(sim)      # after the loads and the outlet accounts
+    # the enabled effects' own observers (the heat's energy balance), after the loads and
+    # the outlet accounts they read
+    for effect in sim.engine.model.effect_list:
+        out.update(effect.sensors(sim))
     return out
