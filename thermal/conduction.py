@@ -22,7 +22,11 @@ real-modulus radius). Smooth surfaces (sigma -> 0) recover 2 k_s a.
 """
 import math
 
+import numpy as np
 import taichi as ti
+
+from taichi_dem.scene.model import Material
+from taichi_dem.setup.pair_tables import effective_youngs_modulus
 
 
 @ti.func
@@ -146,3 +150,30 @@ def sun_chen_heat(delta_t, a_max, t_c, density_i, heat_capacity_i, k_i, density_
     return (SUN_CHEN * delta_t * math.pi * a_max ** 2 * math.sqrt(t_c)
             / ((density_i * heat_capacity_i * k_i) ** -0.5
                + (density_j * heat_capacity_j * k_j) ** -0.5))
+
+
+# ------------------------------------------------------------------ host-side tables
+CONTACT_RADIUS_EXPONENTS = {"static": 1.0 / 3.0, "collision": 1.0 / 5.0, "none": 0.0}
+
+
+def conduction_tables(scene, names: list[str]):
+    """(conductance factor 4 k_i k_j / (k_i + k_j) W/(m K), contact radius correction
+    (E*_sim / E*_real)^x) per material pair; zero where a conductivity is missing. Host
+    side (numpy), for the conduction effect's ``table_values``."""
+    m = len(names)
+    factor = np.zeros((m, m))
+    correction = np.ones((m, m))
+    exponent = CONTACT_RADIUS_EXPONENTS[scene.thermal.contact_radius_correction]
+    for a in range(m):
+        for b in range(m):
+            ma, mb = scene.materials[names[a]], scene.materials[names[b]]
+            ka, kb = ma.thermal_conductivity, mb.thermal_conductivity
+            if ka and kb:
+                factor[a, b] = 4.0 * ka * kb / (ka + kb)
+            real_a = Material(ma.name, ma.density, ma.real_youngs_modulus or ma.youngs_modulus,
+                              ma.poisson_ratio)
+            real_b = Material(mb.name, mb.density, mb.real_youngs_modulus or mb.youngs_modulus,
+                              mb.poisson_ratio)
+            correction[a, b] = (effective_youngs_modulus(ma, mb)
+                                / effective_youngs_modulus(real_a, real_b)) ** exponent
+    return factor, correction

@@ -46,7 +46,7 @@ from .conduction import (SLOWEST_IMPACT, collision_conductance, collision_factor
 
 class Conduction(Effect):
     """Q = h_c (T_j - T_i), h_c = 4 k_i k_j/(k_i + k_j) a, a the Hertz contact radius
-    sqrt(R* d_n), corrected for a softened modulus (setup.pair_tables.conduction_tables)."""
+    sqrt(R* d_n), corrected for a softened modulus (conduction.py conduction_tables)."""
 
     name = "conduction"
     stage = "contact"
@@ -64,7 +64,8 @@ class Conduction(Effect):
             self.tables = type(self).tables + ("spot_youngs", "spot_micro")
 
     def table_values(self, scene, tables):
-        from taichi_dem.setup.pair_tables import conduction_tables, effective_youngs_modulus
+        from taichi_dem.setup.pair_tables import effective_youngs_modulus
+        from .conduction import conduction_tables
         factor, correction = conduction_tables(scene, tables.names)
         out = {"conductance_factor": factor, "radius_correction": correction}
         if self.rough:

@@ -60,31 +60,6 @@ class PairTables:
         return set(int(c) for c in np.unique(self.rolling_model[self.rolling_friction > 0]))
 
 
-CONTACT_RADIUS_EXPONENTS = {"static": 1.0 / 3.0, "collision": 1.0 / 5.0, "none": 0.0}
-
-
-def conduction_tables(scene: Scene, names: list[str]):
-    """(conductance factor 4 k_i k_j / (k_i + k_j) W/(m K), contact radius correction
-    (E*_sim / E*_real)^x) per material pair; zero where a conductivity is missing."""
-    m = len(names)
-    factor = np.zeros((m, m))
-    correction = np.ones((m, m))
-    exponent = CONTACT_RADIUS_EXPONENTS[scene.thermal.contact_radius_correction]
-    for a in range(m):
-        for b in range(m):
-            ma, mb = scene.materials[names[a]], scene.materials[names[b]]
-            ka, kb = ma.thermal_conductivity, mb.thermal_conductivity
-            if ka and kb:
-                factor[a, b] = 4.0 * ka * kb / (ka + kb)
-            real_a = Material(ma.name, ma.density, ma.real_youngs_modulus or ma.youngs_modulus,
-                              ma.poisson_ratio)
-            real_b = Material(mb.name, mb.density, mb.real_youngs_modulus or mb.youngs_modulus,
-                              mb.poisson_ratio)
-            correction[a, b] = (effective_youngs_modulus(ma, mb)
-                                / effective_youngs_modulus(real_a, real_b)) ** exponent
-    return factor, correction
-
-
 # The tables hold every pair of declared materials (M x M: 6 float64 tables and an int32 one,
 # built on the host, copied to the device and indexed by material in the kernels). 140,000
 # unused materials asked for 146 GiB and raised MemoryError. A cap on their size, not on what
