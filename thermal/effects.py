@@ -574,7 +574,7 @@ class Temperature(Effect):
 
         return reset, particle, [self.sums], read
 
-    def sensors(self, sim) -> dict:
+    def run_observers(self, sim) -> dict:
         """The particles' energy balance (energy_balance.py), under the name checkpoints
         keep its state by."""
         from .energy_balance import EnergyBalance

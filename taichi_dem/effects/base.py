@@ -175,7 +175,7 @@ class Effect:
         """Work after each neighbour-list rebuild, before the step that follows (``n``
         particle slots, at ``time`` s); only effects that override it are called."""
 
-    def sensors(self, sim) -> dict:
+    def run_observers(self, sim) -> dict:
         """The observers of the run this effect brings beside the sensors' ({name: an object
         with ``sample(values, now)`` and ``state_dict``/``load_state_dict``}; the heat's energy
         balance, thermal/energy_balance.py), built after the sensors (sensors/__init__.py

@@ -14,7 +14,7 @@ inserted mass) take the same call.
     contacts.py    particles touching each body
     loads.py       body force, torque, power and heat flow; plane wall force and heat flow
 
-The enabled effects add their own observers after these (``Effect.sensors``): the heat
+The enabled effects add their own observers after these (``Effect.run_observers``): the heat
 transfer's energy balance (thermal/energy_balance.py).
 """
 from __future__ import annotations
@@ -66,5 +66,5 @@ def build_sensors(sim) -> dict:
     # the enabled effects' own observers (the heat's energy balance), after the loads and
     # the outlet accounts they read
     for effect in sim.engine.model.effect_list:
-        out.update(effect.sensors(sim))
+        out.update(effect.run_observers(sim))
     return out
