@@ -304,15 +304,20 @@ file = "pair.csv"
     assert vel[0, 1] == pytest.approx(-v, rel=0.01) and vel[1, 1] == pytest.approx(v, rel=0.01)
 
 
-def test_slab_below_two_contact_distances_is_refused(tmp_path):
-    depth = 0.95 * 4 * R
-    body = f"""
+def _slab_fill(depth: float, count: int, extra: str = "") -> str:
+    """A [[particles]] fill of ``count`` glass beads over the slab (``extra``: more keys)."""
+    return f"""
 [[particles]]
 material = "glass"
 radius = {R}
-count = 5
-region = {{ box = {{ min = [-0.028, 0.0, 0.004], max = [0.028, {depth!r}, 0.11] }} }}
+count = {count}
+{extra}region = {{ box = {{ min = [-0.028, 0.0, 0.004], max = [0.028, {depth!r}, 0.11] }} }}
 """
+
+
+def test_slab_below_two_contact_distances_is_refused(tmp_path):
+    depth = 0.95 * 4 * R
+    body = _slab_fill(depth, 5)
     with pytest.raises(td.SceneError) as err:
         td.Simulation.from_text(_slab_scene(depth, body), base_dir=str(tmp_path), arch="cpu",
                                 precision="f64")
@@ -327,14 +332,7 @@ def test_slab_narrower_than_two_gas_gap_reaches_names_the_lens(tmp_path, lens, r
     no longer the only one in reach: refused, naming the key that sets the reach (the effect's
     ``margin_key``). A lens of 0.1 r (4.2 mm) fits and runs (`check` refuses the same way)."""
     depth = 2.2 * 2 * R
-    body = f"""
-[[particles]]
-material = "glass"
-radius = {R}
-count = 20
-temperature = 300.0
-region = {{ box = {{ min = [-0.028, 0.0, 0.004], max = [0.028, {depth!r}, 0.11] }} }}
-[thermal]
+    body = _slab_fill(depth, 20, "temperature = 300.0\n") + f"""[thermal]
 conduction = true
 gas_gap = true
 gap_gas_conductivity = 0.026
