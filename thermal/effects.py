@@ -510,6 +510,8 @@ class Temperature(Effect):
 
     name = "temperature"
     stage = "integrate"
+    # the contacts' heat is driven by temperature differences (K): the engine carries it
+    conducted_field = "temperature"
 
     def __init__(self, description, compensated, time_scale=1.0):
         super().__init__(description)
@@ -575,10 +577,12 @@ class Temperature(Effect):
         return reset, particle, [self.sums], read
 
     def run_observers(self, sim) -> dict:
-        """The particles' energy balance (energy_balance.py), under the name checkpoints
-        keep its state by."""
+        """The heat flows into isothermal walls and bodies (wall_heat_flows.py), then the
+        particles' energy balance that integrates them (energy_balance.py), under the name
+        checkpoints keep its state by."""
         from .energy_balance import EnergyBalance
-        return {"energy": EnergyBalance(sim)}
+        from .wall_heat_flows import WallHeatFlows
+        return {"wall_heat_flows": WallHeatFlows(sim), "energy": EnergyBalance(sim)}
 
     def check(self, sim, measured: dict) -> None:
         """The explicit update T += dt sum(Q)/(m c) is stable while dt sum(h)/(m c) < 1 for

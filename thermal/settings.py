@@ -71,6 +71,20 @@ SERIES = (
     Series("gas/transferred_heat", "J", "plug flow: from the gas to the particles so far"),
 )
 
+# the per-particle fields heat transfer adds to each recorded frame (HDF5 /frames/<k>/<name>,
+# the XDMF and ParaView point attributes, Simulation.particles()), where the particles carry
+# them: name -> (unit, shape, description); a field's f64 residual, where it has one
+# (<name>_residual, f32 scenes), is added to it (scene/catalog.py frame_fields)
+FRAME_FIELDS = {
+    "temperature": ("K", "(N,)", "temperature; with [thermal] only"),
+    "moisture": ("1", "(N,)", "kg water per kg dry solid; with moisture only"),
+}
+# what the viewers colour the particles by, first choice first, where the frames have it (the
+# rerun recording and the ParaView script; else the speed)
+COLOUR_FIELDS = ("temperature",)
+# the time-series views the rerun recording adds: title -> the series (fnmatch patterns)
+SERIES_VIEWS = {"temperature (K)": ("*mean_temperature", "gas/outlet_temperature")}
+
 GAS = register(Section("thermal.gas", "The gas the particles exchange heat with by convection: "
                        "uniform (\"fixed\") or an axial plug-flow stream", (
     Key("model", "choice", "\"fixed\": a uniform gas; \"axial_plug_flow\": a 1-D stream along an "

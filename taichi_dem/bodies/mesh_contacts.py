@@ -74,11 +74,11 @@ class MeshContacts:
         # each body's frame now (x_world = R (x_ref - axis_point) + axis_point + offset) and
         # the loads its contacts sum (frames.py)
         self.frames = BodyFrames(t, kinematics, real, engine.model.tables.index,
-                                 engine.model.wall_conduction)
+                                 engine.model.heats_walls)
         self.tri_cell_count = t.add("tri_cell_count", ti.i32, ncell)
         self.tri_cell_start = t.add("tri_cell_start", ti.i32, ncell + 1)
         self.tri_cell_fill = t.add("tri_cell_fill", ti.i32, ncell)
-        self.loads = BodyLoads(t, real, self.n_bodies, s.capacity, engine.model.wall_conduction)
+        self.loads = BodyLoads(t, real, self.n_bodies, s.capacity, engine.model.heats_walls)
         self.mesh_start = t.add("mesh_start", ti.i32, s.capacity + 1)
         self.mesh_count = t.add("mesh_count", ti.i32, s.capacity)
         self.old_start_by_id = t.add("old_mesh_start_by_id", ti.i32, s.capacity)

@@ -127,6 +127,10 @@ class Effect:
     # ``after_rebuild`` judges something that goes stale otherwise: mobility's cells in a bed
     # that has come to rest, where nothing else asks for a rebuild); None: no limit
     rebuild_within_steps: int | None = None
+    # the particle field whose differences the contact law turns into heat (the temperature
+    # effect: "temperature", K): the contacts then carry heat (W) and conductance (W/K) into
+    # the particles' loads (``particle_load``), and the engine allocates their sums
+    conducted_field: str | None = None
     # it conducts heat to walls and bodies that have a temperature (their heat series, the
     # walls' temperatures uploaded)
     heats_walls = False

@@ -259,7 +259,7 @@ def advance_per_stage(engine, steps: int, record_last: bool):
         record = 1 if (record_last and last) else 0
         if record:
             e.wall_force.fill(0.0)
-            if e.model.thermal:
+            if e.model.heat:
                 e.wall_heat.fill(0.0)
         e._pair_forces(e.count, dt, 1 if rebuild else 0)
         for effect in e.model.cell_effects:

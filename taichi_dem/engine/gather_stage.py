@@ -52,14 +52,14 @@ class GatherStage:
     """The gather's ti.func ``gather_particle(i, dt, record, then_drift, t_next, scatter)``
     and its kernel ``gather(n, dt, record, then_drift, t_next, serial_loops)``."""
 
-    def __init__(self, e, p, temperature_of, plane_contacts, mesh_contacts):
+    def __init__(self, e, p, conducted_of, plane_contacts, mesh_contacts):
         """``e`` the Engine, ``p`` its PairState; ``plane_contacts`` and ``mesh_contacts``
         the contact kinds' ti.funcs (None where the scene has none)."""
         s, model = e.state, e.model
         real = model.real
         ctx = e.context
         pair_heat = model.pair_heat
-        thermal = model.thermal
+        heat_carried = model.heat
         n_walls = len(model.scene.walls)
         has_mesh = mesh_contacts is not None
         holding = e.holding                  # held particles (engine/holding.py)
@@ -98,7 +98,7 @@ class GatherStage:
                     integrates = particle_moves(i)         # held or carried: not integrated
                 heat = 0.0           # W into the particle
                 conductance = 0.0    # W/K, for the stability check
-                if ti.static(thermal):
+                if ti.static(heat_carried):
                     heat = s.owned_heat[i]
                     conductance = s.conductance[i]
                 if ti.static(scatter > 0):
@@ -149,7 +149,7 @@ class GatherStage:
                         mesh_force, mesh_torque, mesh_heat, mesh_conductance = mesh_contacts(
                             i, s.position[i], s.velocity[i], s.angular_velocity[i], s.radius[i],
                             s.mass[i], inv_m, s.inverse_inertia[i], s.acceleration[i],
-                            s.material[i], temperature_of(i), dt)
+                            s.material[i], conducted_of(i), dt)
                         force += mesh_force
                         torque += mesh_torque
                         heat += mesh_heat

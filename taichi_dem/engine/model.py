@@ -111,8 +111,23 @@ class Model:
         return None
 
     @property
-    def thermal(self) -> bool:
-        return self.scene.thermal is not None
+    def conducted_field(self) -> "str | None":
+        """The particle field whose differences the contact law turns into heat (the
+        temperature, K), as an enabled effect declares it (Effect.conducted_field); None: the
+        contacts carry no heat, and none of its sums is allocated or compiled."""
+        for e in self.effect_list:
+            if e.conducted_field is not None:
+                return e.conducted_field
+        return None
+
+    @property
+    def heat(self) -> bool:
+        """The contacts carry heat (W) and conductance (W/K) into the particles' loads."""
+        return self.conducted_field is not None
+
+    def carries(self, name: str) -> bool:
+        """Whether the particles carry the field ``name`` (an enabled effect declares it)."""
+        return name in self.particle_fields
 
     @property
     def split_positions(self) -> bool:
@@ -120,17 +135,12 @@ class Model:
         return "position_residual" in self.particle_fields
 
     @property
-    def moisture(self) -> bool:
-        """Drying: particles carry moisture."""
-        return "moisture" in self.particle_fields
-
-    @property
     def pair_heat(self) -> bool:
         """A pair effect conducts heat (partner heat shares at the entries)."""
         return "partner_heat" in self.pair_fields
 
     @property
-    def wall_conduction(self) -> bool:
+    def heats_walls(self) -> bool:
         """Heat is conducted to walls and bodies with a temperature (their heat series): an
         effect declares ``heats_walls``."""
         return any(e.heats_walls for e in self.effect_list)

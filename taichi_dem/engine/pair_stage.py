@@ -8,15 +8,19 @@ import taichi as ti
 from ..contacts.law import make_contact_law
 
 
-def make_temperature_of(s, thermal: bool):
-    """A ti.func (i) -> particle i's temperature, K (0 without heat transfer)."""
+def make_conducted_of(s, conducted_field: "str | None"):
+    """A ti.func (i) -> particle i's value of the field whose differences drive the contacts'
+    heat (Model.conducted_field: the temperature, K; 0 where the contacts carry no heat)."""
+    has_field = conducted_field is not None
+    conducted = getattr(s, conducted_field) if has_field else None
+
     @ti.func
-    def temperature_of(i):
+    def conducted_of(i):
         t = 0.0 * s.radius[i]
-        if ti.static(thermal):
-            t = s.temperature[i]
+        if ti.static(has_field):
+            t = conducted[i]
         return t
-    return temperature_of
+    return conducted_of
 
 
 def make_share_adder(extra_copies: int):
@@ -43,19 +47,19 @@ def make_share_adder(extra_copies: int):
     return share_adder
 
 
-def make_pair_contact(s, geometry, pair_margin: float, temperature_of):
+def make_pair_contact(s, geometry, pair_margin: float, conducted_of):
     """A ti.func building the Contact (contacts/geometry.py) of particle i with j."""
     _, _, sphere_sphere_gap, with_motion = geometry
 
     @ti.func
     def pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
-                     temperature_i):
+                     conducted_i):
         """The Contact of particle i (its state passed in) with particle j (``d`` = x_i -
         x_j, m): the geometry, and the motion when ``touching``. A pair within a heat
         effect's margin but apart needs no more, and with the gas gap on such pairs are as
         common as touching ones: its partner's motion is not loaded."""
         c = sphere_sphere_gap(d, distance_sq, ri, s.radius[j], mi, s.material[j],
-                              temperature_i, temperature_of(j))
+                              conducted_i, conducted_of(j))
         if ti.static(pair_margin > 0.0):
             if touching:
                 c = with_motion(c, vi, s.velocity[j], wi, s.angular_velocity[j], ai,
@@ -73,7 +77,7 @@ class PairStage:
     """The pair stage's ti.func ``pair_particle(i, dt, full, scatter, copy)`` and its kernel
     ``pair_forces(n, dt, full, serial_loops)``, with the shares' adders the gather reads."""
 
-    def __init__(self, e, p, geometry, pair_history, temperature_of, shields,
+    def __init__(self, e, p, geometry, pair_history, conducted_of, shields,
                  before_pairs=None):
         """``e`` the Engine, ``p`` its PairState; ``geometry`` contacts/geometry.py's
         make_geometry; ``pair_history`` the history's load/store at the entries;
@@ -85,7 +89,7 @@ class PairStage:
         pair_law = make_contact_law(model.effect_list, "pair", real, e.context)
         # a pair is handed to the law while its gap is below the margin an effect asks for
         pair_margin = model.pair_margin
-        pair_heat, thermal = model.pair_heat, model.thermal
+        pair_heat, heat = model.pair_heat, model.heat
         has_mesh = shields is not None
         holding = e.holding
         holds, particle_moves = holding.any, holding.moves
@@ -96,7 +100,7 @@ class PairStage:
         split, has_before_pairs = model.split_positions, before_pairs is not None
         vec0 = ti.Vector([0.0, 0.0, 0.0])
 
-        pair_contact = make_pair_contact(s, geometry, pair_margin, temperature_of)
+        pair_contact = make_pair_contact(s, geometry, pair_margin, conducted_of)
 
         pool = e.worker_pool
         share_adder = make_share_adder(max(pool.copies - 1, 0))
@@ -105,7 +109,7 @@ class PairStage:
                                         pool.copy_torque)
         add_partner_heat = (share_adder(s.scattered_heat, s.scattered_conductance,
                                         pool.copy_heat, pool.copy_conductance)
-                            if thermal else None)
+                            if heat else None)
         # one thread (the serial mode) adds each pair's partner share to the partner directly
         # (Engine.scatter_ok); held particles' frozen and carried pairs read theirs at the entries
         scatter_ok = e.scatter_ok
@@ -121,7 +125,7 @@ class PairStage:
             the kept conductance)."""
             xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
             ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
-            temperature_i = temperature_of(i)
+            conducted_i = conducted_of(i)
             residual_i = vec0
             if ti.static(split):
                 residual_i = s.position_residual[i]
@@ -143,7 +147,7 @@ class PairStage:
                         if ti.static(pair_heat):
                             if p.contact[k] != 0:
                                 h = p.pair_conductance[k]
-                                q = h * (temperature_of(j) - temperature_i)
+                                q = h * (conducted_of(j) - conducted_i)
                                 owned_heat += q
                                 owned_conductance += h
                                 p.partner_heat[k] = -q
@@ -168,7 +172,7 @@ class PairStage:
                     if ti.static(pair_margin > 0.0):
                         touching = distance_sq < (ri + rj) * (ri + rj)
                     c = pair_contact(touching, d, distance_sq, ri, vi, wi, ai, inv_mi, inv_ii, mi, j,
-                                     temperature_i)
+                                     conducted_i)
                     history = pair_history.empty()
                     if touching:
                         history = pair_history.load(k)
@@ -207,7 +211,7 @@ class PairStage:
                     pair_history.clear(k)
             s.owned_force[i] = owned_force
             s.owned_torque[i] = owned_torque
-            if ti.static(thermal):
+            if ti.static(heat):
                 s.owned_heat[i] = owned_heat
                 s.conductance[i] = owned_conductance
 

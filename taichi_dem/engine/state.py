@@ -135,14 +135,12 @@ class ParticleState:
                                     "scattered_conductance"})
 
     def __init__(self, capacity: int, real, n_walls: int, particle_fields: dict,
-                 contact_fields: dict, thermal: bool = False, process: bool = False):
+                 contact_fields: dict, heat: bool = False, process: bool = False):
         """``particle_fields``: {name: (is_vector, kind)} the enabled effects declare;
         ``contact_fields``: the state each contact carries (one per particle and plane wall
         here, named ``wall_<name>``)."""
         self.capacity = capacity
         self.spec = dict(self.CORE, **particle_fields, **(self.PROCESS if process else {}))
-        # compensated (f64 residual) temperatures only where the mechanics are in f32
-        self.compensated = "temperature_residual" in self.spec
         self.process = process
         self.real = real
         self.n_walls = n_walls
@@ -170,7 +168,7 @@ class ParticleState:
         # force (N) and torque (N m) of the pairs this particle owns, summed by the pair kernel
         self.owned_force = t.add("owned_force", real, capacity, vector=True)
         self.owned_torque = t.add("owned_torque", real, capacity, vector=True)
-        if thermal:
+        if heat:
             # heat flow (W) of the owned pairs; sum of the conductances (W/K) of the last step
             self.owned_heat = t.add("owned_heat", real, capacity)
             self.conductance = t.add("conductance", real, capacity)
@@ -180,7 +178,7 @@ class ParticleState:
         # (ZERO_BETWEEN_STEPS)
         self.scattered_force = t.add("scattered_force", real, capacity, vector=True)
         self.scattered_torque = t.add("scattered_torque", real, capacity, vector=True)
-        if thermal:
+        if heat:
             self.scattered_heat = t.add("scattered_heat", real, capacity)
             self.scattered_conductance = t.add("scattered_conductance", real, capacity)
         self.cell = t.add("cell", ti.i32, capacity)

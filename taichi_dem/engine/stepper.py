@@ -53,7 +53,7 @@ from ..setup.tuning import PARALLEL_FROM
 from .drift import make_drift
 from .holding import Holding
 from .gather_stage import GatherStage
-from .pair_stage import PairStage, make_temperature_of
+from .pair_stage import PairStage, make_conducted_of
 from .values import RuntimeValues
 from .workers import WorkerPool, persistent_workers
 
@@ -109,11 +109,11 @@ class Engine:
         # runs of steps on every thread above parallel_from (persistent_workers; off again,
         # for good, if its barrier waits show the threads sharing the cores with other work)
         self.worker_pool = WorkerPool(persistent_workers(self.threads) if self.runs else 0,
-                                      capacity, real, self.model.thermal,
+                                      capacity, real, self.model.heat,
                                       copies=self.scatter_ok and tuning.WORKER_COPIES)
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
         self.state = ParticleState(capacity, real, len(scene.walls), model.particle_fields,
-                                   self.model.contact_fields, thermal=self.model.thermal,
+                                   self.model.contact_fields, heat=self.model.heat,
                                    process=bool(scene.factories or scene.outlets))
         self.trees.append(self.state.tree)
         t = self.new_tree()
@@ -125,10 +125,10 @@ class Engine:
         self.flags = t.add("flags", ti.i32, Flag.SIZE)
         self.wall_force = t.add("wall_force", real, max(len(scene.walls), 1), vector=True)
         # the plane walls as fields, read in a loop (contacts/planes.py)
-        self.plane_walls = PlaneWalls(scene.walls, tables.index, model.wall_conduction,
+        self.plane_walls = PlaneWalls(scene.walls, tables.index, model.heats_walls,
                                       real, t)
         self.reduction = t.add("reduction", real, Reduction.SIZE)   # named slots: Reduction
-        if self.model.thermal:
+        if self.model.heat:
             self.wall_heat = t.add("wall_heat", real, max(len(scene.walls), 1))
         # what the effects see: the model, the values, the tables and the state, read-only
         self.context = EffectContext(model, self.values, self.table, self.state, self)
@@ -258,7 +258,7 @@ class Engine:
         effects = model.effect_list
         # the contact geometry of each kind and the contact law composed from the enabled
         # effects (contacts/): the same law runs on pairs, planes and triangles
-        geometry = make_geometry(real, model.thermal)
+        geometry = make_geometry(real, model.heat)
         sphere_surface = geometry[1]
         # the history values the enabled effects keep, and one load/store/clear of them per
         # storage: the neighbour entries and the (particle, plane wall) slots
@@ -267,10 +267,10 @@ class Engine:
         pair_history = make_history_io(History, members,
                                        {m: getattr(p, m + "_history") for m in members})
         n_walls = len(model.scene.walls)
-        thermal = model.thermal
+        heat = model.heat
         wall_force = self.wall_force
-        wall_heat = self.wall_heat if thermal else None
-        temperature_of = make_temperature_of(s, thermal)
+        wall_heat = self.wall_heat if heat else None
+        conducted_of = make_conducted_of(s, model.conducted_field)
         plane_contacts = None
         if n_walls:
             wall_history = make_history_io(History, members,
@@ -279,7 +279,7 @@ class Engine:
             plane_contacts = make_plane_contacts(
                 s, self.plane_walls, sphere_surface,
                 make_contact_law(effects, "plane", real, self.context), wall_history,
-                wall_force, wall_heat, thermal, temperature_of,
+                wall_force, wall_heat, heat, conducted_of,
                 margin_fraction(model.contact_effects, "plane"))
         mesh_contacts = shields = place_candidates = None
         if self.mesh is not None:
@@ -291,9 +291,9 @@ class Engine:
             shields = self.mesh.make_shields()
             place_candidates = self.mesh.make_place_candidates()
         has_mesh = mesh_contacts is not None
-        pairs = PairStage(self, p, geometry, pair_history, temperature_of, shields,
+        pairs = PairStage(self, p, geometry, pair_history, conducted_of, shields,
                           place_candidates)
-        gathers = GatherStage(self, p, temperature_of, plane_contacts, mesh_contacts)
+        gathers = GatherStage(self, p, conducted_of, plane_contacts, mesh_contacts)
         pair_particle, pair_forces = pairs.pair_particle, pairs.pair_forces
         gather_particle, gather = gathers.gather_particle, gathers.gather
         vec0 = ti.Vector([0.0, 0.0, 0.0])
@@ -321,7 +321,7 @@ class Engine:
                 if leader:
                     for w in range(n_wall_slots):
                         wall_force[w] = vec0
-                        if ti.static(thermal):
+                        if ti.static(heat):
                             wall_heat[w] = 0.0
             if ti.static(has_mesh):
                 if leader:

@@ -114,7 +114,7 @@ class WorkerPool:
     STALL_WINDOW = WORKER_STALL_WINDOW
     STALLED_WINDOWS = WORKER_STALLED_WINDOWS
 
-    def __init__(self, workers: int, capacity: int, real, thermal: bool, copies: bool):
+    def __init__(self, workers: int, capacity: int, real, heat: bool, copies: bool):
         self.workers = workers
         self.runs = 0                 # runs of steps done on the workers
         self.give_way = False
@@ -144,7 +144,7 @@ class WorkerPool:
         if extra:
             self.copy_force = wt.add("copy_force", real, (extra, capacity), vector=True)
             self.copy_torque = wt.add("copy_torque", real, (extra, capacity), vector=True)
-            if thermal:
+            if heat:
                 self.copy_heat = wt.add("copy_heat", real, (extra, capacity))
                 self.copy_conductance = wt.add("copy_conductance", real, (extra, capacity))
         wt.finalize()

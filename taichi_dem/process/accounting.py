@@ -32,8 +32,8 @@ class ProcessAccounts:
         self._reset_interval()
         # callables batch -> None, given every drained batch of the removal log
         self.listeners: list = []
-        self.thermal = sim.engine.model.thermal
-        self.drying = sim.engine.model.moisture
+        self.thermal = sim.engine.model.carries("temperature")
+        self.drying = sim.engine.model.carries("moisture")
 
     def _reset_interval(self):
         no = len(self.outlets)

@@ -388,13 +388,13 @@ class FactorySet:
                "radius": radii, "mass": masses,
                "material": np.full(n, self.material[k], np.int32),
                "origin": np.full(n, k, np.int32)}
-        if self.sim.engine.model.thermal:
+        if self.sim.engine.model.carries("temperature"):
             out["temperature"] = np.full(n, f.temperature)
             # a wet particle's thermal mass holds its water too: m (c + X c_w) (thermal/moisture)
-            x = (f.moisture or 0.0) if self.sim.engine.model.moisture else 0.0
-            c_w = self.scene.thermal.water_heat_capacity if self.sim.engine.model.moisture else 0.0
+            x = (f.moisture or 0.0) if self.sim.engine.model.carries("moisture") else 0.0
+            c_w = self.scene.thermal.water_heat_capacity if self.sim.engine.model.carries("moisture") else 0.0
             out["inverse_thermal_mass"] = 1.0 / (masses * (self.heat_capacity[k] + x * c_w))
-            if self.sim.engine.model.moisture:
+            if self.sim.engine.model.carries("moisture"):
                 out["moisture"] = np.full(n, x)
         return out
 

@@ -33,7 +33,7 @@ class ProcessDevice:
         s = engine.state
         self.outlets = scene.outlets
         self.log_enabled = bool(scene.factories or scene.outlets)
-        self.thermal = engine.model.thermal
+        self.thermal = engine.model.carries("temperature")
         cap = s.capacity
         self.log_capacity = 0
         self.log_temperature = None
@@ -51,7 +51,7 @@ class ProcessDevice:
             self.log_temperature = tree.add("log_temperature", ti.f64, cap) if self.thermal else None
             # m c of what leaves (J/K): the enthalpy it carries out, for the energy balance
             self.log_thermal_mass = tree.add("log_thermal_mass", ti.f64, cap) if self.thermal else None
-            self.log_moisture = tree.add("log_moisture", ti.f64, cap) if engine.model.moisture else None
+            self.log_moisture = tree.add("log_moisture", ti.f64, cap) if engine.model.carries("moisture") else None
         self.planes = PlaneCrossings(scene, tree)
         if self.log_enabled:
             self._compile_drain(engine)
@@ -94,7 +94,7 @@ class ProcessDevice:
         n_outlets = len(outlet_tests)
         thermal = self.thermal
         drying = self.log_moisture is not None
-        compensated = engine.state.compensated
+        compensated = engine.model.carries("temperature_residual")
         process_fields = s.process
         count_crossings = self.planes.make_func(s, engine.values)
         me = self

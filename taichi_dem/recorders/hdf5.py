@@ -11,6 +11,7 @@ import numpy as np
 
 from .._version import __version__
 from ..files import remove_stale_side_files, side_path
+from ..scene import catalog
 from ..sensors.units import unit_of
 
 
@@ -31,8 +32,9 @@ FRAME_DATASETS = {
     "angular_velocity": ("rad/s", "(N, 3)", "angular velocity"),
     "radius": ("m", "(N,)", "radius"),
     "mass": ("kg", "(N,)", "mass"),
-    "temperature": ("K", "(N,)", "temperature; with [thermal] only"),
-    "moisture": ("1", "(N,)", "kg water per kg dry solid; with moisture only"),
+    # the effects' own (scene/catalog.py frame_fields: the heat transfer's temperature, the
+    # drying's moisture), where the particles carry them
+    **catalog.frame_fields(),
     "material": ("1", "(N,)", "material index: the position of its name in the root attribute "
                               "materials"),
 }

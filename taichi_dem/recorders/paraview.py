@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..scene import catalog
+
 MARK = "# taichi-dem ParaView view"
 
 _TEMPLATE = '''#!/usr/bin/env python3
@@ -208,7 +210,8 @@ if __name__ == "__main__":
 
 def paraview_script_text(h5_path, xdmf_path) -> str:
     """The view script's text for the results ``h5_path`` described by ``xdmf_path``: its
-    bodies and its colour (temperature, else speed) read from the file."""
+    bodies and its colour (the effects' colour field, the temperature, else speed) read from the
+    file."""
     import h5py
     h5_path, xdmf_path = Path(h5_path), Path(xdmf_path)
     with h5py.File(h5_path, "r") as f:
@@ -216,8 +219,14 @@ def paraview_script_text(h5_path, xdmf_path) -> str:
         arrays = set()
         for key in f["frames"] if "frames" in f else ():
             arrays |= set(f["frames"][key])
-    if "temperature" in arrays:
-        colour, words = ("temperature [K]", ""), "temperature"
+    # the first field the effects colour particles by (scene/catalog.py colour_fields: the
+    # temperature), named with its unit as the XDMF names it; else the speed
+    fields = catalog.frame_fields()
+    chosen = next((name for name in catalog.colour_fields() if name in arrays), None)
+    if chosen is not None:
+        unit = fields[chosen][0]
+        colour = (f"{chosen} [{unit}]" if unit != "1" else chosen, "")
+        words = chosen
     elif "velocity" in arrays:
         colour, words = ("velocity [m/s]", "Magnitude"), "speed"
     else:

@@ -6,9 +6,9 @@
 
 What is logged (CONTRACT.md, "Rerun"), all on the ``sim_time`` timeline (a duration, s):
 
-- ``particles``: ``Points3D`` (positions, radii, colours). Coloured by temperature when the
-  sample has ``particles/mean_temperature`` and the simulation gives per-particle temperatures,
-  else by speed, through a fixed viridis ramp. The ramp's range only ever widens (so colours
+- ``particles``: ``Points3D`` (positions, radii, colours). Coloured by the first field the
+  effects name for it that the particles carry (scene/catalog.py colour_fields: the
+  temperature, with heat transfer), else by speed, through a fixed viridis ramp. The ramp's range only ever widens (so colours
   stay comparable along the run); its ends are logged as the scalars ``colour_scale/min`` and
   ``colour_scale/max`` and described in the text document ``colour_scale/legend``.
   ``every_nth`` and ``region`` decimate what is drawn (not what is simulated).
@@ -17,18 +17,21 @@ What is logged (CONTRACT.md, "Rerun"), all on the ``sim_time`` timeline (a durat
   point, and its translation (x(t) = R (x0 - p) + p + v t).
 - ``series/<name>``: every /series quantity as ``Scalars``; a vector quantity as one scalar per
   component, ``series/<name>/x|y|z``.
-- A blueprint: the 3D view beside plots of body torque, mass flow, temperature and kinetic
-  energy (those present).
+- A blueprint: the 3D view beside plots of body torque, mass flow, the effects' views
+  (scene/catalog.py series_views: the temperatures) and kinetic energy (those present).
 
 Each recorder has a recording stream of its own, so several simulations can record side by side.
 """
 from __future__ import annotations
 
+import fnmatch
 import time as _time
 from pathlib import Path
 from typing import Optional, Sequence
 
 import numpy as np
+
+from ..scene import catalog
 
 
 # viridis at eleven evenly spaced points (matplotlib's values, rounded); interpolated linearly
@@ -106,11 +109,12 @@ class RerunRecorder:
         if residence:
             plots.append(rrb.TimeSeriesView(name="residence time (s)", origin="/series",
                                             contents=residence))
-        temp = sorted(f"+ /series/{n}" for n in names
-                      if n.endswith(("mean_temperature", "gas/outlet_temperature")))
-        if temp:
-            plots.append(rrb.TimeSeriesView(name="temperature (K)", origin="/series",
-                                            contents=temp))
+        # the views the effects ask for (scene/catalog.py series_views: the temperatures)
+        for title, patterns in catalog.series_views().items():
+            chosen = sorted(f"+ /series/{n}" for n in names
+                            if any(fnmatch.fnmatchcase(n, p) for p in patterns))
+            if chosen:
+                plots.append(rrb.TimeSeriesView(name=title, origin="/series", contents=chosen))
         if "particles/kinetic_energy" in names:
             plots.append(rrb.TimeSeriesView(name="kinetic energy (J)", origin="/series",
                                             contents=["+ /series/particles/kinetic_energy"]))
@@ -182,13 +186,15 @@ class RerunRecorder:
         self.samples += 1
         self.wall_seconds += _time.perf_counter() - t0
 
-    def _temperature(self, sim, p, values):
-        if "particles/mean_temperature" not in values:
-            return None
-        if "temperature" in p:
-            return np.asarray(p["temperature"], float)
-        getter = getattr(sim, "particle_temperatures", None)
-        return np.asarray(getter(), float) if callable(getter) else None
+    @staticmethod
+    def _colour_field(p):
+        """(name, unit, values) of the first field the effects colour particles by that the
+        frame ``p`` has (scene/catalog.py colour_fields: the temperature), or None."""
+        fields = catalog.frame_fields()
+        for name in catalog.colour_fields():
+            if name in p:
+                return name, fields[name][0], np.asarray(p[name], float)
+        return None
 
     def _log_particles(self, sim, values):
         rr = self.rr
@@ -199,9 +205,9 @@ class RerunRecorder:
         if self.region is not None:
             lo, hi = self.region
             keep &= np.all((pos >= lo) & (pos <= hi), axis=1)
-        temperature = self._temperature(sim, p, values)
-        if temperature is not None:
-            quantity, unit, field = "temperature", "K", temperature[keep]
+        coloured = self._colour_field(p)
+        if coloured is not None:
+            quantity, unit, field = coloured[0], coloured[1], coloured[2][keep]
         else:
             quantity, unit = "speed", "m/s"
             field = np.linalg.norm(p["velocity"][keep], axis=1)

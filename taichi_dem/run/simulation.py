@@ -25,6 +25,7 @@ from ..engine import backend, transfer
 from . import interrupt
 from ..setup.tuning import MOST_SPECIES
 from ..errors import DivergenceError, SceneError, StaleSimulationError
+from ..scene import catalog
 from ..scene.loader import load_scene, parse_scene
 from ..scene.model import Scene
 from ..sensors import Now, build_sensors
@@ -320,7 +321,7 @@ class Simulation:
                                       for name in self.tables.names])[placed.material]
             arrays["temperature"] = placed.temperature
             thermal_mass = mass * heat_capacity
-            if self.engine.model.moisture:
+            if self.engine.model.carries("moisture"):
                 # X per particle from its fill (dry where the fill gives none); the water's heat
                 # capacity counts in the thermal mass m (c + X c_w)
                 x = np.concatenate([np.asarray(f.moistures, float)
@@ -613,17 +614,19 @@ class Simulation:
     def particles(self) -> dict[str, np.ndarray]:
         """Alive particles in id order: id, position (m), velocity (m/s), angular_velocity
         (rad/s), radius (m), mass (kg), fixed (bool), material (index into the scene's sorted
-        material names, ``sim.tables.names``); temperature (K) and moisture (kg/kg) when the
-        scene has them."""
+        material names, ``sim.tables.names``); and the per-particle fields the enabled effects
+        add to a frame (scene/catalog.py frame_fields: temperature K, moisture kg/kg)."""
         self._check_alive()
         s = self.engine.state
         n = self.engine.count
         names = ["alive", "serial" if s.process else "particle_id", "position", "velocity",
                  "angular_velocity", "radius", "mass", "inverse_mass", "material"]
-        if self.engine.model.thermal:
-            names += ["temperature"] + (["temperature_residual"] if s.compensated else [])
-        if self.engine.model.moisture:
-            names += ["moisture"] + (["moisture_residual"] if s.compensated else [])
+        # the effects' per-particle fields (the temperature, the moisture) and their f64
+        # residuals in f32 scenes (engine/precision.py), where the particles carry them
+        model = self.engine.model
+        extra = [name for name in catalog.frame_fields() if model.carries(name)]
+        names += [n for name in extra
+                  for n in (name, name + "_residual") if model.carries(n)]
         if self.engine.model.split_positions:
             names.append("position_residual")
         host = dict(zip(names, transfer.read(getattr(s, name) for name in names)))
@@ -637,7 +640,7 @@ class Simulation:
             out["position"] += host["position_residual"][:n][order]
         out["fixed"] = host["inverse_mass"][:n][order] == 0.0
         out["material"] = host["material"][:n][order].astype(np.int32)
-        for name in ("temperature", "moisture"):
+        for name in extra:
             if name in host:
                 out[name] = host[name][:n][order].astype(np.float64)
                 if name + "_residual" in host:

@@ -43,3 +43,27 @@ SETTINGS_MODULES: tuple[ModuleType, ...] = tuple(
 def settings_modules() -> tuple[ModuleType, ...]:
     """Every effect's settings module (thermal first, then the effect packages by name)."""
     return SETTINGS_MODULES
+
+
+def frame_fields() -> dict:
+    """{name: (unit, shape, description)}: the per-particle fields the effects add to each
+    recorded frame where the particles carry them (their settings modules' FRAME_FIELDS)."""
+    out = {}
+    for module in SETTINGS_MODULES:
+        out.update(getattr(module, "FRAME_FIELDS", {}))
+    return out
+
+
+def colour_fields() -> tuple:
+    """The frame fields the viewers colour particles by, first choice first (COLOUR_FIELDS)."""
+    return tuple(name for module in SETTINGS_MODULES
+                 for name in getattr(module, "COLOUR_FIELDS", ()))
+
+
+def series_views() -> dict:
+    """{title: (series name patterns, ...)}: the time-series views the effects ask a viewer
+    for (SERIES_VIEWS)."""
+    out = {}
+    for module in SETTINGS_MODULES:
+        out.update(getattr(module, "SERIES_VIEWS", {}))
+    return out

@@ -12,7 +12,8 @@ inserted mass) take the same call.
     mass_flow.py   mass-flow planes: crossings counted on the device in the drift
     residence.py   residence times from a factory to an outlet (from the removal log)
     contacts.py    particles touching each body
-    loads.py       body force, torque, power and heat flow; plane wall force and heat flow
+    loads.py       body force, torque and power; plane wall force (the heat flows they take
+                   are written by thermal/wall_heat_flows.py)
 
 The enabled effects add their own observers after these (``Effect.run_observers``): the heat
 transfer's energy balance (thermal/energy_balance.py).

@@ -13,7 +13,7 @@ from taichi_dem.sensors.units import declared, describe, unit_of
 ROOT = Path(__file__).resolve().parents[2]
 WRITERS = [ROOT / "taichi_dem" / "sensors" / n for n in
            ("particles.py", "loads.py", "mass_flow.py", "residence.py", "contacts.py")] + [
-    ROOT / "thermal" / "energy_balance.py",
+    ROOT / "thermal" / "energy_balance.py", ROOT / "thermal" / "wall_heat_flows.py",
     ROOT / "taichi_dem" / "process" / "accounting.py",
     ROOT / "taichi_dem" / "process" / "factories.py",
     ROOT / "thermal" / "plug_flow.py",
