@@ -62,7 +62,7 @@ def epsd(relative_spin, normal, normal_force, normal_stiffness, r_eff, rolling_f
 
 
 from .base import Effect  # noqa: E402
-from ..setup.pair_tables import ROLLING_CONSTANT_TORQUE, ROLLING_EPSD  # noqa: E402
+from ..setup.pair_tables import ROLLING_MODEL_CODES  # noqa: E402
 
 
 class _Rolling(Effect):
@@ -100,11 +100,11 @@ class _Rolling(Effect):
 class RollingConstantTorque(_Rolling):
     """Constant directional torque (EDEM type A) on pairs whose interaction asks for it."""
     name = "rolling_constant_torque"
-    model_code = ROLLING_CONSTANT_TORQUE
+    model_code = ROLLING_MODEL_CODES["constant_torque"]
 
 
 class RollingEPSD(_Rolling):
     """EPSD rolling spring (Ai et al. 2011 model C) on pairs whose interaction asks for it."""
     name = "rolling_epsd"
-    model_code = ROLLING_EPSD
+    model_code = ROLLING_MODEL_CODES["epsd"]
     contact_fields = {"rolling_history": (True, "real")}

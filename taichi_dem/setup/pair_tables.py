@@ -14,8 +14,10 @@ import numpy as np
 from .restitution import damping_ratio
 from ..scene.model import Material, Scene
 
-ROLLING_NONE, ROLLING_CONSTANT_TORQUE, ROLLING_EPSD = 0, 1, 2
-_ROLLING_CODES = {"constant_torque": ROLLING_CONSTANT_TORQUE, "epsd": ROLLING_EPSD}
+# the ``rolling_model`` table: each interaction's rolling model (its scene value) as a code, 0
+# where it has no rolling friction; the rolling effects (effects/rolling.py) act on their code
+NO_ROLLING = 0
+ROLLING_MODEL_CODES = {"constant_torque": 1, "epsd": 2}
 
 
 def effective_youngs_modulus(a: Material, b: Material) -> float:
@@ -107,6 +109,6 @@ def build_pair_tables(scene: Scene) -> PairTables:
             t.friction[a, b] = inter.friction
             t.rolling_friction[a, b] = inter.rolling_friction
             t.rolling_damping[a, b] = inter.rolling_damping
-            t.rolling_model[a, b] = (_ROLLING_CODES[inter.rolling_model]
-                                     if inter.rolling_friction > 0 else ROLLING_NONE)
+            t.rolling_model[a, b] = (ROLLING_MODEL_CODES[inter.rolling_model]
+                                     if inter.rolling_friction > 0 else NO_ROLLING)
     return t
