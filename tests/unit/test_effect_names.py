@@ -9,7 +9,8 @@ heat transfer's: thermal/wall_heat_flows.py) and ``recorders/`` (the frames' tem
 moisture, the viewers' colour and the temperature plots are declared in thermal/settings.py:
 FRAME_FIELDS, COLOUR_FIELDS, SERIES_VIEWS). ``setup/`` and ``scene/`` are not yet: the scene
 reads [thermal] itself and the particles' temperature and moisture keys by name, the time step
-reads the scene's gravity, placement writes the fills' temperatures by name. Their counts may only fall."""
+reads the scene's gravity, placement writes the fills' temperatures by name. Their counts
+may only fall."""
 import ast
 import importlib
 import pkgutil
