@@ -28,8 +28,8 @@ class StepFunctions:
     or what each particle prepares after begin_step for every particle's pair stage: run for
     all before any pair), the cell effects' ti.funcs
     ``cell_funcs`` (n, dt), and what the drivers read: the engine's ``flags``, its particle
-    ``state``, its precision ``real`` and whether one thread may add partners' shares to the
-    partners directly (``scatter_ok``)."""
+    ``state`` and its precision ``real``. One thread (a run of steps) adds partners' shares to
+    the partners directly, held particles' too (``scatter`` = True)."""
 
     def __init__(self, **members):
         self.__dict__.update(members)
@@ -38,7 +38,7 @@ class StepFunctions:
 def compile_run_steps(step: StepFunctions):
     """The serial mode's runs of steps: a kernel run_steps(n, dt, t_first, dt_time, steps,
     full_first, record_last, drift_last) -> steps done."""
-    flags, real, scatter_ok = step.flags, step.real, step.scatter_ok
+    flags, real = step.flags, step.real
     pair_particle, gather_particle, begin_step = (step.pair_particle, step.gather_particle,
                                                   step.begin_step)
     before_pairs = step.before_pairs
@@ -68,15 +68,14 @@ def compile_run_steps(step: StepFunctions):
                 for i in range(n):
                     before_pairs(i)
             for i in range(n):
-                pair_particle(i, dt, full, ti.static(scatter_ok), 0)
+                pair_particle(i, dt, full, ti.static(True), 0)
             for cell_stage in ti.static(cell_funcs):
                 cell_stage(n, dt)
             then_drift = 1
             if last:
                 then_drift = drift_last
             for i in range(n):
-                gather_particle(i, dt, record, then_drift, t + dt_time,
-                                ti.static(1 if scatter_ok else 0))
+                gather_particle(i, dt, record, then_drift, t + dt_time, 1)
             done += 1
         return done
 

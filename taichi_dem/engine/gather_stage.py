@@ -77,7 +77,6 @@ class GatherStage:
         drift_particle = e.drift_particle
         pool = e.worker_pool
         take_scattered = make_take_scattered(s, pool, pair_heat)
-        scatter_ok = e.scatter_ok
         vec0 = ti.Vector([0.0, 0.0, 0.0])
 
         @ti.func
@@ -102,7 +101,8 @@ class GatherStage:
                     heat = s.owned_heat[i]
                     conductance = s.conductance[i]
                 if ti.static(scatter > 0):
-                    # (no held particles here: every particle integrates)
+                    # (a held particle's sums too: a carried one's from its active partners
+                    # only, booked on the frame's body below; its heat from every partner)
                     force += scattered_force
                     torque += scattered_torque
                     if ti.static(pair_heat):
@@ -184,6 +184,6 @@ class GatherStage:
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
                 gather_particle(i, dt, record, then_drift, t_next,
-                                ti.static(1 if (serial_loops and scatter_ok) else 0))
+                                ti.static(1 if serial_loops else 0))
         self.gather_particle = gather_particle
         self.gather = gather

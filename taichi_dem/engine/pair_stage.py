@@ -73,6 +73,27 @@ def make_pair_contact(s, geometry, pair_margin: float, conducted_of):
     return pair_contact
 
 
+def make_frozen_pair_heat(p, conducted_of, add_partner_heat):
+    """A ti.func (k, j, conducted_i, scatter, copy) -> (heat W, conductance W/K) into the
+    owner of entry k from partner j, for a frozen pair of two held particles (engine/
+    holding.py): it still conducts, through the conductance kept at the entry at the last
+    rebuild, at today's temperature difference. The partner's share is added to its sums
+    (``scatter``: copy ``copy``) or stored at the entry; (0, 0) where the pair is open."""
+    @ti.func
+    def frozen_pair_heat(k, j, conducted_i, scatter: ti.template(), copy):
+        q = 0.0 * conducted_i
+        h = 0.0 * conducted_i
+        if p.contact[k] != 0:
+            h = p.pair_conductance[k]
+            q = h * (conducted_of(j) - conducted_i)
+            if ti.static(scatter):
+                add_partner_heat(copy, j, -q, h)
+            else:
+                p.partner_heat[k] = -q
+        return q, h
+    return frozen_pair_heat
+
+
 class PairStage:
     """The pair stage's ti.func ``pair_particle(i, dt, full, scatter, copy)`` and its kernel
     ``pair_forces(n, dt, full, serial_loops)``, with the shares' adders the gather reads."""
@@ -99,9 +120,7 @@ class PairStage:
         core_internal = holding.carried
         split, has_before_pairs = model.split_positions, before_pairs is not None
         vec0 = ti.Vector([0.0, 0.0, 0.0])
-
         pair_contact = make_pair_contact(s, geometry, pair_margin, conducted_of)
-
         pool = e.worker_pool
         share_adder = make_share_adder(max(pool.copies - 1, 0))
         # force (N) and torque (N m); heat flow (W) and conductance (W/K)
@@ -110,19 +129,17 @@ class PairStage:
         add_partner_heat = (share_adder(s.scattered_heat, s.scattered_conductance,
                                         pool.copy_heat, pool.copy_conductance)
                             if heat else None)
-        # one thread (the serial mode) adds each pair's partner share to the partner directly
-        # (Engine.scatter_ok); held particles' frozen and carried pairs read theirs at the entries
-        scatter_ok = e.scatter_ok
+        frozen_pair_heat = (make_frozen_pair_heat(p, conducted_of, add_partner_heat)
+                            if pair_heat else None)
 
         @ti.func
         def pair_particle(i, dt, full, scatter: ti.template(), copy):
             """The owned contacts of particle i in one step: their geometry, the contact law,
             the owner's sums and the partner's shares - stored at the entry (no atomics), or
             with ``scatter`` added to the partner's sums of copy ``copy`` (add_partner_share:
-            one thread, or worker ``copy`` alone writing that copy).
-            ``full`` = 1 (the step of a rebuild): every pair; 0: pairs of two
-            held particles (engine/holding.py) keep their force, torque and history (their heat flows through
-            the kept conductance)."""
+            one thread, or worker ``copy`` alone writing that copy). ``full`` = 1 (the step
+            of a rebuild): every pair; 0: pairs of two held particles (engine/holding.py) keep
+            their force, torque and history (their heat flows through the kept conductance)."""
             xi, vi, wi, ai = s.position[i], s.velocity[i], s.angular_velocity[i], s.acceleration[i]
             ri, inv_mi, inv_ii, mi = s.radius[i], s.inverse_mass[i], s.inverse_inertia[i], s.material[i]
             conducted_i = conducted_of(i)
@@ -143,14 +160,12 @@ class PairStage:
                 j = p.neighbour[k]
                 if ti.static(holds):
                     if frozen_i and not particle_moves(j):
-                        # both held: the contact is frozen as it was at the rebuild
+                        # both held: the contact is frozen as it was at the rebuild (neither
+                        # particle is integrated, so its force goes to neither side)
                         if ti.static(pair_heat):
-                            if p.contact[k] != 0:
-                                h = p.pair_conductance[k]
-                                q = h * (conducted_of(j) - conducted_i)
-                                owned_heat += q
-                                owned_conductance += h
-                                p.partner_heat[k] = -q
+                            q, h = frozen_pair_heat(k, j, conducted_i, scatter, copy)
+                            owned_heat += q
+                            owned_conductance += h
                         continue
                 d = minimum_image(xi - s.position[j])
                 if ti.static(split):
@@ -182,6 +197,9 @@ class PairStage:
                         owned_conductance += out.conductance
                         if ti.static(scatter):
                             add_partner_heat(copy, j, -out.heat, out.conductance)
+                            if ti.static(holds):
+                                # (what a frozen pair conducts through until the next rebuild)
+                                p.pair_conductance[k] = out.conductance
                         else:
                             p.partner_heat[k] = -out.heat
                             p.pair_conductance[k] = out.conductance
@@ -193,7 +211,10 @@ class PairStage:
                             owned_force += out.force
                             owned_torque += out.torque_i
                         if ti.static(scatter):
-                            add_partner_share(copy, j, -out.force, out.torque_j)
+                            # (an inner pair of a carried core goes to neither side's sum: the
+                            # gather books a carried particle's load from active partners only)
+                            if not inner:
+                                add_partner_share(copy, j, -out.force, out.torque_j)
                         else:
                             p.partner_force[k] = -out.force
                             p.partner_torque[k] = out.torque_j
@@ -224,6 +245,6 @@ class PairStage:
                     before_pairs(i)
             ti.loop_config(serialize=serial_loops)
             for i in range(n):
-                pair_particle(i, dt, full, ti.static(serial_loops and scatter_ok), 0)
+                pair_particle(i, dt, full, ti.static(serial_loops), 0)
         self.pair_particle = pair_particle
         self.pair_forces = pair_forces

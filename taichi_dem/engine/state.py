@@ -172,7 +172,7 @@ class ParticleState:
             # heat flow (W) of the owned pairs; sum of the conductances (W/K) of the last step
             self.owned_heat = t.add("owned_heat", real, capacity)
             self.conductance = t.add("conductance", real, capacity)
-        # the serial mode's partner shares (Engine.scatter_ok): the owner adds its partner's
+        # the serial mode's partner shares (pair_stage.py ``scatter``): the owner adds its partner's
         # force (N), torque (N m), heat (W) and conductance (W/K) here directly - one thread,
         # no race - and the particle stage reads and clears them; zero between steps
         # (ZERO_BETWEEN_STEPS)

@@ -95,11 +95,6 @@ class Engine:
         # effect's cell stage has no ti.func form
         self.runs = self.threads is not None and all(hasattr(e, "cell_func")
                                                      for e in self.model.cell_effects)
-        # the serial mode's pair stage adds partner shares to the partner directly, with no
-        # gather through the mirror index (one thread: no race); held particles keep the
-        # entries (their frozen pairs re-use their stored shares). The mirror is still built at every
-        # rebuild: a checkpoint of a serial run restores into a parallel one (or a GPU)
-        self.scatter_ok = not any(x.holds_particles for x in model.effect_list)
         self.trees: list[FieldTree] = []
         # scene values the kernels read at run time (values.py): made first, so their place
         # is the same in every simulation; the grid's layout and the skin are read from them
@@ -110,7 +105,7 @@ class Engine:
         # for good, if its barrier waits show the threads sharing the cores with other work)
         self.worker_pool = WorkerPool(persistent_workers(self.threads) if self.runs else 0,
                                       capacity, real, self.model.heat,
-                                      copies=self.scatter_ok and tuning.WORKER_COPIES)
+                                      copies=tuning.WORKER_COPIES)
         has_planes = any(x.kind == "mass_flow" for x in scene.sensors)
         self.state = ParticleState(capacity, real, len(scene.walls), model.particle_fields,
                                    self.model.contact_fields, heat=self.model.heat,
@@ -298,7 +293,6 @@ class Engine:
         gather_particle, gather = gathers.gather_particle, gathers.gather
         vec0 = ti.Vector([0.0, 0.0, 0.0])
         pool = self.worker_pool
-        scatter_ok = self.scatter_ok
 
         self._pair_forces = self.serial_switch(pair_forces)
         self._gather = self.serial_switch(gather)
@@ -335,7 +329,7 @@ class Engine:
         step = drivers.StepFunctions(
             pair_particle=pair_particle, gather_particle=gather_particle, begin_step=begin_step,
             before_pairs=place_candidates, cell_funcs=cell_funcs, flags=flags, state=s,
-            real=real, scatter_ok=scatter_ok)
+            real=real)
         self._run_steps = drivers.compile_run_steps(step)
         self._run_worker_steps = (drivers.compile_run_worker_steps(step, pool) if pool.workers
                                   else None)

@@ -17,7 +17,7 @@ WORKER_CHUNK = 128
 WORKER_CHUNKS = 16
 # True: in the pair stage each worker adds partners' shares to a copy of the sums of its own
 # (1.24 - 1.27x the chunk-claiming pair stage at 32k, BENCHMARKS.md stop 18); False: the pair
-# stage claims chunks and stores shares at the entries, as under [mobility] (tests, bench A/B).
+# stage claims chunks and stores shares at the entries (tests, bench A/B).
 WORKER_COPIES = True
 # A barrier wait this long (spins, ~0.5 - 1 ms), plus STALL_SPINS_PER_PARTICLE per particle,
 # means a worker lost its core (the runs then give way to the parallel kernels); at 128k a fixed

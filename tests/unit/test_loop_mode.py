@@ -121,8 +121,8 @@ def workers_allowed(monkeypatch):
 
 @needs_two_cores
 def test_claiming_workers_equal_the_parallel_kernels_bit_for_bit(monkeypatch):
-    """Where the workers cannot keep partner shares in copies of their own ([mobility]: its
-    frozen pairs re-use their stored shares; here forced with WORKER_COPIES) they claim chunks
+    """Where the workers do not keep partner shares in copies of their own (forced here with
+    WORKER_COPIES; the copies cost memory, one sum per particle per worker) they claim chunks
     of particles in both stages and gather the shares through the mirror index, as the
     parallel kernels do: each particle's sums are added in the same order whichever worker
     takes it, so in the heap (many particles receive two or more partners' shares) the state
@@ -376,3 +376,51 @@ def test_direct_partner_shares_equal_the_gather_to_round_off():
             assert np.max(np.abs(serial[key] - states[other][key])) < 1e-12 * scale, (other, key)
         # drifted before the forces
         assert np.array_equal(serial["position"], states[other]["position"]), other
+
+
+def test_held_particles_shares_added_directly_equal_the_gather_to_round_off():
+    """With [mobility] holding part of a bed, the serial mode still adds every pair's partner
+    share to the partner directly (pair_stage.py ``scatter``): a frozen pair of two held particles adds
+    nothing (neither is integrated), a pair of a held and a moving particle adds the moving
+    one's share. 1200 spheres settled 0.5 s on a floor (f64), judged: a fifth of them held,
+    many moving ones touching held ones. From that state, three steps in the serial mode
+    (direct shares) and in the parallel kernels (the gather through the mirror index) give
+    the same velocities and spins to f64 round-off, and the held ones do not move in either."""
+    from conftest import SMALL_SCENE
+    from taichi_dem.run import checkpoint
+    base = SMALL_SCENE.format(precision="f64", rolling=0.0, count=1200).replace(
+        "end_time = 0.02", "end_time = 1.0")
+    text = base.replace("min = [-0.05, -0.05, -0.01]",
+                        "min = [-0.05, -0.05, -0.01]\nperiodic = [\"x\", \"y\"]")
+    text += ("\n[mobility]\nsolid_fraction_threshold = 0.2\ncell_size = 0.016\n"
+             "granular_temperature_threshold = 1e-5\n")
+    with td.Simulation.from_text(text) as sim:
+        sim.run(until=0.5)
+        sim.engine.rebuild(sim.engine.count)          # judged now
+        sim.step(1)
+        snap = checkpoint.capture(sim)
+    states, held = {}, {}
+    for name, parallel_from in (("serial", None), ("parallel", 0)):
+        with td.Simulation.from_text(text, parallel_from=parallel_from) as sim:
+            e = sim.engine
+            if name == "parallel":
+                e.workers = 0
+            checkpoint.restore(sim, snap)
+            before = sim.particles()
+            sim.step(3)
+            assert e.serial == (name == "serial")
+            states[name] = sim.particles()
+            active = e.model.effect("mobility").particle_active.to_numpy()[:e.count]
+            ids = (e.state.serial if e.state.process else e.state.particle_id).to_numpy()
+            held[name] = np.isin(states[name]["id"], ids[:e.count][active == 0])
+            assert np.array_equal(states[name]["position"][held[name]],
+                                  before["position"][held[name]]), name
+    assert np.array_equal(held["serial"], held["parallel"])
+    p, h = states["serial"], held["serial"]
+    assert 0.1 * len(h) < np.sum(h) < 0.5 * len(h), np.sum(h)        # measured: 259 of 1200
+    d = np.linalg.norm(p["position"][:, None, :] - p["position"][None, :, :], axis=2)
+    touching = d < (p["radius"][:, None] + p["radius"][None, :])
+    np.fill_diagonal(touching, False)
+    assert np.sum(np.any(touching[~h][:, h], axis=1)) > 20        # moving ones on held ones
+    for key, scale in (("velocity", 1.0), ("angular_velocity", 100.0)):
+        assert np.max(np.abs(p[key] - states["parallel"][key])) < 1e-12 * scale, key
