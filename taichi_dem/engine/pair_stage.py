@@ -159,7 +159,10 @@ class PairStage:
             for k in range(s.row_start[i], s.row_start[i] + s.row_owned[i]):
                 j = p.neighbour[k]
                 if ti.static(holds):
-                    if frozen_i and not particle_moves(j):
+                    frozen = False
+                    if frozen_i:             # (``and`` evaluates both sides: a read per pair)
+                        frozen = not particle_moves(j)
+                    if frozen:
                         # both held: the contact is frozen as it was at the rebuild (neither
                         # particle is integrated, so its force goes to neither side)
                         if ti.static(pair_heat):
@@ -206,7 +209,8 @@ class PairStage:
                     if c.normal_overlap > 0.0:
                         inner = False
                         if ti.static(core_internal):
-                            inner = inactive_i and not particle_moves(j)
+                            if inactive_i:
+                                inner = not particle_moves(j)
                         if not inner:
                             owned_force += out.force
                             owned_torque += out.torque_i
