@@ -104,19 +104,15 @@ class PairStage:
         make_geometry; ``pair_history`` the history's load/store at the entries;
         ``shields`` (i, j, d) -> whether a mesh plate lies between them, or None;
         ``before_pairs`` (i): run for every particle before any pair (or None)."""
-        s, model = e.state, e.model
-        real = model.real
-        minimum_image = e.minimum_image
+        s, model, real, minimum_image = e.state, e.model, e.model.real, e.minimum_image
         pair_law = make_contact_law(model.effect_list, "pair", real, e.context)
         # a pair is handed to the law while its gap is below the margin an effect asks for
         pair_margin = model.pair_margin
         pair_heat, heat = model.pair_heat, model.heat
-        has_mesh = shields is not None
-        holding = e.holding
+        has_mesh, holding = shields is not None, e.holding
         holds, particle_moves = holding.any, holding.moves
-        # held particles carried by a body's frame (engine/holding.py): what holds the frozen
-        # core there is a load on that body (booked in the gather); its inner contacts
-        # cancel in that sum and are left out of both sides
+        # held particles carried by a body's frame (engine/holding.py): what holds the frozen core
+        # is a load on that body (the gather); its inner contacts cancel there: left out of both
         core_internal = holding.carried
         split, has_before_pairs = model.split_positions, before_pairs is not None
         vec0 = ti.Vector([0.0, 0.0, 0.0])
