@@ -524,6 +524,24 @@ class Temperature(Effect):
         if compensated:
             self.particle_fields["temperature_residual"] = (False, "f64")
 
+    def source_values(self, scene, source, names, material, mass) -> dict:
+        """A fill's or factory's particles' temperature (K: the source's, or a fill's own
+        from a results file; NaN where none is given), their 1 / (m (c + X c_w)) (1/(J/K):
+        a wet particle's water counts) and, drying, their moisture X (kg/kg; else dry)."""
+        th, n, given = scene.thermal, len(mass), getattr(source, "temperatures", None)
+        own_t = source.temperature is None and given is not None
+        temperature = (np.asarray(given, float) if own_t else
+                       np.full(n, np.nan if source.temperature is None else source.temperature))
+        heat_capacity = np.array([scene.materials[m].heat_capacity or 0.0 for m in names])[material]
+        if not th.moisture:
+            return {"temperature": temperature,
+                    "inverse_thermal_mass": 1.0 / (mass * heat_capacity)}
+        own = getattr(source, "moistures", None)
+        x = (np.asarray(own, float) if source.moisture is None and own is not None
+             else np.full(n, source.moisture or 0.0))
+        return {"temperature": temperature, "moisture": x,
+                "inverse_thermal_mass": 1.0 / (mass * (heat_capacity + x * th.water_heat_capacity))}
+
     def sample(self, values: dict, n: int, measured: dict) -> None:
         """particles/mean_temperature: K, weighted by the particles' heat capacities."""
         values["particles/mean_temperature"] = measured["mean_temperature"]

@@ -191,6 +191,14 @@ class Effect:
         taichi_dem.DivergenceError to stop the run, or warn. Effects that have one override
         it; the run driver attaches only those (run/simulation.py)."""
 
+    def source_values(self, scene, source, names, material, mass) -> dict:
+        """{state field: (n,) array}: what this effect gives the n particles a source brings
+        in - an initial fill (``source`` its scene entry) or a factory's batch - by name
+        (the heat's temperature K, moisture kg/kg and 1 / thermal mass 1/(J/K)); ``names``
+        the sorted material names, ``material`` (n,) indices into them, ``mass`` (n,) kg.
+        Written by the same insertion as every other field (engine/insertion.py)."""
+        return {}
+
     def inserted_func(self, ctx):
         """What an inserted particle starts with from this effect: it is inserted clear of
         every contact, so its first half step's acceleration is the sum of the effects that

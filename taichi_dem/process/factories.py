@@ -95,7 +95,7 @@ class FactorySet:
         names = sim.tables.names
         self.material = [names.index(f.material) for f in self.factories]
         self.density = [scene.materials[f.material].density for f in self.factories]
-        self.heat_capacity = [scene.materials[f.material].heat_capacity for f in self.factories]
+        self.names = names
         self.npf = np.float64 if sim.precision == "f64" else np.float32
         self.gravity = np.asarray(scene.simulation.gravity, float)
         # the step the current run of steps ends at when factories are due there (else None):
@@ -388,14 +388,10 @@ class FactorySet:
                "radius": radii, "mass": masses,
                "material": np.full(n, self.material[k], np.int32),
                "origin": np.full(n, k, np.int32)}
-        if self.sim.engine.model.carries("temperature"):
-            out["temperature"] = np.full(n, f.temperature)
-            # a wet particle's thermal mass holds its water too: m (c + X c_w) (thermal/moisture)
-            x = (f.moisture or 0.0) if self.sim.engine.model.carries("moisture") else 0.0
-            c_w = self.scene.thermal.water_heat_capacity if self.sim.engine.model.carries("moisture") else 0.0
-            out["inverse_thermal_mass"] = 1.0 / (masses * (self.heat_capacity[k] + x * c_w))
-            if self.sim.engine.model.carries("moisture"):
-                out["moisture"] = np.full(n, x)
+        # what the enabled effects give them (Effect.source_values: the temperature, moisture
+        # and thermal mass with heat)
+        for effect in self.sim.engine.model.effect_list:
+            out.update(effect.source_values(self.scene, f, self.names, out["material"], masses))
         return out
 
     def _place(self, f, radii: np.ndarray, time: float, pos: np.ndarray, rad: np.ndarray):

@@ -316,22 +316,15 @@ class Simulation:
                   "radius": placed.radius, "mass": mass, "material": placed.material,
                   "key": np.arange(n), "serial": np.arange(n), "origin": np.full(n, -1),
                   "birth_time": np.zeros(n)}
-        if self.scene.thermal is not None:
-            heat_capacity = np.array([self.scene.materials[name].heat_capacity or 0.0
-                                      for name in self.tables.names])[placed.material]
-            arrays["temperature"] = placed.temperature
-            thermal_mass = mass * heat_capacity
-            if self.engine.model.carries("moisture"):
-                # X per particle from its fill (dry where the fill gives none); the water's heat
-                # capacity counts in the thermal mass m (c + X c_w)
-                x = np.concatenate([np.asarray(f.moistures, float)
-                                    if f.moisture is None and f.moistures is not None
-                                    else np.full(np.count_nonzero(placed.fill == i), f.moisture or 0.0)
-                                    for i, f in enumerate(self.scene.fills)]) \
-                    if len(self.scene.fills) else np.zeros(n)
-                arrays["moisture"] = x
-                thermal_mass = mass * (heat_capacity + x * self.scene.thermal.water_heat_capacity)
-            arrays["inverse_thermal_mass"] = 1.0 / thermal_mass
+        # what the enabled effects give each fill's particles (Effect.source_values: the
+        # temperature, moisture and thermal mass with heat)
+        for effect in self.engine.model.effect_list:
+            for i, fill in enumerate(self.scene.fills):
+                sel = placed.fill == i
+                given = effect.source_values(self.scene, fill, self.tables.names,
+                                             placed.material[sel], mass[sel])
+                for name, values in given.items():
+                    arrays.setdefault(name, np.zeros(len(mass)))[sel] = values
         self.engine.insert(arrays)
 
     def _mark_stale(self, why: str):

@@ -32,7 +32,8 @@ class PlacedParticles:
     """Placed initial particles, SI, in fill order.
 
     ``material`` indexes ``materials`` (the scene's material names, sorted); ``fill`` indexes
-    ``scene.fills``; ``temperature`` is NaN where the fill gives none.
+    ``scene.fills`` (what the effects give each fill's particles, their temperatures among
+    them, is theirs: Effect.source_values).
     """
     position: np.ndarray           # (n, 3) float64, m
     radius: np.ndarray             # (n,) float64, m
@@ -41,7 +42,6 @@ class PlacedParticles:
     fixed: np.ndarray              # (n,) bool
     material: np.ndarray           # (n,) int32, index into `materials`
     fill: np.ndarray               # (n,) int32, index into scene.fills
-    temperature: np.ndarray        # (n,) float64, K; NaN = none given
     materials: tuple[str, ...] = ()
 
     @property
@@ -729,10 +729,5 @@ def place_fills(scene: Scene, rng: np.random.Generator) -> PlacedParticles:
         fixed=per_fill(lambda i, f, n: np.full(n, f.fixed), 0, bool),
         material=per_fill(lambda i, f, n: np.full(n, mat_index[f.material]), 0, np.int32),
         fill=per_fill(lambda i, f, n: np.full(n, i), 0, np.int32),
-        # the fill's temperature, else (a fill from a results file) its particles' own
-        temperature=per_fill(lambda i, f, n: np.asarray(f.temperatures, float)
-                             if f.temperature is None and f.temperatures is not None
-                             else np.full(n, np.nan if f.temperature is None else f.temperature),
-                             0, np.float64),
         materials=materials,
     )
