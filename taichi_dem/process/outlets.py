@@ -51,7 +51,8 @@ class ProcessDevice:
             self.log_temperature = tree.add("log_temperature", ti.f64, cap) if self.thermal else None
             # m c of what leaves (J/K): the enthalpy it carries out, for the energy balance
             self.log_thermal_mass = tree.add("log_thermal_mass", ti.f64, cap) if self.thermal else None
-            self.log_moisture = tree.add("log_moisture", ti.f64, cap) if engine.model.carries("moisture") else None
+            self.log_moisture = (tree.add("log_moisture", ti.f64, cap)
+                                 if engine.model.carries("moisture") else None)
         self.planes = PlaneCrossings(scene, tree)
         if self.log_enabled:
             self._compile_drain(engine)

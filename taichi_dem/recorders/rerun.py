@@ -8,9 +8,10 @@ What is logged (CONTRACT.md, "Rerun"), all on the ``sim_time`` timeline (a durat
 
 - ``particles``: ``Points3D`` (positions, radii, colours). Coloured by the first field the
   effects name for it that the particles carry (scene/catalog.py colour_fields: the
-  temperature, with heat transfer), else by speed, through a fixed viridis ramp. The ramp's range only ever widens (so colours
-  stay comparable along the run); its ends are logged as the scalars ``colour_scale/min`` and
-  ``colour_scale/max`` and described in the text document ``colour_scale/legend``.
+  temperature, with heat transfer), else by speed, through a fixed viridis ramp. The ramp's
+  range only ever widens (so colours stay comparable along the run); its ends are logged as
+  the scalars ``colour_scale/min`` and ``colour_scale/max`` and described in the text
+  document ``colour_scale/legend``.
   ``every_nth`` and ``region`` decimate what is drawn (not what is simulated).
 - ``bodies/<name>``: a ``Mesh3D`` of the body at t = 0, logged once (static), moved by a
   ``Transform3D`` at each sample: rotation by the body's angle about its axis through its axis

@@ -16,7 +16,8 @@ inserted mass) take the same call.
                    are written by thermal/wall_heat_flows.py)
 
 The enabled effects add their own observers after these (``Effect.run_observers``): the heat
-transfer's energy balance (thermal/energy_balance.py).
+transfer's wall and body heat series (thermal/wall_heat_flows.py) and its energy balance
+(thermal/energy_balance.py).
 """
 from __future__ import annotations
 

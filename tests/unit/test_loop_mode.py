@@ -380,10 +380,10 @@ def test_direct_partner_shares_equal_the_gather_to_round_off():
 
 def test_held_particles_shares_added_directly_equal_the_gather_to_round_off():
     """With [mobility] holding part of a bed, the serial mode still adds every pair's partner
-    share to the partner directly (pair_stage.py ``scatter``): a frozen pair of two held particles adds
-    nothing (neither is integrated), a pair of a held and a moving particle adds the moving
-    one's share. 1200 spheres settled 0.5 s on a floor (f64), judged: a fifth of them held,
-    many moving ones touching held ones. From that state, three steps in the serial mode
+    share to the partner directly (pair_stage.py ``scatter``): a frozen pair of two held
+    particles adds no force (neither is integrated), a pair of a held and a moving particle
+    adds the moving one's share. 1200 spheres settled 0.5 s on a floor (f64), judged: a fifth
+    of them held, many moving ones touching held ones. From that state, three steps in the serial mode
     (direct shares) and in the parallel kernels (the gather through the mirror index) give
     the same velocities and spins to f64 round-off, and the held ones do not move in either."""
     from conftest import SMALL_SCENE

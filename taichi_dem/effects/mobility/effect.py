@@ -4,10 +4,10 @@ description, not from their code).
 
 At every neighbour rebuild, and at least every JUDGE_WITHIN_STEPS steps (a bed at rest asks for
 no rebuild; the lists are rebuilt for the judgement), the particles, already sorted by contact
-cell (broadphase.py), are judged per *mobility cell*: a block of contact cells about ``cell_size`` across (3 largest
-diameters by default; a contact cell of ~1.1 d holds about one particle, too few for a
-fluctuation or a solid fraction). For each mobility cell, over the particles whose centres lie in
-it:
+cell (broadphase.py), are judged per *mobility cell*: a block of contact cells about
+``cell_size`` across (3 largest diameters by default; a contact cell of ~1.1 d holds about
+one particle, too few for a fluctuation or a solid fraction). For each mobility cell, over
+the particles whose centres lie in it:
 
   mean velocity       u = sum v / n                                  m/s
   granular temperature T_g = sum |v - u|^2 / (3 n)                    (m/s)^2
