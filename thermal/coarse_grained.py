@@ -116,16 +116,25 @@ def reference_temperature(scene, material: str) -> float:
     are filled or fed at."""
     hot = [w.temperature for w in list(scene.walls) + list(scene.bodies)
            if w.temperature is not None]
-    fed = [getattr(f, "hottest_temperature", f.temperature)
-           for f in list(scene.fills) + list(scene.factories) if f.material == material]
+    fed = [_hottest(f) for f in list(scene.fills) + list(scene.factories)
+           if f.material == material]
     fed = [t for t in fed if t is not None]
     wall = sum(hot) / len(hot)
     return 0.5 * (wall + (max(fed) if fed else wall))
 
 
+def _hottest(source):
+    """A fill's or factory's temperature, K: the one it gives, else the hottest of the
+    particles a results file gives a fill (None when neither)."""
+    if source.temperature is not None:
+        return source.temperature
+    given = getattr(source, "frame_values", {}).get("temperature")
+    return float(np.max(given)) if given is not None and len(given) else None
+
+
 def represented(scene) -> dict:
     """{material name: coarse_grained.represented_bed(...) at its reference temperature}."""
-    th = scene.thermal
+    th = scene.settings.get("thermal")
     out = {}
     for name, mat in scene.materials.items():
         if mat.coarse_grained is not None:

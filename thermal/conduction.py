@@ -163,7 +163,7 @@ def conduction_tables(scene, names: list[str]):
     m = len(names)
     factor = np.zeros((m, m))
     correction = np.ones((m, m))
-    exponent = CONTACT_RADIUS_EXPONENTS[scene.thermal.contact_radius_correction]
+    exponent = CONTACT_RADIUS_EXPONENTS[scene.settings.get("thermal").contact_radius_correction]
     for a in range(m):
         for b in range(m):
             ma, mb = scene.materials[names[a]], scene.materials[names[b]]

@@ -528,17 +528,17 @@ class Temperature(Effect):
         """A fill's or factory's particles' temperature (K: the source's, or a fill's own
         from a results file; NaN where none is given), their 1 / (m (c + X c_w)) (1/(J/K):
         a wet particle's water counts) and, drying, their moisture X (kg/kg; else dry)."""
-        th, n, given = scene.thermal, len(mass), getattr(source, "temperatures", None)
-        own_t = source.temperature is None and given is not None
-        temperature = (np.asarray(given, float) if own_t else
+        th, n = scene.settings.get("thermal"), len(mass)
+        frame = getattr(source, "frame_values", {})     # (a fill's, from a results file)
+        own_t = source.temperature is None and frame.get("temperature") is not None
+        temperature = (np.asarray(frame["temperature"], float) if own_t else
                        np.full(n, np.nan if source.temperature is None else source.temperature))
         heat_capacity = np.array([scene.materials[m].heat_capacity or 0.0 for m in names])[material]
         if not th.moisture:
             return {"temperature": temperature,
                     "inverse_thermal_mass": 1.0 / (mass * heat_capacity)}
-        own = getattr(source, "moistures", None)
-        x = (np.asarray(own, float) if source.moisture is None and own is not None
-             else np.full(n, source.moisture or 0.0))
+        own_x = source.moisture is None and frame.get("moisture") is not None
+        x = np.asarray(frame["moisture"], float) if own_x else np.full(n, source.moisture or 0.0)
         return {"temperature": temperature, "moisture": x,
                 "inverse_thermal_mass": 1.0 / (mass * (heat_capacity + x * th.water_heat_capacity))}
 
@@ -700,7 +700,7 @@ class Temperature(Effect):
 
 def thermal_effects(scene) -> list:
     """The thermal effects ``scene`` calls for, in step order (none without [thermal])."""
-    th = scene.thermal
+    th = scene.settings.get("thermal")
     if th is None:
         return []
     compensated = scene.simulation.precision != "f64"
@@ -796,5 +796,5 @@ def thermal_effects(scene) -> list:
 
 def build(scene, settings) -> list:
     """The heat transfer's effects for a scene whose [thermal] reads as ``settings``
-    (scene.thermal), by its section's ``builds`` (effects/registry.py)."""
+    (scene.settings.get("thermal")), by its section's ``builds`` (effects/registry.py)."""
     return list(thermal_effects(scene))

@@ -29,7 +29,7 @@ class EnergyBalance:
     def sample(self, values: dict, now) -> None:
         sim = self.sim
         scene = sim.scene
-        scale = scene.thermal.time_scale
+        scale = scene.settings.get("thermal").time_scale
         inside = float(now.measured["thermal_energy"])
         if self.initial is None:
             self.initial = inside

@@ -467,7 +467,7 @@ def gas_gap_free_path(scene) -> float:
     scene's reference temperature: the [thermal.gas] temperature if there is one, else the
     mean of the walls', bodies', fills' and factories' temperatures."""
     from .correlations import modified_mean_free_path
-    th = scene.thermal
+    th = scene.settings.get("thermal")
     if th.gas_gap_free_path is not None:
         return float(th.gas_gap_free_path)
     if th.gas is not None:
@@ -507,7 +507,7 @@ def pair_solid_shares(scene, tables, free_path: float, porosity: float) -> np.nd
     midplane of one touching neighbour to the opposite one, the gas within the Voronoi cone,
     gaps to the midplane widened by l / 2 + delta), combined in series for a pair (the harmonic
     mean); 1 for materials that are not particles'."""
-    th = scene.thermal
+    th = scene.settings.get("thermal")
     face = gas_gap.VORONOI_FACE * (1.0 - porosity) ** (-1.0 / 3.0)   # r_ij / R
     reach_sin = face / math.sqrt(face * face + 1.0)        # r_sf / R of two touching spheres
     names = tables.names
@@ -529,7 +529,7 @@ def first_layer_ratios(scene, free_path: float) -> dict:
     (particle_transient.py) for each particle material, at the geometric mean of its smallest
     and largest radius (the ratio depends on the radius through Fo, which the kernel takes per
     particle, and weakly through l / R)."""
-    th = scene.thermal
+    th = scene.settings.get("thermal")
     reach = first_layer.wall_reach(th.gas_gap_lens)
     out = {}
     for name, radius in _material_radii(scene).items():

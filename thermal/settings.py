@@ -13,11 +13,12 @@ from dataclasses import dataclass
 from typing import Any, Optional
 
 from taichi_dem.errors import SceneError
-from taichi_dem.scene import air
+from taichi_dem import air
 from taichi_dem.scene.keys import (Key, Section, equals, given, none_of, register, type_name,
                                    unless)
 from taichi_dem.scene.sections.regions import REGION
 from taichi_dem.scene.keys import Series
+from .host_keys import HOST_KEYS, check_hosts, check_materials, host_rules
 
 DRAG_MODELS = ("di_felice", "schiller_naumann")
 GAS_MODELS = ("fixed", "axial_plug_flow")
@@ -79,6 +80,9 @@ FRAME_FIELDS = {
     "temperature": ("K", "(N,)", "temperature; with [thermal] only"),
     "moisture": ("1", "(N,)", "kg water per kg dry solid; with moisture only"),
 }
+# what a fill started from an earlier run's frame accepts of each (scene/sections/particles.py
+# read_frame): the values must be "positive" or "nonnegative" (besides finite)
+FRAME_FIELD_VALUES = {"temperature": "positive", "moisture": "nonnegative"}
 # what the viewers colour the particles by, first choice first, where the frames have it (the
 # rerun recording and the ParaView script; else the speed)
 COLOUR_FIELDS = ("temperature",)
@@ -218,6 +222,7 @@ THERMAL = register(Section("thermal", "Heat transfer: present = compiled and run
         "faster than the mechanics", effect="temperature"),
 ), owner=__name__, nested={"gas": GAS, "radiation_region": REGION},
    builds="taichi_dem.thermal.effects:build",
+   adds=HOST_KEYS, added_rules=host_rules, check_added=check_materials,
    reader=lambda table, parser: parse_thermal(table, parser, parser.sources, parser.walls,
                                               parser.bodies),
    schema_rules=lambda: [
@@ -336,8 +341,8 @@ def parse_thermal(value: Any, ctx, fills, walls, bodies) -> ThermalSettings:
     if kw.get("radiation"):
         kw.update(parse_radiation(t, ctx, key, kw.get("gas"), fills, walls, bodies))
     # the sources' moisture (fills and factories), or a fill's particles' from a results file
-    kw["moisture"] = any(f.moisture is not None or (getattr(f, "moistures", None) is not None
-                                                    and f.moistures.any()) for f in fills)
+    kw["moisture"] = any(f.moisture is not None or (getattr(f, "frame_values", {}).get(
+        "moisture") is not None and f.frame_values["moisture"].any()) for f in fills)
     kw.update(THERMAL.read(t, file, key, only=("evaporation_temperature", "latent_heat",
                                                "water_heat_capacity", "critical_moisture",
                                                "gas_gap")))
@@ -389,22 +394,7 @@ def parse_thermal(value: Any, ctx, fills, walls, bodies) -> ThermalSettings:
                                                      "walls and bodies needs wall_conduction on and "
                                                      "a wall or body with a temperature; enable one "
                                                      "or drop gas_gap")
-    for f in fills:
-        mat = ctx.materials[f.material]
-        for k in ("thermal_conductivity", "heat_capacity"):
-            if getattr(mat, k) is None:
-                raise SceneError(file, f"materials.{f.material}.{k}",
-                                 f"required when [thermal] is present (particles of '{f.material}')")
-        if f.temperature is None and getattr(f, "temperatures", None) is None:
-            raise SceneError(file, f"{f.key}.temperature", "required when [thermal] is present"
-                             + (" (the results file's frame has no temperatures)"
-                                if getattr(f, "frame", None) is not None else ""))
-    if settings.wall_conduction:
-        for w in list(walls) + list(bodies):
-            if w.temperature is not None and ctx.materials[w.material].thermal_conductivity is None:
-                raise SceneError(file, f"materials.{w.material}.thermal_conductivity",
-                                 f"required: '{w.name}' has a temperature and [thermal] "
-                                 f"wall_conduction is on")
+    check_hosts(settings, ctx, fills, walls, bodies)
     return settings
 
 

@@ -69,7 +69,7 @@ def _top_sections():
     from taichi_dem.scene import keys, schema
     schema._sections()          # imports every module that declares a section
     top = dict(schema._TOP)
-    top.update({p: p for p in keys.effect_sections() if p not in top})
+    top.update({p: p for p in keys.table_sections() if p not in top})
     return list(top.items()), keys.registered()
 
 

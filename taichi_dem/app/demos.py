@@ -379,7 +379,7 @@ class DryerDrum(Process):
         """The process summary, then the solids and the gas along the drum beside the steady
         1-D counter-current heat balance dryer designers use (analysis.py)."""
         super().summary(sim)
-        th = sim.scene.thermal
+        th = sim.scene.settings.get("thermal")
         gas = th.gas if th is not None else None
         if gas is None or not gas.plug_flow or not sim.scene.factories:
             return
@@ -432,7 +432,7 @@ class DryerDrum(Process):
         correlations the march uses for a whole dryer (app/dryer.py)."""
         from .dryer import friedman_marshall_residence, perry_volumetric_coefficient
         scene = sim.scene
-        gas = scene.thermal.gas
+        gas = scene.settings.get("thermal").gas
         drum = next((b for b in scene.bodies if b.name == "drum"), None)
         if drum is None or drum.motion.speed is None:
             return

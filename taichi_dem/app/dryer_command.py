@@ -7,6 +7,7 @@ import math
 import sys
 from pathlib import Path
 
+from ..scene import catalog  # noqa: F401 (the effects' dimensions: a temperature)
 from ..errors import SceneError
 from .dryer import Dryer, answer, sensitivity
 

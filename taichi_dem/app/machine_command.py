@@ -6,6 +6,7 @@ import json
 import math
 from pathlib import Path
 
+from ..scene import catalog  # noqa: F401 (the effects' dimensions: a temperature)
 from ..errors import SceneError
 from .machine import (MachineMap, choice_differences, choices_report, parse_holdup,
                       substituted, with_errors)

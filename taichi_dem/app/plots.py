@@ -47,6 +47,7 @@ from typing import Optional
 import numpy as np
 
 
+from ..scene import catalog  # noqa: F401 (the effects' dimensions: a temperature)
 from ..errors import ResultsFileError as PlotError      # missing, not HDF5, not taichi_dem's
 
 

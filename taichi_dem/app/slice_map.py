@@ -395,7 +395,7 @@ def machine_info(scene, geometry: SliceGeometry, fill_index: int = 0) -> dict:
             "shell": scene.bodies[geometry.shell].name,
             "angular_speeds": speeds, "wall_temperatures": walls,
             "heat_capacity": (getattr(material, "heat_capacity", None)
-                              if scene.thermal is not None else None),
+                              if scene.settings.get("thermal") is not None else None),
             # the gas the curtains fell through ([gas]: its speed along the axis, m/s, and
             # density, kg/m^3): a dryer marched on this map should blow as fast
             "gas": ({"axial_velocity": float(np.asarray(gas.velocity, float) @ geometry.axis_direction),
@@ -734,7 +734,7 @@ def cmd_map(args) -> int:
     if not 0 <= args.fill < len(scene.fills):
         raise SceneError(str(path), "particles", f"--fill {args.fill}: the scene has "
                          f"{len(scene.fills)} fill(s)")
-    scale = getattr(scene.thermal, "time_scale", 1.0) if scene.thermal is not None else 1.0
+    scale = getattr(scene.settings.get("thermal"), "time_scale", 1.0) if scene.settings.get("thermal") is not None else 1.0
     if scale != 1.0:
         print(f"note: {path}: thermal.time_scale = {scale:g}: the conductance per metre is "
               "lowered where heat outruns the mixing (-71 % at 10 on a cooler slice); map "

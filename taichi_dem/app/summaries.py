@@ -150,7 +150,7 @@ def process_summary(sim, window: float = 0.25) -> dict:
         booked = walls - gas - source
         out["heat_out_of_particles"] = loss
         out["heat_into_walls"] = walls
-        scale = sim.scene.thermal.time_scale
+        scale = sim.scene.settings.get("thermal").time_scale
         when = (f" in {scale * t[-1]:.4g} s of thermal time ({t[-1]:.4g} s simulated, "
                 f"time_scale {scale:g})") if scale != 1.0 else f" in {t[-1]:.4g} s"
         line = (f"summary: energy balance{when}: the particles lost {loss / 1e3:.4g} kJ; "
@@ -166,7 +166,7 @@ def process_summary(sim, window: float = 0.25) -> dict:
             error = (loss - booked) / max(abs(booked), abs(loss))
             out["energy_balance_error"] = error
             line += f" (difference {error:.2%}"
-            if sim.scene.thermal.gas is not None and not sim.scene.thermal.gas.plug_flow:
+            if sim.scene.settings.get("thermal").gas is not None and not sim.scene.settings.get("thermal").gas.plug_flow:
                 line += "; convection to the fixed gas is not booked"
             line += ")"
         print(line)

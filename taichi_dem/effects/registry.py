@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import importlib
 
-from ..scene.keys import effect_sections, registered
+from ..scene.keys import effect_sections
 from ..scene.model import Scene
 from .base import Effect
-from .gravity import Gravity
 from .hertz_mindlin import HertzMindlin
 from .rolling import RollingConstantTorque, RollingEPSD
 
@@ -16,8 +15,6 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
     """The effects this scene calls for, in step order."""
     effects: list[Effect] = [Effect("velocity Verlet for translation and rotation",
                                     "velocity_verlet", "integrate")]
-    if any(abs(g) > 0 for g in scene.simulation.gravity):
-        effects.append(Gravity("uniform gravity", scene.simulation.gravity))
     effects.append(HertzMindlin("Hertz-Mindlin no-slip, tangential history, Coulomb limit"))
     models = {i.rolling_model for i in scene.interactions.values() if i.rolling_friction > 0}
     if "constant_torque" in models:
@@ -32,13 +29,13 @@ def enabled_effects(scene: Scene) -> tuple[Effect, ...]:
         effects.append(Effect(f"{len(scene.bodies)} triangle-mesh bodies ({n_tri} triangles): "
                               "the contact law on each particle-triangle contact, loads on "
                               "each body", "mesh_contact", "detect"))
-    # the effects with a section of their own (scene/catalog.py), built by the function
-    # their section names (imported only for a scene that has the section)
-    for path, settings in scene.settings.items():
-        effects.extend(_built(effect_sections()[path].builds, scene, settings))
-    if scene.thermal is not None:
-        # the heat transfer's, by [thermal]'s declaration (thermal/settings.py)
-        effects.extend(_built(registered()["thermal"].builds, scene, scene.thermal))
+    # the effects that declare a section (scene/catalog.py), built by the function their
+    # section names, imported only for a scene that enables them (a table of their own, or
+    # what other sections imply: gravity by [simulation] gravity), in their order of
+    # registration
+    for path, section in effect_sections().items():
+        if path in scene.settings:
+            effects.extend(_built(section.builds, scene, scene.settings[path]))
     for f in scene.factories:
         effects.append(Effect(f"factory '{f.name}': {f.material} at "
                               + " then ".join(f"{r * 3.6:g} t/h from {t:g} s"

@@ -479,9 +479,9 @@ class Simulation:
         now = Now(time=self.time, interval=interval, measured=m,
                   pooled_interval=covered - interval)
         values = {"time": self.time, "sample_interval": covered}
-        if self.scene.thermal is not None and self.scene.thermal.time_scale != 1.0:
+        if self.scene.settings.get("thermal") is not None and self.scene.settings.get("thermal").time_scale != 1.0:
             # the time the heat has had: S x simulated time ([thermal] time_scale)
-            values["thermal_time"] = self.scene.thermal.time_scale * self.time
+            values["thermal_time"] = self.scene.settings.get("thermal").time_scale * self.time
         for sensor in self.sensors.values():
             sensor.sample(values, now)
         if pooling:
@@ -539,7 +539,7 @@ class Simulation:
     def _warn_biot(self):
         """A particle is one temperature (lumped) only while its Biot number h (r/3) / k_p is
         small; warn above 0.1 (at the gas velocity, particles at rest)."""
-        th = self.scene.thermal
+        th = self.scene.settings.get("thermal")
         if th is None or th.gas is None:
             return
         gas = th.gas

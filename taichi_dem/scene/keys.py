@@ -101,12 +101,22 @@ class Key:
     schema: Optional[dict] = None
     # the default in words where it depends on another key (shown instead of ``default``)
     default_words: str = ""
+    # a key an effect adds to another section (Section.adds), given in a scene without the
+    # effect's section: "refused" (an error naming the key; ``off_reason`` says why, else a
+    # generic reason), "ignored" (a note from ``check`` and ``run``: nothing reads it) or
+    # "kept" (a property the effect reads where it is on: a material's conductivity)
+    when_off: str = "refused"
+    off_reason: str = ""
+    # a structured key's reader where no section's code reads it (a key added to another
+    # section): ``parse(value, file, key) -> value`` (its errors name ``file`` and ``key``)
+    parse: Optional[Callable[[Any, str, str], Any]] = None
 
     def __post_init__(self):
         assert self.kind in KINDS, self.kind
         assert self.unit is None or self.unit in DIMENSIONS, self.unit
         assert self.kind not in ("quantity", "vector") or self.unit is not None, self.name
         assert self.kind != "choice" or self.choices, self.name
+        assert self.when_off in ("refused", "ignored", "kept"), self.when_off
 
     @property
     def required(self) -> bool:
@@ -145,6 +155,8 @@ class Key:
     def read(self, value: Any, file: str, key: str) -> Any:
         """The value of this key in SI (a tuple for vectors), or AUTO; a SceneError naming
         ``file`` and ``key`` when it is the wrong type, unit or out of range."""
+        if self.parse is not None:
+            return self.parse(value, file, key)
         if self.auto and isinstance(value, str) and value.strip().lower() == AUTO:
             return AUTO
         k = self.kind
@@ -245,15 +257,35 @@ class Section:
     # other sections when the scene lacks this one (the drag of a [thermal.gas] with
     # ``drag``); the loader calls it after [thermal]
     derive: Optional[Callable[[Any], Any]] = None
-    # with a reader: keys the effect adds to every [materials.NAME] (read by the materials
-    # section, kept in ``Material.effect_values``, listed by the schema under materials.*)
-    material_keys: tuple = ()
+    # with a reader: the effect sections whose settings its reader or ``derive`` reads (the
+    # loader's ``settings``, as read so far): the loader reads those first
+    after: tuple = ()
+    # with a reader: the keys the effect adds to other sections' tables, by the host's path
+    # ({"materials.*": (Key, ...), "walls[]": ..., "bodies[]", "particles[]", "factories[]"}):
+    # the host reads them with its own keys into its object's ``effect_values`` (their
+    # defaults where absent; scene/model.py ``AddedKeys``), the schema lists them under it.
+    # Given in a scene without this section, each does what its ``when_off`` says
+    adds: dict = field(default_factory=dict)
+    # with ``adds``: ``added_rules() -> {host path: [JSON Schema, ...]}``, the conditional
+    # keys among the added ones (one needs another), for the host's ``allOf``
+    added_rules: Optional[Callable[[], dict]] = None
+    # with ``adds``: ``check_added(parser)``, the checks among the added keys that hold
+    # whether or not the section is on (a real modulus no softer than the simulated one);
+    # the loader calls it after reading every section
+    check_added: Optional[Callable[[Any], None]] = None
     # with a reader: what the effect can do to a free particle, for the time step and the
     # divergence guard (setup/timestep.py expected_max_speed), both from (scene, settings):
     # ``acceleration_bound`` the largest acceleration it gives one, m/s^2 (a body force);
     # ``speed_bound`` the largest speed it can carry one to, m/s (a gas's drag)
     acceleration_bound: Optional[Callable[[Any, Any], float]] = None
     speed_bound: Optional[Callable[[Any, Any], float]] = None
+    # ``work_bound(scene, settings, span)``: the work per unit mass (J/kg) its field can do on
+    # a particle crossing the domain (``span``: its extent per axis, m), where the field has a
+    # direction (gravity along its own); ``resting_acceleration(scene, settings)``: the steady
+    # acceleration (m/s^2) a particle at rest bears from it (its weight, for the overlap a
+    # particle's own weight presses into its partner)
+    work_bound: Optional[Callable[[Any, Any, Any], float]] = None
+    resting_acceleration: Optional[Callable[[Any, Any], float]] = None
     # with a reader: ``step_problem(settings, dt) -> (key, reason) or None``, why the effect
     # cannot be stepped at ``dt`` s (the scene is refused naming [path].key)
     step_problem: Optional[Callable[[Any, float], Any]] = None
@@ -362,29 +394,75 @@ def register(section: Section) -> Section:
 
 
 def registered() -> dict[str, Section]:
-    """Every declared section by path; [materials.NAME] with the keys effects add to it."""
-    out = dict(_REGISTRY)
-    if "materials.*" in out:
-        out["materials.*"] = material_section(out["materials.*"])
+    """Every declared section by path, each host with the keys effects add to it."""
+    return {path: host_section(section) for path, section in _REGISTRY.items()}
+
+
+def added_keys(host: str) -> tuple[tuple[str, Key], ...]:
+    """(the adding section's path, key) for each key the effect sections add to the section
+    at ``host`` ("materials.*", "walls[]", ...: Section.adds), by their order of
+    registration, whether the scene enables them or not."""
+    return tuple((s.path, k) for s in _REGISTRY.values() for k in s.adds.get(host, ()))
+
+
+def host_section(section: Section) -> Section:
+    """``section`` with the keys effects add to it (its own keys first)."""
+    extra = tuple(k for _, k in added_keys(section.path))
+    if not extra:
+        return section
+    nested = dict(section.nested)
+    for k in extra:
+        assert k.name not in section, f"{section.path}.{k.name}: an effect adds a built-in key"
+        # (required only where its effect is on: the host cannot know that by itself)
+        assert not k.required, f"{section.path}.{k.name}: an added key needs a default"
+        inner = _REGISTRY.get(f"{section.path}.{k.name}")
+        if inner is not None:           # a table the adding effect declares the keys of
+            nested[k.name] = inner
+    return replace(section, keys=section.keys + extra, nested=nested)
+
+
+def added_values(host: str, table: dict, file: str, key: str) -> dict:
+    """{name: SI value, or its default} of every key the effects add to the host section at
+    ``host``, read from its ``table`` (at ``key``, for errors); a structured key (a table)
+    is kept as given, for its effect to read."""
+    out = {}
+    for _, k in added_keys(host):
+        if k.name in table:
+            out[k.name] = k.read(table[k.name], file, join(key, k.name))
+        else:
+            out[k.name] = k.default
     return out
 
 
-def material_keys() -> tuple[Key, ...]:
-    """The keys enabled-or-not effects add to every [materials.NAME] (Section.material_keys),
-    by the effect sections' order of registration."""
-    return tuple(k for s in _REGISTRY.values() for k in s.material_keys)
+def added_in(doc: dict, section) -> list:
+    """(the table's dotted key, Key) for each key ``section`` adds to another section that
+    the scene ``doc`` gives, in the document's order."""
+    out = []
+    for host, keys in section.adds.items():
+        for where, table in _host_tables(doc, host):
+            out.extend((where, k) for k in keys if k.name in table)
+    return out
 
 
-def material_section(section: Section) -> Section:
-    """``section`` ([materials.NAME]'s own keys) with the keys effects add to it."""
-    extra = material_keys()
-    for k in extra:
-        assert k.name not in section, f"{k.name}: an effect's material key is a built-in one"
-        # (required only where its effect is on: the loader cannot know that per material)
-        assert not k.required, f"{k.name}: an effect's material key needs a default"
-    return replace(section, keys=section.keys + extra) if extra else section
+def _host_tables(doc: dict, host: str) -> list:
+    """(dotted key, table) of each table of the host section ``host`` in ``doc``
+    ("materials.*": each [materials.NAME]; "walls[]": each [[walls]])."""
+    name = host.split(".")[0].split("[")[0]
+    value = doc.get(name, {} if host.endswith(".*") else [])
+    if host.endswith(".*") and isinstance(value, dict):
+        return [(f"{name}.{k}", t) for k, t in value.items() if isinstance(t, dict)]
+    if host.endswith("[]") and isinstance(value, list):
+        return [(f"{name}[{i}]", t) for i, t in enumerate(value) if isinstance(t, dict)]
+    return []
 
 
 def effect_sections() -> dict[str, Section]:
-    """The registered top-level sections that an effect reads itself (``reader``)."""
-    return {p: s for p, s in _REGISTRY.items() if s.reader is not None}
+    """The registered sections that declare an effect (``builds``), each of which the scene
+    enables by a table of its own (``reader``) or by what other sections imply (``derive``:
+    gravity by [simulation] gravity)."""
+    return {p: s for p, s in _REGISTRY.items() if s.builds}
+
+
+def table_sections() -> dict[str, Section]:
+    """The effect sections that are a scene table of their own (``reader``: [mobility])."""
+    return {p: s for p, s in effect_sections().items() if s.reader is not None}

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from . import catalog as _catalog  # noqa: F401 (registers the effects' sections)
 from ..errors import SceneError
-from .keys import effect_sections, registered, suggest as _suggest
+from .keys import added_in, effect_sections, suggest as _suggest, table_sections
 from .model import Scene
 from .sections.common import Reader, decode_utf8 as _decode_utf8, refuse_control_characters
 from .sections.materials import MaterialSections
@@ -31,12 +31,11 @@ from .sections.process import ProcessSections
 from .sections.simulation import SimulationSections
 from .sections.surfaces import SurfaceSections
 
-# the sections this module reads itself; every effect section with a reader of its own
+# the sections this module reads itself; every effect section that is a table of its own
 # (scene/catalog.py) is accepted too
 BUILT_IN_SECTIONS = ("simulation", "domain", "materials", "interactions", "particles", "walls",
-                     "bodies", "factories", "outlets", "sensors", "thermal",
-                     "output")
-SECTIONS = BUILT_IN_SECTIONS + tuple(p for p in effect_sections() if p not in BUILT_IN_SECTIONS)
+                     "bodies", "factories", "outlets", "sensors", "output")
+SECTIONS = BUILT_IN_SECTIONS + tuple(p for p in table_sections() if p not in BUILT_IN_SECTIONS)
 PLANNED_SECTIONS: tuple[str, ...] = ()
 
 
@@ -144,42 +143,56 @@ class _Parser(Reader, SimulationSections, MaterialSections, SurfaceSections, Par
         self.check_particle_total(simulation, fills, factories)
         sources = tuple(fills) + factories
         self.check_coverage(interactions, sources, walls, bodies)
-        # [thermal] first: the other effects' sections may read it (the drag of its gas);
-        # its reader is declared with its keys (thermal/settings.py)
         self.simulation, self.sources, self.walls, self.bodies = simulation, sources, walls, bodies
-        thermal = (registered()["thermal"].reader(doc["thermal"], self)
-                   if "thermal" in doc else None)
-        self.check_coarse_grained(thermal, sources, walls, bodies)
-        self.check_consistency(doc, simulation, output, sources, walls, bodies, thermal)
-        if thermal is None:
-            for f in sources:
-                if f.moisture is not None:
-                    raise self.err(f"{f.key}.moisture", "drying needs heat transfer: add a "
-                                                        "[thermal] section (and a gas to dry in)")
-        # every other effect's section, read by its own settings module (scene/keys.py)
-        self.thermal = thermal
-        settings = {}
-        for path, section in effect_sections().items():
-            if path in BUILT_IN_SECTIONS:
-                continue
-            if path in doc:
+        self.doc = doc
+        self.check_consistency(doc, simulation, output, sources, walls, bodies)
+        # every effect's section, read by its own settings module (scene/keys.py), each after
+        # the sections whose settings it reads (Section.after)
+        self.settings = {}
+        sections = effect_sections()
+        for path in _reading_order(sections):
+            section = sections[path]
+            if path in doc and section.reader is not None:
                 read = section.reader(doc[path], self)
                 if read is not None:            # (None: the section says it is off)
-                    settings[path] = read
+                    self.settings[path] = read
             elif section.derive is not None:
                 implied = section.derive(self)      # (from other sections: [thermal.gas])
                 if implied is not None:
-                    settings[path] = implied
-            for key in section.material_keys:
-                # a material key of an effect the scene does not enable would do nothing
-                given = [n for n, m in doc.get("materials", {}).items()
-                         if isinstance(m, dict) and key.name in m]
-                if given and path not in settings:
-                    raise self.err(f"materials.{given[0]}.{key.name}",
-                                   f"acts only with [{path}], which the scene does not have: "
-                                   f"add the section or drop the key")
+                    self.settings[path] = implied
+        for path, section in sections.items():
+            if section.check_added is not None:
+                section.check_added(self)
+            if path not in self.settings:
+                self.refuse_added_keys(doc, path, section)
         return Scene(source=self.source, text=text, simulation=simulation, domain=self.domain,
                      materials=self.materials, interactions=interactions, fills=fills,
-                     walls=walls, bodies=bodies, output=output, thermal=thermal,
+                     walls=walls, bodies=bodies, output=output,
                      factories=factories, outlets=outlets, sensors=sensors,
-                     settings=settings)
+                     settings=self.settings)
+
+    def refuse_added_keys(self, doc: dict, path: str, section) -> None:
+        """A key the effect of ``section`` (at ``path``, not enabled by the scene) adds to
+        another section, given there: refused where the key says so (``Key.when_off``)."""
+        for host, key in added_in(doc, section):
+            if key.when_off == "refused":
+                raise self.err(f"{host}.{key.name}", key.off_reason or
+                               f"acts only with [{path}], which the scene does not have: add "
+                               f"the section or drop the key")
+
+
+def _reading_order(sections: dict) -> list:
+    """The effect sections' paths, each after those it reads (``Section.after``), else in
+    their order of registration."""
+    out: list = []
+
+    def visit(path, seen=()):
+        if path in out or path not in sections:
+            return
+        assert path not in seen, f"[{path}]: its sections read each other"
+        for first in sections[path].after:
+            visit(first, seen + (path,))
+        out.append(path)
+    for path in sections:
+        visit(path)
+    return out

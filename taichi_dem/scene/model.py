@@ -15,18 +15,35 @@ import numpy as np
 Vec3 = tuple[float, float, float]
 
 
+class AddedKeys:
+    """A scene object whose section effects add keys to (scene/keys.py ``Section.adds``: a
+    material's conductivity, a wall's temperature). Their values, SI or the key's default,
+    are kept in ``effect_values`` and read as attributes (``wall.temperature``), so the
+    scene's own code names none of them and a misspelt one is still an AttributeError."""
+
+    def __getattr__(self, name: str):
+        # (only called when the normal lookup fails; __dict__ read directly: no recursion
+        # while a copy or an unpickled object is half made)
+        values = self.__dict__.get("effect_values")
+        if values is not None and name in values:
+            return values[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+
 @dataclass(frozen=True)
-class SimulationSettings:
+class SimulationSettings(AddedKeys):
     end_time: float = 1.0                # s
     dt: Optional[float] = None           # s; None = automatic (rayleigh_fraction x Rayleigh time)
     rayleigh_fraction: float = 0.2
-    gravity: Vec3 = (0.0, 0.0, -9.81)    # m/s^2
     precision: str = "f32"               # "f32" | "f64"
     seed: int = 1
     skin: Optional[float] = None         # m, Verlet skin; None = 0.1 x mean diameter (LAMMPS-like)
     # particle slots with factories; None = the initial particles plus what the factories'
     # schedules insert until end_time (10 % margin), at most what the domain can hold
     max_particles: Optional[int] = None
+    # the keys effects add (scene/keys.py Section.adds: the gravity, m/s^2): {name: SI value,
+    # or the key's default}
+    effect_values: dict = field(default_factory=dict, compare=False)
 
 
 @dataclass(frozen=True)
@@ -34,16 +51,6 @@ class Domain:
     min: Vec3
     max: Vec3
     periodic: tuple[str, ...] = ()       # subset of ("x", "y", "z")
-
-
-@dataclass(frozen=True)
-class CoarseGraining:
-    """[materials.NAME] coarse_grained: the particles stand for a bed of finer ones, and take
-    heat from walls and bodies as that bed would (thermal/coarse_grained.py)."""
-    represented_diameter: float          # m, the real particles' diameter
-    bed_porosity: float = 0.4            # of the real bed: its bulk density and conductivity
-    surface_coverage: float = 0.8        # Schlünder's phi_A, the wall's coverage by the first layer
-    roughness: float = 0.0               # m, Schlünder's delta, added to the mean free path
 
 
 @dataclass(frozen=True)
@@ -89,22 +96,14 @@ class Calibration:
 
 
 @dataclass(frozen=True)
-class Material:
+class Material(AddedKeys):
     name: str
     density: float                       # kg/m^3
     youngs_modulus: float                # Pa (possibly softened)
     poisson_ratio: float
-    thermal_conductivity: Optional[float] = None   # W/(m K)
-    heat_capacity: Optional[float] = None          # J/(kg K)
-    emissivity: Optional[float] = None
-    real_youngs_modulus: Optional[float] = None    # Pa, unsoftened (conduction correction)
-    coarse_grained: Optional[CoarseGraining] = None  # heat to walls as the represented bed
-    surface_roughness: float = 0.0                 # m, Schlünder's delta (the gas gap's widening)
-    surface_slope: Optional[float] = None          # RMS asperity slope (rough contact spots)
-    microhardness: Optional[float] = None          # Pa (rough contact spots)
     calibration: Optional[Calibration] = None      # what it was calibrated against
-    # the keys effects add to a material (scene/keys.py Section.material_keys): {name: SI
-    # value, or the key's default}
+    # the keys effects add to a material (scene/keys.py Section.adds: the heat transfer's
+    # conductivity and heat capacity, ...): {name: SI value, or the key's default}
     effect_values: dict = field(default_factory=dict, compare=False)
 
     @property
@@ -154,7 +153,7 @@ class Region:
 
 
 @dataclass(frozen=True, eq=False)
-class ParticleFill:
+class ParticleFill(AddedKeys):
     """An initial fill: ``count`` spheres placed without overlap in ``region``, or the explicit
     particles of a CSV ``file`` (arrays already read, SI)."""
     key: str                             # e.g. "particles[0]", for error messages
@@ -164,8 +163,6 @@ class ParticleFill:
     region: Optional[Region] = None
     velocity: Vec3 = (0.0, 0.0, 0.0)
     angular_velocity: Vec3 = (0.0, 0.0, 0.0)
-    temperature: Optional[float] = None
-    moisture: Optional[float] = None     # kg water per kg dry solid; None = dry (no drying)
     fixed: bool = False
     file: Optional[str] = None
     positions: Optional[np.ndarray] = None          # (n,3) from file
@@ -173,17 +170,12 @@ class ParticleFill:
     velocities: Optional[np.ndarray] = None         # (n,3) or None
     angular_velocities: Optional[np.ndarray] = None # (n,3) or None
     frame: Optional[int] = None                     # the results file's frame a fill starts from
-    temperatures: Optional[np.ndarray] = None       # (n,) K, from a results file's frame
-    moistures: Optional[np.ndarray] = None          # (n,) kg/kg, from a results file's frame
-
-    @property
-    def hottest_temperature(self) -> Optional[float]:
-        """The fill's temperature, K: the one it gives, else the hottest of the particles a
-        results file gives it (None when neither)."""
-        if self.temperature is not None:
-            return self.temperature
-        return float(np.max(self.temperatures)) if self.temperatures is not None \
-            and len(self.temperatures) else None
+    # the per-particle fields effects add to a results file's frame, as the fill's frame
+    # gives them (catalog.frame_fields: {name: (n,) array})
+    frame_values: dict = field(default_factory=dict, compare=False)
+    # the keys effects add (scene/keys.py Section.adds: a temperature, ...): {name: SI value,
+    # or the key's default}
+    effect_values: dict = field(default_factory=dict, compare=False)
 
     @property
     def largest_radius(self) -> float:
@@ -203,13 +195,15 @@ class ParticleFill:
 
 
 @dataclass(frozen=True)
-class PlaneWall:
+class PlaneWall(AddedKeys):
     """An analytic infinite plane; particles live on the side ``normal`` points to."""
     name: str
     point: Vec3
     normal: Vec3                         # unit
     material: str
-    temperature: Optional[float] = None  # K; None = adiabatic
+    # the keys effects add (scene/keys.py Section.adds: a temperature, ...): {name: SI value,
+    # or the key's default}
+    effect_values: dict = field(default_factory=dict, compare=False)
 
 
 @dataclass(frozen=True)
@@ -336,7 +330,7 @@ class SheetInlet:
 
 
 @dataclass(frozen=True, eq=False)
-class Factory:
+class Factory(AddedKeys):
     """Continuous insertion at a scheduled mass rate into ``region`` without overlap
     (``pattern = "random"``), or as lattice layers through the face ``sheet`` (``"sheet"``).
 
@@ -350,11 +344,12 @@ class Factory:
     radius: Optional[RadiusDistribution] = None
     sizes: Optional[tuple[tuple[float, float], ...]] = None
     velocity: Vec3 = (0.0, 0.0, 0.0)     # m/s
-    temperature: Optional[float] = None  # K
-    moisture: Optional[float] = None     # kg water per kg dry solid; None = dry
     interval: Optional[float] = None     # s between insertions; None = automatic
     pattern: str = "random"              # "random" (in region) | "sheet" (layers through a face)
     sheet: Optional[SheetInlet] = None   # the face, for pattern "sheet"
+    # the keys effects add (scene/keys.py Section.adds: a temperature, ...): {name: SI value,
+    # or the key's default}
+    effect_values: dict = field(default_factory=dict, compare=False)
 
     @property
     def largest_radius(self) -> float:
@@ -414,14 +409,13 @@ class Scene:
     walls: tuple[PlaneWall, ...] = ()
     bodies: tuple["Body", ...] = ()
     output: Output = field(default_factory=Output)
-    # [thermal] as thermal/settings.py reads it (its ThermalSettings), or None
-    thermal: Optional["ThermalSettings"] = None  # noqa: F821
     factories: tuple[Factory, ...] = ()
     outlets: tuple[Outlet, ...] = ()
     sensors: tuple[Sensor, ...] = ()
-    # the settings of every other effect section the scene has (or another section implies),
-    # by section name: what an effect's settings module returns for it (scene/keys.py
-    # ``Section.reader``, ``Section.derive``): settings["gas"] is the drag's (DragSettings)
+    # the settings of every effect section the scene has (or another section implies), by
+    # section name: what an effect's settings module returns for it (scene/keys.py
+    # ``Section.reader``, ``Section.derive``): settings["gas"] is the drag's (DragSettings);
+    # a section the scene does not enable is absent
     settings: dict = field(default_factory=dict)
 
     def interaction(self, a: str, b: str) -> Interaction:
@@ -458,7 +452,7 @@ class Motion:
 
 
 @dataclass(frozen=True, eq=False)
-class Body:
+class Body(AddedKeys):
     """A rigid triangle-mesh body (one or several meshes), its material and motion."""
     key: str                             # "bodies[0]"
     name: str
@@ -466,4 +460,6 @@ class Body:
     vertices: np.ndarray                 # (V, 3) m, all meshes merged, at t = 0
     faces: np.ndarray                    # (F, 3) int
     motion: Motion = field(default_factory=Motion)
-    temperature: Optional[float] = None  # K; None = adiabatic
+    # the keys effects add (scene/keys.py Section.adds: a temperature, ...): {name: SI value,
+    # or the key's default}
+    effect_values: dict = field(default_factory=dict, compare=False)

@@ -50,9 +50,9 @@ from taichi_dem.geometry import registry as _builders
 from taichi_dem.geometry.builders import (BUILDERS, COMMON, KINDS as BUILDER_KINDS,
                                          PARAMETER_RANGES, REQUIRED as BUILDER_REQUIRED)
 
-from .keys import (REQUIRED, Key, Section, effect_sections, equals, given, none_of, registered,
+from .keys import (REQUIRED, Key, Section, table_sections, equals, given, none_of, registered,
                    unless)
-from .units import DIMENSIONS, MAX_MAGNITUDE, MIN_MAGNITUDE, quantity_pattern, units_for
+from .units import ABSOLUTE, DIMENSIONS, MAX_MAGNITUDE, MIN_MAGNITUDE, quantity_pattern, units_for
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
 
@@ -124,8 +124,8 @@ def quantity(dimension: str, minimum=None, maximum=None, exclusive_minimum=False
              exclusive_maximum=False) -> dict:
     """A quantity of ``dimension``: a number in SI within the range (and the SI magnitudes
     the loader accepts) or a string with a unit of that dimension (``pattern``)."""
-    if dimension == "temperature" and minimum is None:
-        minimum = 0.0                   # parse_quantity refuses temperatures below 0 K
+    if dimension in ABSOLUTE and minimum is None:
+        minimum = 0.0                   # parse_quantity refuses values below absolute zero
     sign = _sign(minimum, exclusive_minimum)
     out: dict[str, Any] = {"type": ["number", "string"],
                            "pattern": quantity_pattern(dimension, sign)}
@@ -446,7 +446,7 @@ def builder_schema() -> dict:
 _TOP = {"simulation": "simulation", "domain": "domain", "output": "output",
         "materials": "materials.*", "interactions": "interactions[]", "particles": "particles[]",
         "walls": "walls[]", "bodies": "bodies[]", "factories": "factories[]",
-        "outlets": "outlets[]", "sensors": "sensors[]", "thermal": "thermal"}
+        "outlets": "outlets[]", "sensors": "sensors[]"}
 
 
 def scene_schema() -> dict:
@@ -454,7 +454,7 @@ def scene_schema() -> dict:
     sections = _sections()
     props: dict[str, Any] = {}
     top = dict(_TOP)
-    top.update({p: p for p in effect_sections() if p not in top})
+    top.update({p: p for p in table_sections() if p not in top})
     for name, path in top.items():
         s = section_schema(sections[path], sections)
         if path.endswith("[]"):

@@ -20,7 +20,6 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "time": ("s", "a time"),
     "speed": ("m/s", "a speed"),
     "angular_speed": ("rad/s", "an angular speed"),
-    "temperature": ("K", "a temperature"),
     "mass": ("kg", "a mass"),
     "mass_rate": ("kg/s", "a mass flow rate"),
     "density": ("kg/m^3", "a density"),
@@ -32,8 +31,6 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "power": ("W", "a power"),
     "energy": ("J", "an energy"),
     "viscosity": ("Pa s", "a dynamic viscosity"),
-    "thermal_conductivity": ("W/(m K)", "a thermal conductivity"),
-    "specific_heat": ("J/(kg K)", "a specific heat capacity"),
     "area": ("m^2", "an area"),
     "specific_energy": ("J/kg", "a specific energy (e.g. a latent heat)"),
 }
@@ -68,10 +65,6 @@ _add("speed", {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3, "m/min": 1.0 / 60.0,
 _add("angular_speed", {"rad/s": 1.0, "rpm": _RPM, "rev/min": _RPM, "1/min": _RPM,
                        "rev/s": 2.0 * math.pi, "rps": 2.0 * math.pi, "deg/s": _DEG,
                        "°/s": _DEG, "1/s": 1.0, "s-1": 1.0})
-_add("temperature", {"K": 1.0})
-_add("temperature", {"C": 1.0, "degC": 1.0, "°C": 1.0, "celsius": 1.0}, 273.15)
-_add("temperature", {"F": 5.0 / 9.0, "degF": 5.0 / 9.0, "°F": 5.0 / 9.0},
-     273.15 - 32.0 * 5.0 / 9.0)
 _add("mass", {"kg": 1.0, "g": 1e-3, "mg": 1e-6, "t": 1e3})
 _add("mass_rate", {"kg/s": 1.0, "kg/min": 1.0 / 60.0, "kg/h": 1.0 / 3600.0,
                    "g/s": 1e-3, "t/s": 1e3, "t/min": 1e3 / 60.0, "t/h": 1e3 / 3600.0,
@@ -87,15 +80,44 @@ _add("torque", {"Nm": 1.0, "N*m": 1.0, "kNm": 1e3, "kN*m": 1e3, "mNm": 1e-3, "mN
 _add("power", {"W": 1.0, "kW": 1e3, "MW": 1e6, "mW": 1e-3})
 _add("energy", {"J": 1.0, "kJ": 1e3, "MJ": 1e6, "Wh": 3600.0, "kWh": 3.6e6})
 _add("viscosity", {"Pas": 1.0, "Pa*s": 1.0, "mPas": 1e-3, "mPa*s": 1e-3, "cP": 1e-3})
-_add("thermal_conductivity", {"W/(mK)": 1.0, "W/(m*K)": 1.0, "W/m/K": 1.0, "W/mK": 1.0})
-_add("specific_heat", {"J/(kgK)": 1.0, "J/(kg*K)": 1.0, "J/kg/K": 1.0, "J/kgK": 1.0,
-                       "kJ/(kgK)": 1e3, "kJ/(kg*K)": 1e3, "kJ/kg/K": 1e3})
 _add("area", {"m2": 1.0, "cm2": 1e-4, "mm2": 1e-6})
 _add("specific_energy", {"J/kg": 1.0, "kJ/kg": 1e3, "MJ/kg": 1e6})
 
 _LOWER: dict[str, list[str]] = {}
 for _u in _UNITS:
     _LOWER.setdefault(_u.lower(), []).append(_u)
+
+# the dimensions whose SI values are never negative (an absolute temperature): a value below
+# 0 is refused, and a bare number or a unit without offset takes no minus
+ABSOLUTE: set[str] = set()
+
+
+def add_dimension(dimension: str, si: str, phrase: str, spellings: tuple, *,
+                  absolute: bool = False) -> None:
+    """A dimension an effect brings (the heat transfer's temperature): its SI unit, the phrase
+    of messages, its ``spellings`` ((``{unit: factor}``, offset), ...: SI value = number x
+    factor + offset) and whether its SI values are never negative. Declared once, before
+    the keys that use it; a second declaration of the same is a no-op."""
+    if dimension in DIMENSIONS:
+        assert DIMENSIONS[dimension] == (si, phrase), dimension
+        return
+    DIMENSIONS[dimension] = (si, phrase)
+    for table, offset in spellings:
+        _add(dimension, table, offset)
+        for unit in table:
+            _LOWER.setdefault(unit.lower(), []).append(unit)
+    if absolute:
+        ABSOLUTE.add(dimension)
+
+
+def _known(dimension: str) -> None:
+    """ValueError unless ``dimension`` is declared, here or by an effect: an effect's
+    dimensions are declared when its settings are imported (scene/catalog.py imports them
+    all; the loader imports the catalog, and so does a command that reads a quantity of an
+    effect's dimension before any scene)."""
+    if dimension not in DIMENSIONS:
+        raise ValueError(f"unknown dimension {dimension!r}; known: {', '.join(DIMENSIONS)} "
+                         "(an effect's are declared by its settings: scene/catalog.py)")
 
 _NUMBER = re.compile(r"^\s*([+-]?(?:\d+(?:_\d+)*\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")
 
@@ -147,10 +169,9 @@ def parse_quantity(value: Any, dimension: str, *, file: str = "<string>", key: s
 
     Raises :class:`SceneError` for a wrong type, an unparseable string, an unknown unit, a unit
     of another dimension, a non-finite number, a nonzero magnitude outside MIN_MAGNITUDE to
-    MAX_MAGNITUDE or a temperature below absolute zero.
+    MAX_MAGNITUDE or an ABSOLUTE dimension's value below zero (below absolute zero).
     """
-    if dimension not in DIMENSIONS:
-        raise ValueError(f"unknown dimension {dimension!r}; known: {', '.join(DIMENSIONS)}")
+    _known(dimension)
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise SceneError(file, key, f"expected {_expected(dimension)}, got {_type_name(value)}")
     if isinstance(value, str):
@@ -184,8 +205,9 @@ def parse_quantity(value: Any, dimension: str, *, file: str = "<string>", key: s
         raise SceneError(file, key, f"{value!r} is absurd for {_phrase(dimension)}: {size} "
                                     f"in SI, outside {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g} "
                                     "(wrong units?)")
-    if dimension == "temperature" and result < 0.0:
-        raise SceneError(file, key, f"{value!r} is below absolute zero ({result:g} K)")
+    if dimension in ABSOLUTE and result < 0.0:
+        raise SceneError(file, key, f"{value!r} is below absolute zero ({result:g} "
+                                    f"{DIMENSIONS[dimension][0]})")
     return result
 
 
@@ -249,12 +271,11 @@ def _unit_regex(unit: str) -> str:
 def quantity_pattern(dimension: str, sign: str = "any") -> str:
     """A regex (anchored) accepting exactly the quantity strings parse_quantity reads for
     ``dimension`` with the given sign (SIGNS) of the number; units with an offset (C, F)
-    take any sign, since their SI value's sign is not the number's (a temperature in K is
-    never negative)."""
-    if dimension not in DIMENSIONS:
-        raise ValueError(f"unknown dimension {dimension!r}; known: {', '.join(DIMENSIONS)}")
-    if dimension == "temperature" and sign == "any":
-        sign = "nonnegative"        # in K (or a bare number) a minus is below absolute zero
+    take any sign, since their SI value's sign is not the number's (an ABSOLUTE dimension's
+    SI value is never negative)."""
+    _known(dimension)
+    if dimension in ABSOLUTE and sign == "any":
+        sign = "nonnegative"        # in SI (or a bare number) a minus is below absolute zero
     groups: dict[str, list[str]] = {}
     for unit, (d, _, offset) in _UNITS.items():
         if d == dimension and not (offset and sign == "zero"):

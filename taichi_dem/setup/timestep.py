@@ -69,37 +69,37 @@ def body_surface_speed(scene: Scene) -> float:
     return best
 
 
-def effect_bounds(scene: Scene) -> tuple[float, float]:
+def effect_bounds(scene: Scene) -> tuple[float, float, float]:
     """What the scene's effects can do to a free particle, as they declare it
-    (scene/keys.py ``Section.acceleration_bound`` and ``speed_bound``): the sum of their
-    largest accelerations (m/s^2) and the largest speed any carries one to (m/s)."""
-    acceleration = speed = 0.0
+    (scene/keys.py ``Section.work_bound``, ``acceleration_bound`` and ``speed_bound``): the
+    work per unit mass their fields can do across the domain (J/kg; a directed field's along
+    its direction, an undirected acceleration's along the domain's diagonal), the largest
+    speed any carries one to (m/s), and the steady acceleration a resting particle bears
+    (``resting_acceleration``, m/s^2: its weight)."""
+    work = acceleration = speed = resting = 0.0
     sections = effect_sections()
+    span = np.asarray(scene.domain.max) - np.asarray(scene.domain.min)
     for path, settings in scene.settings.items():
         section = sections[path]
+        if section.work_bound is not None:
+            work += float(section.work_bound(scene, settings, span))
         if section.acceleration_bound is not None:
             acceleration += float(section.acceleration_bound(scene, settings))
         if section.speed_bound is not None:
             speed = max(speed, float(section.speed_bound(scene, settings)))
-    return acceleration, speed
+        if section.resting_acceleration is not None:
+            resting += float(section.resting_acceleration(scene, settings))
+    work += acceleration * float(np.linalg.norm(span))
+    return work, speed, resting
 
 
 def expected_max_speed(scene: Scene, initial_speeds: np.ndarray) -> float:
     """Largest speed expected (m/s): the initial speeds; free fall across the domain under
-    gravity and the effects' accelerations; the speed an effect carries a particle to; and
-    the fastest body surface on top (a particle meets a moving paddle at both speeds)."""
-    g = float(np.linalg.norm(scene.simulation.gravity))
-    span = np.asarray(scene.domain.max) - np.asarray(scene.domain.min)
-    # the work per unit mass a field can do across the domain bounds the kinetic energy:
-    # gravity along its own direction, an effect's acceleration (any direction) along the
-    # domain's diagonal
-    work = 0.0
-    if g > 0:
-        gdir = np.abs(np.asarray(scene.simulation.gravity)) / g
-        # periodic axes do not bound a fall (a chute): cap those by the non-periodic span
-        work += g * float(np.dot(gdir, span))
-    acceleration, carried = effect_bounds(scene)
-    work += acceleration * float(np.linalg.norm(span))
+    the effects' fields (gravity's along its direction, the others' along the domain's
+    diagonal); the speed an effect carries a particle to; and the fastest body surface on
+    top (a particle meets a moving paddle at both speeds)."""
+    # the work per unit mass the fields can do across the domain bounds the kinetic energy
+    work, carried, _ = effect_bounds(scene)
     fall = math.sqrt(2.0 * work)
     v0 = float(np.max(initial_speeds)) if len(initial_speeds) else 0.0
     return max(v0, fall, carried, 1e-3) + body_surface_speed(scene)
@@ -220,7 +220,7 @@ def weight_overlap(scene: Scene, radii: np.ndarray, materials: np.ndarray,
     softest partner (Hertz, m g = 4/3 E* sqrt(r) d^1.5, the particle's own radius as R*),
     over the materials present, with that material and radius (m); (0, None, nan) without
     gravity. Dimensionless."""
-    g = float(np.linalg.norm(scene.simulation.gravity))
+    g = effect_bounds(scene)[2]         # the weight per unit mass the effects give
     if g <= 0.0 or not len(radii):
         return 0.0, None, math.nan
     present = set(material_names[j] for j in np.unique(materials))

@@ -219,7 +219,9 @@ def test_check_accepts_a_good_settled_start_file(tmp_path, no_taichi_runtime):
     from taichi_dem.scene.loader import load_scene
     fill = load_scene(tmp_path / "scene.toml").fills[0]
     assert fill.positions.shape == (N, 3) and np.all(fill.radii == RADIUS)
-    assert fill.temperatures.shape == (N,) and np.all(fill.moistures == 0.05)
+    # (the fields effects add to a frame are the fill's frame_values, by their names)
+    frame = fill.frame_values
+    assert frame["temperature"].shape == (N,) and np.all(frame["moisture"] == 0.05)
 
 
 @pytest.mark.parametrize("override", [dict(radius=_one_row(np.nan)),

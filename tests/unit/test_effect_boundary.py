@@ -50,7 +50,8 @@ def _violations(path: Path, root: Path = ROOT) -> list[str]:
 
 def test_the_effect_modules_are_found():
     names = {p.name for p in EFFECT_MODULES}
-    assert {"effect.py", "effects.py", "gravity.py", "hertz_mindlin.py", "rolling.py"} <= names
+    assert {"effect.py", "effects.py", "hertz_mindlin.py", "rolling.py"} <= names
+    assert any(p.parent.name == "gravity" and p.name == "effect.py" for p in EFFECT_MODULES)
 
 
 @pytest.mark.parametrize("path", EFFECT_MODULES, ids=lambda p: str(p.relative_to(ROOT)))

@@ -745,17 +745,17 @@ def _thermal_base():
 def test_gas_gap_and_time_scale_keys_load():
     d = _thermal_base()
     d["thermal"].update(gas_gap_model="isothermal", gas_gap_pairs=False, time_scale=50.0)
-    th = load(d).thermal
+    th = load(d).settings.get("thermal")
     assert (th.gas_gap_model, th.gas_gap_pairs, th.time_scale) == ("isothermal", False, 50.0)
-    default = load(_thermal_base()).thermal
+    default = load(_thermal_base()).settings.get("thermal")
     assert (default.gas_gap_model, default.gas_gap_lens) == ("schlunder", 0.4)
     assert default.gas_pressure == 101325.0 and default.gas_gap_free_path is None
     d = _thermal_base()
     d["thermal"].update(gas_gap_model="voronoi", gas_gap_porosity=0.45)
-    th = load(d).thermal
+    th = load(d).settings.get("thermal")
     assert (th.gas_gap_model, th.gas_gap_porosity) == ("voronoi", 0.45)
     d["thermal"].pop("gas_gap_porosity")
-    assert load(d).thermal.gas_gap_porosity == 0.4
+    assert load(d).settings.get("thermal").gas_gap_porosity == 0.4
 
 
 @pytest.mark.parametrize("key, value, frag", [
@@ -798,7 +798,7 @@ def test_schlunder_keys_load():
     d["thermal"].update(gas_pressure="50 kPa", gas_gap_free_path="0.5 um", gas_gap_lens=0.3)
     d["materials"][d["particles"][0]["material"]]["surface_roughness"] = "2 um"
     scene = load(d)
-    th = scene.thermal
+    th = scene.settings.get("thermal")
     assert (th.gas_pressure, th.gas_gap_free_path, th.gas_gap_lens) == (5e4, 5e-7, 0.3)
     assert scene.materials[d["particles"][0]["material"]].surface_roughness == pytest.approx(2e-6)
 

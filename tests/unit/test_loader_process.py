@@ -32,7 +32,7 @@ def test_contract_keys_load():
     d["particles"][0]["temperature"] = 300.0
     d["thermal"] = {"conduction": True}
     s = load(d)
-    assert s.thermal.moisture
+    assert s.settings.get("thermal").moisture
     (f,) = s.factories
     assert f.name == "inlet" and f.radius.mean == 0.01 and f.temperature == pytest.approx(723.15)
     assert f.moisture == 0.05 and f.velocity == (0.0, 0.0, -0.5)

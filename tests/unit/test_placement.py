@@ -251,7 +251,8 @@ def _fill_temperatures(s, p) -> list:
     from types import SimpleNamespace
     from taichi_dem.thermal.effects import Temperature
     heat = Temperature("", compensated=False)
-    fake = SimpleNamespace(thermal=SimpleNamespace(moisture=False), materials=s.materials)
+    fake = SimpleNamespace(settings={"thermal": SimpleNamespace(moisture=False)},
+                           materials=s.materials)
     out = []
     with np.errstate(divide="ignore"):
         for i, f in enumerate(s.fills):

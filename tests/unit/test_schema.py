@@ -84,7 +84,8 @@ def test_declared_defaults_are_the_dataclass_defaults():
     from it): they must never drift apart."""
     from taichi_dem.effects.drag.settings import SECTION as DRAG
     from taichi_dem.effects.mobility.settings import SECTION as MOBILITY, MobilitySettings
-    from taichi_dem.scene.model import CoarseGraining, Interaction, Output, SimulationSettings
+    from taichi_dem.scene.model import Interaction, Output, SimulationSettings
+    from taichi_dem.thermal.host_keys import CoarseGraining
     from taichi_dem.thermal.settings import GAS, THERMAL, GasSettings, ThermalSettings
     sections = registered()
     pairs = [(THERMAL, ThermalSettings, {}), (GAS, GasSettings, {}),

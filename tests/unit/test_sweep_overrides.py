@@ -142,7 +142,7 @@ def test_every_demo_scene_survives_the_toml_round_trip(demo):
     a = load_scene(path)
     b = parse_scene(ov.to_text(tomllib.loads(path.read_text())), source=str(path))
     for field in ("simulation", "domain", "materials", "interactions", "fills", "walls",
-                  "factories", "outlets", "sensors", "thermal", "output", "bodies"):
+                  "factories", "outlets", "sensors", "settings", "output", "bodies"):
         assert _same(getattr(a, field), getattr(b, field)), field
     assert not _same(a.simulation, parse_scene(ov.overridden_text(
         path.read_text(), {"simulation.seed": 77}, str(path)), source=str(path)).simulation)
@@ -208,7 +208,7 @@ def test_tradeoff_planning_timestep_modulus_and_hooks():
         # thermal.time_scale (issue 10) is a knob of thermal scenes now
         assert not any(k.startswith("time_scale") for k in skipped)
         for v in variants[6:]:
-            assert parse_scene(v.text, source=path).thermal.time_scale in (10.0, 100.0)
+            assert parse_scene(v.text, source=path).settings.get("thermal").time_scale in (10.0, 100.0)
         for v in variants[:6]:
             s = parse_scene(v.text, source=path)
             glass = s.materials["glass"]
@@ -216,7 +216,7 @@ def test_tradeoff_planning_timestep_modulus_and_hooks():
             assert glass.youngs_modulus == pytest.approx(1e7 / factor)
             assert s.materials["steel"].youngs_modulus == 2e11        # walls not softened
             if "uncorrected" in v.labels["setting"]:
-                assert s.thermal.contact_radius_correction == "none"
+                assert s.settings.get("thermal").contact_radius_correction == "none"
             else:
                 assert glass.real_youngs_modulus == pytest.approx(1e7)
 
@@ -237,6 +237,6 @@ def test_explicit_dt_follows_softening_and_coarse_graining():
     ref_e = load_scene(cooler).materials["ash"].youngs_modulus
     assert got["E/100, corrected"].materials["ash"].real_youngs_modulus == pytest.approx(ref_e)
     assert got["E/100, corrected"].materials["ash"].youngs_modulus == pytest.approx(ref_e / 100)
-    assert got["E/100, uncorrected"].thermal.contact_radius_correction == "none"
+    assert got["E/100, uncorrected"].settings.get("thermal").contact_radius_correction == "none"
     _, variants, _ = tradeoffs.plan_study(str(BOX), ["modulus", "size"], 1, 0.02)
     assert all("simulation.dt" not in v.overrides for v in variants)

@@ -3,6 +3,7 @@ import math
 import pytest
 
 from taichi_dem.errors import SceneError
+from taichi_dem.scene import catalog  # noqa: F401 (the effects' dimensions: the temperature)
 from taichi_dem.scene.units import DIMENSIONS, parse_quantity, parse_vec3, units_for
 
 

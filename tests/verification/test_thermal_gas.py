@@ -173,7 +173,7 @@ def test_plug_flow_energy_balance(small_scene_text, wet):
         assert s["particles/lost"][-1] == 0
         vapour = 0.0
         if wet:
-            th = sim.scene.thermal
+            th = sim.scene.settings.get("thermal")
             evaporated = s["particles/evaporated_mass"][-1] - s["particles/evaporated_mass"][0]
             vapour = evaporated * (th.latent_heat + th.water_heat_capacity * th.evaporation_temperature)
             assert evaporated > 0 and s["particles/mean_moisture"][-1] < s["particles/mean_moisture"][0]

@@ -41,10 +41,10 @@ SECTION = register(Section("body_force", "A uniform body force per unit mass on 
     Key("acceleration", "vector", "the acceleration it gives a particle of factor 1",
         unit="acceleration", default=REQUIRED),
 ), owner=__name__, reader=read, builds="taichi_dem.effects.body_force.effect:build",
-   material_keys=(
+   adds={"materials.*": (
     Key("body_force_factor", "quantity", "how strongly [body_force] pulls this material "
         "(0: not at all)", unit="dimensionless", default=1.0),
-), acceleration_bound=largest_acceleration))
+)}, acceleration_bound=largest_acceleration))
 
 # the series the effect writes (sensors/series.py; the results file's units come from here)
 SERIES = (Series("body_force/force", "N", "the body force on all particles inside", "(3,)"),)

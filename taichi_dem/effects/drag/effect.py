@@ -34,6 +34,9 @@ from ..base import Effect
 
 class Drag(Effect):
     name = "drag"
+    # its acceleration added after gravity's, as it always was (gravity was built first):
+    # the order of the sums, and so the last bits of every result, stay what they were
+    after = ("gravity",)
     stage = "particle"
 
     def __init__(self, description, drag):

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Optional
 
 from ...errors import SceneError
-from ...scene import air
+from ... import air
 from ...scene.keys import Key, Section, given, register, type_name
 
 MODELS = ("di_felice", "schiller_naumann")
@@ -23,7 +23,8 @@ SECTION = register(Section("gas", "A gas that drags the particles (one-way coupl
     Key("drag", "choice", "the drag law: Di Felice (local voidage from the cell grid) or "
         "Schiller-Naumann (a dilute particle)", default="di_felice", choices=MODELS),
 ), owner=__name__, reader=lambda table, parser: read(table, parser),
-   derive=lambda parser: derive(parser), builds="taichi_dem.effects.drag.effect:build",
+   derive=lambda parser: derive(parser), after=("thermal",),
+   builds="taichi_dem.effects.drag.effect:build",
    speed_bound=lambda scene, settings: carried_speed(settings),
    schema_rules=lambda: [given("velocity")]))
 
@@ -60,10 +61,11 @@ def carried_speed(settings: DragSettings) -> float:
 
 
 def read(table, parser) -> DragSettings:
-    """The mechanics-only [gas] section (``parser``: the loader's; its ``thermal`` is read
-    already): refused beside a [thermal.gas], which gives its drag itself."""
+    """The mechanics-only [gas] section (``parser``: the loader's, whose ``settings`` hold
+    [thermal] already): refused beside a [thermal.gas], which gives its drag itself."""
     file = parser.source
-    if parser.thermal is not None and parser.thermal.gas is not None:
+    heat = parser.settings.get("thermal")
+    if heat is not None and heat.gas is not None:
         raise SceneError(file, "gas", "the scene has a [thermal.gas] already: give its drag "
                                       "there (drag = \"di_felice\"), not a second gas")
     if not isinstance(table, dict):
@@ -80,7 +82,8 @@ def read(table, parser) -> DragSettings:
 def derive(parser) -> Optional[DragSettings]:
     """The drag of a [thermal.gas] with drag = "di_felice" | "schiller_naumann" (its gas's
     velocity, density and viscosity), when the scene has no [gas]; else None."""
-    heat_gas = parser.thermal.gas if parser.thermal is not None else None
+    heat = parser.settings.get("thermal")
+    heat_gas = heat.gas if heat is not None else None
     if heat_gas is not None and heat_gas.drag != "none":
         return DragSettings(model=heat_gas.drag, velocity=heat_gas.velocity,
                             density=heat_gas.density, viscosity=heat_gas.viscosity)

@@ -19,9 +19,10 @@ command line (``--h5``, ``--rrd``) is the user's own choice, taken as given with
 expanded. ``foreign_file_problem`` refuses to overwrite an existing file that is not a results
 file, checkpoint or recording of ours.
 
-A temperature on a fill, factory, wall or body in a scene without ``[thermal]`` is not refused
-(CONTRACT.md's own example scene has them: a scene turns heat off by leaving out [thermal]) but
-named by ``ignored_keys`` for ``check`` and ``run`` to print as notes.
+A key an effect adds to a fill, factory, wall or body that the effect ignores where the scene
+lacks its section (a temperature without heat transfer: CONTRACT.md's own example scene has
+them, and a scene turns heat off by leaving out its section) is not refused but named by
+``ignored_keys`` for ``check`` and ``run`` to print as notes.
 """
 from __future__ import annotations
 
@@ -32,6 +33,7 @@ from typing import Optional
 import numpy as np
 
 from ...errors import SceneError
+from ..keys import added_in, effect_sections
 from .particles import region_bounds
 
 
@@ -70,21 +72,24 @@ def output_path_problem(path) -> Optional[str]:
 
 
 def ignored_keys(scene) -> list[tuple[str, str]]:
-    """(key, reason) for each key the scene gives but nothing will read: temperatures without
-    [thermal]."""
-    if scene.thermal is not None:
-        return []
+    """(key, reason) for each key the scene gives but nothing will read: a key an effect adds
+    to another section (scene/keys.py ``Section.adds``) that the effect ignores while the
+    scene lacks its section (``Key.when_off``: a temperature without heat transfer)."""
     out = []
-    for f in tuple(scene.fills) + tuple(scene.factories):
-        if f.temperature is not None:
-            out.append((f"{f.key}.temperature", "ignored: the scene has no [thermal] section "
-                        "(heat transfer off)"))
-    for kind, items in (("walls", scene.walls), ("bodies", scene.bodies)):
-        for i, item in enumerate(items):
-            if getattr(item, "temperature", None) is not None:
-                out.append((f"{kind}[{i}].temperature", "ignored: the scene has no [thermal] "
-                            "section (heat transfer off)"))
+    for path, section in effect_sections().items():
+        if path in scene.settings:
+            continue
+        for where, key in added_in(_given_tables(scene), section):
+            if key.when_off == "ignored":
+                out.append((f"{where}.{key.name}", f"ignored: the scene has no [{path}] "
+                            f"section ({section.description.split(':')[0].lower()} off)"))
     return out
+
+
+def _given_tables(scene) -> dict:
+    """The scene's document as given (its TOML text, read again)."""
+    import tomllib
+    return tomllib.loads(scene.text)
 
 
 def _path_text_problem(text: str) -> Optional[str]:
@@ -201,8 +206,7 @@ def foreign_file_problem(path, kind: str) -> Optional[str]:
 class ConsistencySections:
     """Mixin of the scene parser (scene/loader.py): the checks of the module docstring."""
 
-    def check_consistency(self, doc: dict, simulation, output, sources, walls, bodies,
-                          thermal) -> None:
+    def check_consistency(self, doc: dict, simulation, output, sources, walls, bodies) -> None:
         """Refuse the combinations of the module docstring (``doc``: the raw scene, to tell a
         key given from its default)."""
         centre = 0.5 * (np.asarray(self.domain.min, float) + np.asarray(self.domain.max, float))

@@ -12,7 +12,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ...errors import SceneError
-from ..keys import REQUIRED, Key, Section, register
+from ..keys import REQUIRED, Key, Section, added_values, host_section, register
 from ..keys import suggest as _suggest
 from ..model import ParticleFill, RadiusDistribution, Region
 from ..units import MAX_MAGNITUDE, MIN_MAGNITUDE
@@ -44,10 +44,6 @@ PARTICLE = register(Section("particles[]", "An initial fill, [[particles]]: `cou
     Key("velocity", "vector", "initial velocity", unit="speed", default=(0.0, 0.0, 0.0)),
     Key("angular_velocity", "vector", "initial angular velocity", unit="angular_speed",
         default=(0.0, 0.0, 0.0)),
-    Key("temperature", "quantity", "initial temperature (required with [thermal])",
-        unit="temperature", default=None, **_P),
-    Key("moisture", "quantity", "kg water per kg dry solid (drying; needs [thermal])",
-        unit="dimensionless", default=None, minimum=0.0),
     Key("fixed", "boolean", "frozen in place (a rough wall of spheres)", default=False),
     Key("file", "string", "a CSV of x,y,z,radius[,vx,vy,vz[,wx,wy,wz]] (SI), or a results file "
         "(.h5) of an earlier run whose frame gives the particles of this fill's material (their "
@@ -118,7 +114,7 @@ class ParticleSections:
         return region
 
     def parse_fill(self, t: dict, key: str) -> ParticleFill:
-        self.check_keys(t, key, PARTICLE, required=("material",))
+        self.check_keys(t, key, host_section(PARTICLE), required=("material",))
         material = self.material_name(t["material"], f"{key}.material")
         kw: dict[str, Any] = {}
         if "velocity" in t:
@@ -126,11 +122,7 @@ class ParticleSections:
         if "angular_velocity" in t:
             kw["angular_velocity"] = self.vec3(t["angular_velocity"], "angular_speed",
                                                f"{key}.angular_velocity")
-        if "temperature" in t:
-            kw["temperature"] = self.positive(t["temperature"], "temperature",
-                                              f"{key}.temperature")
-        if "moisture" in t:
-            kw["moisture"] = self.nonnegative(t["moisture"], "dimensionless", f"{key}.moisture")
+        kw["effect_values"] = added_values(PARTICLE.path, t, self.source, key)
         if "fixed" in t:
             kw["fixed"] = self.boolean(t["fixed"], f"{key}.fixed")
         if "file" in t:
@@ -143,8 +135,11 @@ class ParticleSections:
             if fname.lower().endswith((".h5", ".hdf5")):
                 frame = self.integer(t["frame"], f"{key}.frame") if "frame" in t else -1
                 arrays = self.read_frame(fname, f"{key}.file", frame, material)
+                own = {t for t, _, _ in OWN_FRAME_DATASETS.values()}
+                kw["frame_values"] = {t: a for t, a in arrays.items()
+                                      if t not in own and a is not None}
                 return ParticleFill(key=key, material=material, file=fname, frame=frame,
-                                    **arrays, **kw)
+                                    **{t: a for t, a in arrays.items() if t in own}, **kw)
             if "frame" in t:
                 raise self.err(f"{key}.frame", "only with a results file (.h5) as file; a CSV "
                                                "holds one set of particles")
@@ -189,9 +184,9 @@ class ParticleSections:
     def read_frame(self, fname: str, key: str, frame: int, material: str) -> dict:
         """The particles of ``material`` in frame ``frame`` (negative: from the last) of the
         results file ``fname`` (relative to the scene): positions (m), radii (m), velocities
-        (m/s), angular velocities (rad/s) and, when the frame has them, temperatures (K) and
-        moistures (kg/kg). The file is validated like a scene: every dataset's shape and type,
-        one row per particle everywhere, finite values, positive radii and temperatures; what
+        (m/s), angular velocities (rad/s) and, when the frame has them, the fields effects add
+        to frames (a temperature, K), each by its name. The file is validated like a scene: every dataset's shape and type,
+        one row per particle everywhere, finite values, positive radii (and temperatures); what
         is wrong is a SceneError naming the scene, ``key``, the HDF5 file and the dataset."""
         import h5py
         path = self.resolve_path(fname, key)
@@ -243,7 +238,7 @@ class ParticleSections:
             raise bad(f"{gpath} is a dataset; a frame is a group of datasets (position, "
                       "radius, velocity, ...)")
         arrays = {}
-        for name, (target, columns, _) in FRAME_DATASETS.items():
+        for name, (target, columns, _) in frame_datasets().items():
             ds = _member(g, name, bad, gpath)
             if ds is None:
                 if name in ("position", "radius"):
@@ -267,7 +262,7 @@ class ParticleSections:
             rows = np.nonzero(index == names.index(material))[0]
             if not len(rows):
                 raise bad(f"frame {keys[frame]} holds no particles of material '{material}'")
-        _check_values(arrays, {n: f"{gpath}/{n}" for n in FRAME_DATASETS}, bad)
+        _check_values(arrays, {n: f"{gpath}/{n}" for n in frame_datasets()}, bad)
         return {target: (None if a is None else a[rows].astype(float))
                 for target, a in arrays.items()}
 
@@ -400,17 +395,32 @@ def _region_volume(region: Region) -> float:
     return math.pi * region.radius ** 2 * region.length
 
 
-# the per-particle datasets of a settled-start frame: dataset -> (read_frame's array, columns
-# (None: one value per particle), what its values must be)
-FRAME_DATASETS = {
+# the mechanics' per-particle datasets of a settled-start frame: dataset -> (read_frame's
+# array, columns (None: one value per particle), what its values must be)
+OWN_FRAME_DATASETS = {
     "position": ("positions", 3, "finite"),
     "radius": ("radii", None, "positive"),
     "velocity": ("velocities", 3, "finite"),
     "angular_velocity": ("angular_velocities", 3, "finite"),
-    "temperature": ("temperatures", None, "positive"),
-    "moisture": ("moistures", None, "nonnegative"),
 }
-_TARGETS = {target: name for name, (target, _, _) in FRAME_DATASETS.items()}
+
+
+def frame_datasets() -> dict:
+    """OWN_FRAME_DATASETS and the fields the effects add to a frame (scene/catalog.py
+    frame_fields: a temperature), each read under its own name into the fill's
+    ``frame_values``, its values as the effect says (frame_field_values)."""
+    from ..catalog import frame_field_values, frame_fields
+    out = dict(OWN_FRAME_DATASETS)
+    for name, rule in frame_field_values().items():
+        shape = frame_fields()[name][1]
+        columns = None if shape == "(N,)" else int(shape.strip("()").split(",")[1])
+        out[name] = (name, columns, rule)
+    return out
+
+
+def _name_of(target: str) -> str:
+    """The dataset a read_frame array ``target`` comes from."""
+    return next(name for name, (t, _, _) in frame_datasets().items() if t == target)
 
 
 def _printable(name: str) -> str:
@@ -445,13 +455,13 @@ _KINDS = {"b": "booleans", "c": "complex numbers", "S": "byte strings", "U": "st
 
 def _rows(arrays: dict, gpath: str, bad) -> int:
     """The particle count N of a frame's ``arrays`` (read_frame's names): every dataset has
-    shape (N,) or (N, 3) as FRAME_DATASETS says, the same N everywhere."""
+    shape (N,) or (N, 3) as frame_datasets says, the same N everywhere."""
     count = None
     for target, a in arrays.items():
         if a is None:
             continue
-        name = _TARGETS[target]
-        columns = FRAME_DATASETS[name][1]
+        name = _name_of(target)
+        columns = frame_datasets()[name][1]
         n = a.shape[0] if a.ndim else None
         want = "(N,)" if columns is None else f"(N, {columns})"
         if a.ndim != (1 if columns is None else 2) or (columns and a.shape[1] != columns):
@@ -461,7 +471,7 @@ def _rows(arrays: dict, gpath: str, bad) -> int:
         if count is None:
             count = n
         elif n != count:
-            first = next(_TARGETS[t] for t, b in arrays.items() if b is not None)
+            first = next(_name_of(t) for t, b in arrays.items() if b is not None)
             raise bad(f"dataset {gpath}/{name} has {n} rows but {gpath}/{first} has {count}; "
                       "every dataset of a frame has one row per particle")
     return count or 0
@@ -470,12 +480,12 @@ def _rows(arrays: dict, gpath: str, bad) -> int:
 def _check_values(arrays: dict, paths: dict, bad, row_numbers=None) -> None:
     """Every value of a frame's ``arrays`` (read_frame's names; ``paths``: the dataset of
     each, ``row_numbers``: each row's number in it) finite and within the SI magnitudes a scene
-    accepts; radii and temperatures > 0, moistures >= 0."""
+    accepts; radii > 0, and the effects' fields as frame_datasets says."""
     for target, a in arrays.items():
         if a is None:
             continue
-        name = _TARGETS[target]
-        rule = FRAME_DATASETS[name][2]
+        name = _name_of(target)
+        rule = frame_datasets()[name][2]
         values = a.astype(np.float64, copy=False).reshape(len(a), -1)
         magnitude = np.abs(values)
         tests = [(~np.isfinite(values), "is not finite (NaN or infinite)"),
@@ -562,13 +572,13 @@ def _checkpoint_particles(f, where: str, key: str, material: str, reader, bad) -
     def read(name):
         if name not in fields:
             return None
-        columns = FRAME_DATASETS[name][1]
+        columns = frame_datasets()[name][1]
         value = column(name, columns)[rows].astype(float)
         if name + "_residual" in fields:
             value = value + column(name + "_residual", columns)[rows]
         return value
-    out = {target: read(name) for name, (target, _, _) in FRAME_DATASETS.items()}
-    _check_values(out, {n: fields[n][0] for n in FRAME_DATASETS if n in fields}, bad, rows)
+    out = {target: read(name) for name, (target, _, _) in frame_datasets().items()}
+    _check_values(out, {n: fields[n][0] for n in frame_datasets() if n in fields}, bad, rows)
     return out
 
 

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import SceneError
-from ..keys import REQUIRED, Key, Section, register
+from ..keys import REQUIRED, Key, Section, added_values, host_section, register
 from ..keys import suggest as _suggest
 from ..model import Factory, Outlet, RateSchedule, Sensor, SheetInlet
 from .particles import BOX, RADIUS, REGION, fmt, region_bounds
@@ -42,10 +42,6 @@ FACTORY = register(Section("factories[]", "Insertion at a mass rate, [[factories
     Key("region", "table", "random only: where particles appear", default=None),
     Key("velocity", "vector", "the inserted particles' velocity", unit="speed",
         default=(0.0, 0.0, 0.0)),
-    Key("temperature", "quantity", "their temperature (with [thermal])", unit="temperature",
-        default=None, **_P),
-    Key("moisture", "quantity", "kg water per kg dry solid", unit="dimensionless",
-        default=None, minimum=0.0),
     Key("mass_rate", "any", "the mass rate, or a schedule [[t, rate], ...] (steps)",
         unit="mass_rate", default=REQUIRED, schema=_SCHEDULE),
     Key("interval", "quantity", "random only: time between batches", unit="time",
@@ -135,7 +131,7 @@ class ProcessSections:
                                              f"{', '.join(FACTORY_PATTERNS)}")
         if pattern == "sheet":
             return self.parse_sheet_factory(t, key)
-        self.check_keys(t, key, FACTORY, required=("name", "material", "region", "mass_rate"))
+        self.check_keys(t, key, host_section(FACTORY), required=("name", "material", "region", "mass_rate"))
         for k in SHEET_ONLY_KEYS:
             if k in t:
                 raise self.err(f"{key}.{k}", 'only for pattern = "sheet" (this factory places '
@@ -165,10 +161,7 @@ class ProcessSections:
             kw["sizes"] = tuple(rows)
         if "velocity" in t:
             kw["velocity"] = self.vec3(t["velocity"], "speed", f"{key}.velocity")
-        if "temperature" in t:
-            kw["temperature"] = self.positive(t["temperature"], "temperature", f"{key}.temperature")
-        if "moisture" in t:
-            kw["moisture"] = self.nonnegative(t["moisture"], "dimensionless", f"{key}.moisture")
+        kw["effect_values"] = added_values(FACTORY.path, t, self.source, key)
         if "interval" in t:
             kw["interval"] = self.positive(t["interval"], "time", f"{key}.interval")
         region = self.parse_region(t["region"], f"{key}.region")
@@ -224,7 +217,7 @@ class ProcessSections:
     def parse_sheet_factory(self, t: dict, key: str) -> Factory:
         """``pattern = "sheet"``: lattice layers through ``face`` at ``velocity``, one layer
         whenever the stream has carried the previous one the spacing the mass rate implies."""
-        self.check_keys(t, key, FACTORY, required=())
+        self.check_keys(t, key, host_section(FACTORY), required=())
         for k in RANDOM_ONLY_KEYS:
             if k in t:
                 reason = {"region": "a sheet inserts through its face; give face = { point, "
@@ -235,7 +228,7 @@ class ProcessSections:
                                       "moved one layer spacing; the interval follows from the "
                                       "mass rate and velocity"}[k]
                 raise self.err(f"{key}.{k}", f'not for pattern = "sheet": {reason}')
-        self.check_keys(t, key, FACTORY,
+        self.check_keys(t, key, host_section(FACTORY),
                         required=("name", "material", "face", "velocity", "mass_rate", "radius"))
         radius = self.parse_radius(t["radius"], f"{key}.radius")
         if radius.std != 0.0:
@@ -296,10 +289,7 @@ class ProcessSections:
                            f"{limit:.4g} kg/s. Lower mass_rate or jitter, or raise the face's "
                            f"depth or the velocity")
         kw: dict[str, Any] = {}
-        if "temperature" in t:
-            kw["temperature"] = self.positive(t["temperature"], "temperature", f"{key}.temperature")
-        if "moisture" in t:
-            kw["moisture"] = self.nonnegative(t["moisture"], "dimensionless", f"{key}.moisture")
+        kw["effect_values"] = added_values(FACTORY.path, t, self.source, key)
         return Factory(key=key, name=self.name(t, key), material=material, region=None,
                        mass_rate=rate, radius=radius, velocity=velocity, pattern="sheet",
                        sheet=sheet, **kw)

@@ -4,7 +4,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...errors import SceneError
-from ..keys import AUTO, REQUIRED, Key, Section, register
+from ..keys import AUTO, REQUIRED, Key, Section, added_values, host_section, register
 from ..keys import type_name as _type_name
 from ..model import Domain, Output, SimulationSettings
 
@@ -20,7 +20,8 @@ MAX_COORDINATE = 1e6       # m
 AXES = ("x", "y", "z")
 _S = SimulationSettings
 
-SIMULATION = register(Section("simulation", "Time, gravity, precision and the step", (
+SIMULATION = register(Section("simulation", "Time, precision and the step (and the keys "
+                             "effects add to it)", (
     Key("end_time", "quantity", "simulated time to run", unit="time", default=_S.end_time,
         minimum=0.0, exclusive_minimum=True),
     Key("dt", "quantity", "the time step; \"auto\": rayleigh_fraction x the Rayleigh time, "
@@ -29,7 +30,6 @@ SIMULATION = register(Section("simulation", "Time, gravity, precision and the st
     Key("rayleigh_fraction", "quantity", "the automatic step as a fraction of the Rayleigh time",
         unit="dimensionless", default=_S.rayleigh_fraction, minimum=0.0, maximum=1.0,
         exclusive_minimum=True, why="typically 0.1 to 0.3"),
-    Key("gravity", "vector", "gravity", unit="acceleration", default=_S.gravity),
     Key("precision", "choice", "floating-point precision of the particle state",
         default=_S.precision, choices=("f32", "f64")),
     Key("seed", "integer", "seeds numpy's generator (placement, factories)", default=_S.seed,
@@ -79,15 +79,16 @@ class SimulationSections:
     def simulation(self, value: Any) -> SimulationSettings:
         key = "simulation"
         t = self.table(value, key)
-        SIMULATION.check(t, self.source, key)
+        host_section(SIMULATION).check(t, self.source, key)
         try:
-            kw = SIMULATION.read(t, self.source, key, only=("dt",))
+            kw = host_section(SIMULATION).read(t, self.source, key, only=("dt",))
         except SceneError as e:
             raise self.err(e.key, f"{e.reason}; dt is \"auto\" or a positive time") from None
         if kw.get("dt") == AUTO:
             kw["dt"] = None
-        kw.update(SIMULATION.read(t, self.source, key, only=(
-            "end_time", "rayleigh_fraction", "gravity", "precision", "seed", "skin")))
+        kw.update(host_section(SIMULATION).read(t, self.source, key, only=(
+            "end_time", "rayleigh_fraction", "precision", "seed", "skin")))
+        kw["effect_values"] = added_values(SIMULATION.path, t, self.source, key)
         if "max_particles" in t:
             k = f"{key}.max_particles"
             kw["max_particles"] = self.integer(t["max_particles"], k)

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import SceneError
-from ..keys import REQUIRED, Key, Section, register
+from ..keys import REQUIRED, Key, Section, added_values, host_section, register
 from ..keys import type_name as _type_name
 from ..model import Body, Motion, PlaneWall, SpeedSchedule
 from .simulation import AXES
@@ -20,11 +20,10 @@ PLANE = register(Section("plane", "An infinite plane", (
     Key("normal", "direction", "the normal, pointing to the particles' side", default=REQUIRED),
 ), owner=__name__))
 WALL = register(Section("walls[]", "An analytic plane wall, [[walls]]", (
-    Key("name", "string", "its name (loads, sensors, radiation_to)", default=REQUIRED),
+    Key("name", "string", "its name (for its loads, and for the sensors and effects that "
+        "refer to it)", default=REQUIRED),
     Key("plane", "table", "{ point, normal }", default=REQUIRED),
     Key("material", "string", "a material name", default=REQUIRED),
-    Key("temperature", "quantity", "a fixed temperature (adiabatic when absent)",
-        unit="temperature", default=None, minimum=0.0, exclusive_minimum=True),
 ), owner=__name__, nested={"plane": PLANE}))
 ROTATE = register(Section("bodies[].motion.rotate", "Rotation about a fixed axis", (
     Key("axis_point", "vector", "a point on the axis", unit="length", default=(0.0, 0.0, 0.0)),
@@ -42,14 +41,13 @@ MOTION = register(Section("bodies[].motion", "A prescribed rigid motion (at rest
 ), owner=__name__, nested={"rotate": ROTATE, "translate": TRANSLATE}))
 BODY = register(Section("bodies[]", "A rigid triangle-mesh body, [[bodies]]: a builder's shape "
                         "(drum shell, paddles, screw, ...) or an STL/OBJ file", (
-    Key("name", "string", "its name (loads, sensors, mobility)", default=REQUIRED),
+    Key("name", "string", "its name (for its loads, and for the sensors and effects that "
+        "refer to it)", default=REQUIRED),
     Key("material", "string", "a material name", default=REQUIRED),
     Key("mesh", "any", "{ builder = NAME, ...parameters } or { file = PATH, scale, ... }, or an "
         "array of those (geometry/builders.py lists the builders and their parameters)",
         default=REQUIRED, schema={"anyOf": [{"type": "object"}, {"type": "array"}]}),
     Key("motion", "table", "{ rotate = {...} } or { translate = {...} }", default=None),
-    Key("temperature", "quantity", "a fixed temperature (adiabatic when absent)",
-        unit="temperature", default=None, minimum=0.0, exclusive_minimum=True),
 ), owner=__name__, nested={"motion": MOTION}))
 
 
@@ -68,18 +66,15 @@ class SurfaceSections:
         names: dict[str, str] = {}
         for i, t in enumerate(items):
             key = f"walls[{i}]"
-            self.check_keys(t, key, WALL)
+            self.check_keys(t, key, host_section(WALL))
             name = self.group_name(t["name"], f"{key}.name")
             if name in names:
                 raise self.err(f"{key}.name", f"duplicate wall name '{name}' (also {names[name]})")
             names[name] = key
             point, normal = self.parse_plane(t["plane"], f"{key}.plane")
             material = self.material_name(t["material"], f"{key}.material")
-            temp = None
-            if "temperature" in t:
-                temp = self.positive(t["temperature"], "temperature", f"{key}.temperature")
             out.append(PlaneWall(name=name, point=point, normal=normal, material=material,
-                                 temperature=temp))
+                                 effect_values=added_values(WALL.path, t, self.source, key)))
         return tuple(out)
 
     # -- [[bodies]] ------------------------------------------------------------------------------
@@ -88,7 +83,7 @@ class SurfaceSections:
         names: dict[str, str] = {w.name: f"walls[{i}]" for i, w in enumerate(walls)}
         for i, t in enumerate(items):
             key = f"bodies[{i}]"
-            self.check_keys(t, key, BODY)
+            self.check_keys(t, key, host_section(BODY))
             name = self.group_name(t["name"], f"{key}.name")
             if name in names:
                 raise self.err(f"{key}.name", f"duplicate name '{name}' (also {names[name]}); "
@@ -99,14 +94,12 @@ class SurfaceSections:
             motion = Motion()
             if "motion" in t:
                 motion = self.parse_motion(t["motion"], f"{key}.motion", t["mesh"], f"{key}.mesh")
-            temp = None
-            if "temperature" in t:
-                temp = self.positive(t["temperature"], "temperature", f"{key}.temperature")
             vertices = np.array(mesh.vertices, dtype=np.float64).reshape(-1, 3)
             faces = np.array(mesh.faces, dtype=np.int64).reshape(-1, 3)
             self.check_inside_domain(vertices, f"{key}.mesh")
             out.append(Body(key=key, name=name, material=material, vertices=vertices,
-                            faces=faces, motion=motion, temperature=temp))
+                            faces=faces, motion=motion,
+                            effect_values=added_values(BODY.path, t, self.source, key)))
         return tuple(out)
 
     def parse_mesh(self, spec: Any, key: str):

@@ -1,7 +1,13 @@
 """Uniform gravity: every moving particle accelerates at g (m/s^2)."""
 import taichi as ti
 
-from .base import Effect
+from ..base import Effect
+
+
+def build(scene, settings) -> list:
+    """The gravity effect of a scene whose [simulation] gravity is nonzero (``settings``:
+    its GravitySettings)."""
+    return [Gravity("uniform gravity", settings.acceleration)]
 
 
 class Gravity(Effect):
