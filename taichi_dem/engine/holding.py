@@ -14,6 +14,13 @@ compiler folds away, so the step it compiles is the step without them.
     rigid_velocity   ti.func (x, t) -> v: the frame's velocity there, m/s
     carried_load     ti.func (i, force, torque, acceleration): book what holds a carried
                      particle on the frame's body
+
+The engine compiles its step twice where an effect can hold particles: with these hooks, and
+with the constants of a scene without them (``idle``), and runs the second while
+the holder's last judgement held nothing (``holds_any``): a flow where nothing is held then
+runs the step of a scene without the effect. The hooks' reads and branches cost the 32k
+chute 4 - 5 % even with every flag 1 and a run-time switch in front of them
+(BENCHMARKS.md "Mobility where nothing freezes").
 """
 import taichi as ti
 
@@ -21,14 +28,16 @@ import taichi as ti
 class Holding:
     """The hooks of the enabled effect that holds particles, or their absence."""
 
-    def __init__(self, effects, ctx):
+    def __init__(self, effects, ctx, idle: bool = False):
         holders = [e for e in effects if e.holds_particles]
         if len(holders) > 1:
             raise ValueError("more than one effect holds particles: "
                              + ", ".join(e.name for e in holders))
         holder = holders[0] if holders else None
         self.holder = holder
-        self.any = holder is not None
+        # ``idle``: the hooks of a step that runs while the holder holds nothing
+        # (every flag 1): constants, as without a holder
+        self.any = holder is not None and not idle
         self.carried = self.any and holder.carrier_body >= 0
         present = self.any
         flag = holder.particle_active if present else None
@@ -50,3 +59,8 @@ class Holding:
         self.rigid_drift = holder.make_rigid_drift(ctx) if carried else None
         self.rigid_velocity = holder.make_rigid_velocity(ctx) if carried else None
         self.carried_load = holder.make_carried_load(ctx) if carried else None
+
+    def holds_any(self) -> bool:
+        """Whether the holder's last judgement held any particle (its ``particles_held``,
+        read from the device: a checkpoint restores it); False without a holder."""
+        return self.any and int(self.holder.particles_held[0]) != 0

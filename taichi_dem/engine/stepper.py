@@ -167,6 +167,10 @@ class Engine:
         for x in self.model.effect_list:
             x.prepare(self.context)         # (what needs the broadphase and the mesh)
         self.holding = Holding(self.model.effect_list, self.context)
+        # the step while the holder holds nothing: the hooks' constants (engine/holding.py)
+        self.idle_holding = (Holding(self.model.effect_list, self.context, idle=True)
+                             if self.holding.any else None)
+        self._variants: dict = {}           # holds? -> the step's kernels (select_step)
         self._compile_particle_kernels()
         self.count = 0                     # slots in use
         self._measure = None               # (measure.py, compiled on first use)
@@ -239,10 +243,48 @@ class Engine:
         self.worker_pool.destroy()
 
     # ------------------------------------------------------------------ kernels
+    def _holding_variants(self):
+        """(holds, Holding) of each step the engine compiles: one without a holder; with
+        one, the step with its hooks (True) and the step while it holds nothing (False)."""
+        if self.idle_holding is None:
+            return ((False, self.holding),)
+        return ((True, self.holding), (False, self.idle_holding))
+
     def _compile_particle_kernels(self):
-        self.minimum_image, self.drift_particle, self._drift = make_drift(self)
+        self._drifts = {}
+        full = self.holding
+        for holds, holding in self._holding_variants():
+            self.holding = holding          # (make_drift reads the engine's hooks)
+            self.minimum_image, particle, drift = make_drift(self)
+            self._drifts[holds] = (particle, drift)
+        self.holding = full
+        self.drift_particle, self._drift = self._drifts[full.any]
+
+    def select_step(self):
+        """Run the step with the holder's hooks while its last judgement held particles, else
+        the one without them (the same results: every flag is 1). Called after each
+        judgement (the rebuilds) and where a run of steps begins (after a restore)."""
+        holds = self.holding.holds_any()
+        self.drift_particle, self._drift = self._drifts[holds]
+        kernels = self._variants.get(holds)
+        if kernels is not None:
+            (self._pair_forces, self._gather, self._run_steps,
+             self._run_worker_steps) = kernels
 
     def _compile_pair_kernels(self, p: PairState):
+        """The step's kernels for the pair list ``p``, once per holding variant
+        (_holding_variants; compiled on first use), then the one to run (select_step)."""
+        full = self.holding
+        for holds, holding in self._holding_variants():
+            self.holding = holding          # (the stages read the engine's hooks)
+            self.drift_particle = self._drifts[holds][0]
+            self._compile_pair_variant(p)
+            self._variants[holds] = (self._pair_forces, self._gather, self._run_steps,
+                                     self._run_worker_steps)
+        self.holding = full
+        self.select_step()
+
+    def _compile_pair_variant(self, p: PairState):
         """The step's ti.funcs and kernels for the pair list ``p``: one factory per contact
         kind (pairs: pair_stage.py; plane walls: contacts/planes.py; mesh triangles:
         bodies/mesh_contacts.py), the gather that sums them (gather_stage.py), and the
@@ -344,6 +386,7 @@ class Engine:
         self.count = self.broadphase.rebuild(n)
         for x in self.model.rebuild_effects:
             x.after_rebuild(self.context, self.count, self.time)
+        self.select_step()
         if self.serial and self.runs:
             # one step of no length in the kernel the runs use (nothing else to compile)
             self._run_steps(self.count, 0.0, self.time, 0.0, 1, 1, 0, 0)
@@ -372,10 +415,12 @@ class Engine:
         self.flags[Flag.DEAD_IN_SLOTS] = 0
         for x in self.model.rebuild_effects:
             x.after_rebuild(self.context, self.count, self.time)
+        self.select_step()
 
     def advance(self, steps: int, record_last: bool = False):
         """Advance ``steps`` time steps of ``self.model.dt``: in runs of steps per launch in the
         serial mode (``runs``), else two parallel launches per step."""
+        self.select_step()
         if self.serial and self.runs:
             drivers.advance_in_runs(self, steps, record_last)
             return

@@ -279,6 +279,46 @@ def test_a_resumed_bed_keeps_the_judgements_schedule(tmp_path):
     assert np.array_equal(straight["velocity"], resumed["velocity"])
 
 
+def test_a_flow_that_holds_nothing_steps_as_without_mobility():
+    """Where the last judgement held nothing, the engine runs the step compiled without the
+    holding hooks (engine/holding.py ``idle``): a falling cloud (nothing can be held) steps
+    bit for bit as the same scene without [mobility] (f64, one thread)."""
+    text = small(count=400)
+    out = {}
+    for name, extra in (("without", ""), ("with", "\n[mobility]\nenabled = true\n")):
+        with td.Simulation.from_text(text + extra, h5="", threads=1) as sim:
+            sim.step(400)
+            out[name] = sim.particles()
+            if extra:
+                e = sim.engine
+                assert not e.holding.holds_any()
+                assert e.model.effect("mobility").statistics()["inactive_particles"] == 0
+                assert e._drift is e._drifts[False][1]
+    for field in ("position", "velocity", "angular_velocity"):
+        assert np.array_equal(out["without"][field], out["with"][field]), field
+
+
+def test_a_flow_that_holds_nothing_is_judged_every_idle_steps(monkeypatch):
+    """While the last judgement held nothing, the next comes at the first rebuild at least
+    IDLE_JUDGE_STEPS steps later (judging at each of a flow's rebuilds cost the 32k chute
+    ~9 %); once a judgement holds particles, every rebuild judges (a settled bed)."""
+    from taichi_dem.effects.mobility import effect as mobility
+    # a thin skin: the falling cloud rebuilds every few steps, as a fast flow does
+    text = small(count=400, precision="f32").replace("seed = 3", "seed = 3\nskin = 1e-5")
+    with td.Simulation.from_text(text + "\n[mobility]\nenabled = true\n", h5="") as sim:
+        e = sim.engine
+        m = e.model.effect("mobility")
+        judged = []
+        update = m._update
+        monkeypatch.setattr(m, "_update", lambda n, t: (judged.append(t), update(n, t)))
+        start = e.broadphase.rebuilds
+        sim.step(3 * mobility.IDLE_JUDGE_STEPS)
+        rebuilds = e.broadphase.rebuilds - start
+    gaps = np.diff(judged) / e.model.dt
+    assert rebuilds > len(judged) >= 2, (rebuilds, len(judged))
+    assert np.all(gaps >= mobility.IDLE_JUDGE_STEPS - 0.5), gaps
+
+
 def test_a_frozen_bed_still_loads_its_floor():
     """1200 spheres settled on a floor (0.5 s, threshold 1e-6 (m/s)^2), then judged: many are
     inactive and held, their mutual contacts frozen. Nothing inactive moves; the floor's load

@@ -87,6 +87,13 @@ INACTIVE, ACTIVE, MOBILE, EMPTY = 0, 1, 2, 3
 # froze a quarter as much (1,200 spheres on a floor, tests/unit/test_mobility.py); at 2000
 # the forced judgements come after the bed has come to rest and change nothing there.
 JUDGE_WITHIN_STEPS = 2000
+# while the last judgement held nothing (a flow: the chute), the next comes at the first
+# rebuild at least this many steps later, not at every rebuild: judging is one serial pass over
+# the particles at each of the chute's rebuilds (~every 33 steps), ~2 % of its step, for
+# nothing. A bed that comes to rest is frozen at most this many steps later; once a judgement
+# holds particles, every rebuild judges again (a held particle is woken at the next one, as
+# before). BENCHMARKS.md "Mobility where nothing freezes: judged less while it holds nothing".
+IDLE_JUDGE_STEPS = 200
 
 
 class Mobility(Effect):
@@ -149,6 +156,14 @@ class Mobility(Effect):
         self.block_status = tree.add("mobility_status", ti.i32, self.n_blocks)
         # [inactive particles, cells inactive, active, mobile, particles outside the reach]
         self.counts = tree.add("mobility_counts", ti.i32, 5)
+        # the last judgement: [its time, s; 1 if it held any particle, else 0] (in the tree:
+        # a checkpoint keeps it, so a resumed run judges at the rebuilds the uninterrupted one
+        # would)
+        self.last_judgement = tree.add("mobility_last_judgement", ti.f64, 2)
+        # 1 while the last judgement held any particle: the step reads the flags only then
+        # (engine/holding.py), so a flow where nothing is held pays no flag reads. 1 until
+        # the first judgement (and from a checkpoint without it: its flags stand)
+        self.particles_held = tree.add("mobility_particles_held", ti.i32, 1)
 
     def upload(self, ctx):
         """The volume (m^3) of each mobility cell inside the domain (a non-periodic axis's last
@@ -179,7 +194,9 @@ class Mobility(Effect):
                        ).astype(np.int32)
         return (self._volumes(ctx, np.maximum(vol, 1e-30).reshape(-1), beyond.reshape(-1))
                 + [(self.block_outside, outside.reshape(-1)),
-                   (self.particle_active, np.ones(self.particle_active.shape, np.int32))])
+                   (self.particle_active, np.ones(self.particle_active.shape, np.int32)),
+                   (self.last_judgement, np.array([-np.inf, 1.0])),
+                   (self.particles_held, np.ones(1, np.int32))])
 
     def _volumes(self, ctx, volume, beyond):
         """The writes of the cells' volumes (m^3) and their flags of lying beyond the reach."""
@@ -243,7 +260,7 @@ class Mobility(Effect):
         check_acceleration = acceleration_sq >= 0.0
         phi_min = st.solid_fraction_threshold
         counts = self.counts
-        active = self.particle_active
+        active, held, last = self.particle_active, self.particles_held, self.last_judgement
         count, temp, speed_sq = self.block_count, self.block_temperature, self.block_mean_speed_sq
         phi, volume, flag = self.block_solid_fraction, self.block_volume, self.block_flag
         mobile, status = self.block_mobile, self.block_status
@@ -360,6 +377,10 @@ class Mobility(Effect):
                     s.angular_acceleration[i] = ti.Vector([0.0, 0.0, 0.0])
                     ti.atomic_add(counts[0], 1)
                 active[i] = a
+            for _ in range(1):          # (a loop of its own: after every particle is judged)
+                held[0] = 1 if counts[0] > 0 else 0
+                last[0] = t
+                last[1] = ti.cast(held[0], ti.f64)
 
 
         rigid_spin = self.make_rigid_spin(ctx)
@@ -497,7 +518,10 @@ class Mobility(Effect):
     # ------------------------------------------------------------------ driver
     def after_rebuild(self, ctx, n: int, time: float):
         """Judge every particle: its ``particle_active`` flag for the steps to the next
-        rebuild."""
+        rebuild; while the last judgement held none, only every IDLE_JUDGE_STEPS steps."""
+        judged_at, held = self.last_judgement.to_numpy()
+        if held == 0.0 and time - judged_at < (IDLE_JUDGE_STEPS - 0.5) * ctx.dt:
+            return
         self._update(n, time)
         if self.reach_in_use and int(self.counts[4]) > 0:
             # a particle centre beyond the frame body's reach: the body does not enclose the
