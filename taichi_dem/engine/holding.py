@@ -20,7 +20,7 @@ with the constants of a scene without them (``idle``), and runs the second while
 the holder's last judgement held nothing (``holds_any``): a flow where nothing is held then
 runs the step of a scene without the effect. The hooks' reads and branches cost the 32k
 chute 4 - 5 % even with every flag 1 and a run-time switch in front of them
-(BENCHMARKS.md "Mobility where nothing freezes").
+(BENCHMARKS.md "Mobility where nothing freezes: the step without the hooks").
 """
 import taichi as ti
 

@@ -167,10 +167,14 @@ class Engine:
         for x in self.model.effect_list:
             x.prepare(self.context)         # (what needs the broadphase and the mesh)
         self.holding = Holding(self.model.effect_list, self.context)
-        # the step while the holder holds nothing: the hooks' constants (engine/holding.py)
-        self.idle_holding = (Holding(self.model.effect_list, self.context, idle=True)
-                             if self.holding.any else None)
-        self._variants: dict = {}           # holds? -> the step's kernels (select_step)
+        # the steps it compiles, by whether they read the holder's hooks (engine/holding.py):
+        # holds? -> {"holding", "drift": (drift_particle, drift), "pairs": the pair kernels}
+        self._variants = {False: {"holding": self.holding}}
+        if self.holding.any:
+            # the step while the holder holds nothing: the hooks' constants
+            self._variants = {True: {"holding": self.holding},
+                              False: {"holding": Holding(self.model.effect_list,
+                                                         self.context, idle=True)}}
         self._compile_particle_kernels()
         self.count = 0                     # slots in use
         self._measure = None               # (measure.py, compiled on first use)
@@ -243,44 +247,35 @@ class Engine:
         self.worker_pool.destroy()
 
     # ------------------------------------------------------------------ kernels
-    def _holding_variants(self):
-        """(holds, Holding) of each step the engine compiles: one without a holder; with
-        one, the step with its hooks (True) and the step while it holds nothing (False)."""
-        if self.idle_holding is None:
-            return ((False, self.holding),)
-        return ((True, self.holding), (False, self.idle_holding))
-
     def _compile_particle_kernels(self):
-        self._drifts = {}
         full = self.holding
-        for holds, holding in self._holding_variants():
-            self.holding = holding          # (make_drift reads the engine's hooks)
+        for variant in self._variants.values():
+            self.holding = variant["holding"]       # (make_drift reads the engine's hooks)
             self.minimum_image, particle, drift = make_drift(self)
-            self._drifts[holds] = (particle, drift)
+            variant["drift"] = (particle, drift)
         self.holding = full
-        self.drift_particle, self._drift = self._drifts[full.any]
+        self.drift_particle, self._drift = self._variants[full.any]["drift"]
 
     def select_step(self):
         """Run the step with the holder's hooks while its last judgement held particles, else
         the one without them (the same results: every flag is 1). Called after each
         judgement (the rebuilds) and where a run of steps begins (after a restore)."""
-        holds = self.holding.holds_any()
-        self.drift_particle, self._drift = self._drifts[holds]
-        kernels = self._variants.get(holds)
-        if kernels is not None:
+        variant = self._variants[self.holding.holds_any()]
+        self.drift_particle, self._drift = variant["drift"]
+        if "pairs" in variant:
             (self._pair_forces, self._gather, self._run_steps,
-             self._run_worker_steps) = kernels
+             self._run_worker_steps) = variant["pairs"]
 
     def _compile_pair_kernels(self, p: PairState):
-        """The step's kernels for the pair list ``p``, once per holding variant
-        (_holding_variants; compiled on first use), then the one to run (select_step)."""
+        """The step's kernels for the pair list ``p``, once per variant (with and without the
+        holding hooks; each compiled on first use), then the one to run (select_step)."""
         full = self.holding
-        for holds, holding in self._holding_variants():
-            self.holding = holding          # (the stages read the engine's hooks)
-            self.drift_particle = self._drifts[holds][0]
+        for variant in self._variants.values():
+            self.holding = variant["holding"]       # (the stages read the engine's hooks)
+            self.drift_particle = variant["drift"][0]
             self._compile_pair_variant(p)
-            self._variants[holds] = (self._pair_forces, self._gather, self._run_steps,
-                                     self._run_worker_steps)
+            variant["pairs"] = (self._pair_forces, self._gather, self._run_steps,
+                                self._run_worker_steps)
         self.holding = full
         self.select_step()
 

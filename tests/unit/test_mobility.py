@@ -293,7 +293,7 @@ def test_a_flow_that_holds_nothing_steps_as_without_mobility():
                 e = sim.engine
                 assert not e.holding.holds_any()
                 assert e.model.effect("mobility").statistics()["inactive_particles"] == 0
-                assert e._drift is e._drifts[False][1]
+                assert e._drift is e._variants[False]["drift"][1]
     for field in ("position", "velocity", "angular_velocity"):
         assert np.array_equal(out["without"][field], out["with"][field]), field
 

@@ -2,8 +2,9 @@
 move (the "adaptive sparse contacts" idea of seed 000 and of Lethe; written here from the
 description, not from their code).
 
-At every neighbour rebuild, and at least every JUDGE_WITHIN_STEPS steps (a bed at rest asks for
-no rebuild; the lists are rebuilt for the judgement), the particles, already sorted by contact
+At every neighbour rebuild (while the last judgement held nothing, every IDLE_JUDGE_STEPS
+steps), and at least every JUDGE_WITHIN_STEPS steps (a bed at rest asks for no rebuild; the
+lists are rebuilt for the judgement), the particles, already sorted by contact
 cell (broadphase.py), are judged per *mobility cell*: a block of contact cells about
 ``cell_size`` across (3 largest diameters by default; a contact cell of ~1.1 d holds about
 one particle, too few for a fluctuation or a solid fraction). For each mobility cell, over
@@ -88,11 +89,11 @@ INACTIVE, ACTIVE, MOBILE, EMPTY = 0, 1, 2, 3
 # the forced judgements come after the bed has come to rest and change nothing there.
 JUDGE_WITHIN_STEPS = 2000
 # while the last judgement held nothing (a flow: the chute), the next comes at the first
-# rebuild at least this many steps later, not at every rebuild: judging is one serial pass over
-# the particles at each of the chute's rebuilds (~every 33 steps), ~2 % of its step, for
+# rebuild at least this many steps later, not at every rebuild: judging is a serial pass over
+# the particles, at each of the chute's rebuilds (~every 33 steps) ~8 % of its step, for
 # nothing. A bed that comes to rest is frozen at most this many steps later; once a judgement
 # holds particles, every rebuild judges again (a held particle is woken at the next one, as
-# before). BENCHMARKS.md "Mobility where nothing freezes: judged less while it holds nothing".
+# before). BENCHMARKS.md "Mobility where nothing freezes: the step without the hooks".
 IDLE_JUDGE_STEPS = 200
 
 
