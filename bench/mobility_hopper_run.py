@@ -7,6 +7,7 @@ run (both phases' stepping, compiling excluded by a first step), the discharge m
 each, and the ratio off / on; variants alternated round by round (this host drifts).
 
     python bench/mobility_hopper_run.py --rounds 2
+    python bench/mobility_hopper_run.py --rounds 4 --seeds 4    # four beds
 """
 import argparse
 import statistics
@@ -19,9 +20,11 @@ from taichi_dem.app import slot_hopper as sh
 from taichi_dem.run.simulation import Simulation
 
 
-def whole_run(folder: Path, mobility: bool, settle: float, discharge: float) -> dict:
-    """Fill and settle, then discharge; wall seconds of each phase's stepping."""
-    text = sh.scene_text(phase="fill", mobility=mobility, end_time=settle)
+def whole_run(folder: Path, mobility: bool, settle: float, discharge: float,
+              seed: int = 1) -> dict:
+    """Fill and settle (the fill placed with ``seed``), then discharge; wall seconds of each
+    phase's stepping."""
+    text = sh.scene_text(phase="fill", mobility=mobility, end_time=settle, seed=seed)
     with Simulation.from_text(text, base_dir=str(folder)) as sim:
         sim.step(1)
         t0 = time.perf_counter()
@@ -38,20 +41,26 @@ def main(argv=None) -> int:
     p.add_argument("--rounds", type=int, default=2)
     p.add_argument("--settle", type=float, default=0.45)
     p.add_argument("--discharge", type=float, default=0.7)
+    p.add_argument("--seeds", type=int, default=1,
+                   help="round r fills its bed with seed 1 + r mod SEEDS: with more than one, "
+                        "the discharge on / off is seen over several beds, not one pair")
     a = p.parse_args(argv)
     runs = {False: [], True: []}
     with tempfile.TemporaryDirectory() as tmp:
         for r in range(a.rounds):
             for mobility in ((False, True) if r % 2 == 0 else (True, False)):
-                res = whole_run(Path(tmp), mobility, a.settle, a.discharge)
+                res = whole_run(Path(tmp), mobility, a.settle, a.discharge,
+                                seed=1 + r % a.seeds)
                 runs[mobility].append(res)
                 print(f"round {r + 1} mobility {'on ' if mobility else 'off'}: fill and settle "
                       f"{res['fill']:.1f} s, discharge {res['discharge']:.1f} s, whole run "
                       f"{res['total']:.1f} s; discharge {1e3 * res['rate']:.2f} g/s", flush=True)
     ratios = [x["total"] / y["total"] for x, y in zip(runs[False], runs[True])]
+    discharge = [y["rate"] / x["rate"] for x, y in zip(runs[False], runs[True])]
     print(f"\nwhole run off / on, paired: median {statistics.median(ratios):.2f} (rounds "
           f"{', '.join(f'{q:.2f}' for q in ratios)}); discharge on / off "
-          f"{statistics.median(y['rate'] / x['rate'] for x, y in zip(runs[False], runs[True])):.4f}")
+          f"{statistics.median(discharge):.4f} (rounds "
+          f"{', '.join(f'{q:.4f}' for q in discharge)})")
     return 0
 
 
