@@ -255,13 +255,13 @@ class Section:
     builds: str = ""
     # with a reader: ``derive(parser) -> settings or None``, the effect's settings implied by
     # other sections when the scene lacks this one (the drag of a [thermal.gas] with
-    # ``drag``); the loader calls it after [thermal]
+    # ``drag``; gravity from [simulation] gravity, a section without a table of its own)
     derive: Optional[Callable[[Any], Any]] = None
-    # with a reader: the effect sections whose settings its reader or ``derive`` reads (the
+    # the effect sections whose settings its reader or ``derive`` reads (the
     # loader's ``settings``, as read so far): the loader reads those first
     after: tuple = ()
-    # with a reader: the keys the effect adds to other sections' tables, by the host's path
-    # ({"materials.*": (Key, ...), "walls[]": ..., "bodies[]", "particles[]", "factories[]"}):
+    # the keys the effect adds to other sections' tables, by the host's path ({"materials.*":
+    # (Key, ...), "walls[]", "bodies[]", "particles[]", "factories[]", "simulation"}):
     # the host reads them with its own keys into its object's ``effect_values`` (their
     # defaults where absent; scene/model.py ``AddedKeys``), the schema lists them under it.
     # Given in a scene without this section, each does what its ``when_off`` says
@@ -273,8 +273,8 @@ class Section:
     # whether or not the section is on (a real modulus no softer than the simulated one);
     # the loader calls it after reading every section
     check_added: Optional[Callable[[Any], None]] = None
-    # with a reader: what the effect can do to a free particle, for the time step and the
-    # divergence guard (setup/timestep.py expected_max_speed), both from (scene, settings):
+    # what the effect can do to a free particle, for the time step and the divergence guard
+    # (setup/timestep.py expected_max_speed), both from (scene, settings):
     # ``acceleration_bound`` the largest acceleration it gives one, m/s^2 (a body force);
     # ``speed_bound`` the largest speed it can carry one to, m/s (a gas's drag)
     acceleration_bound: Optional[Callable[[Any, Any], float]] = None
@@ -424,7 +424,7 @@ def host_section(section: Section) -> Section:
 def added_values(host: str, table: dict, file: str, key: str) -> dict:
     """{name: SI value, or its default} of every key the effects add to the host section at
     ``host``, read from its ``table`` (at ``key``, for errors); a structured key (a table)
-    is kept as given, for its effect to read."""
+    is read by its ``parse``."""
     out = {}
     for _, k in added_keys(host):
         if k.name in table:

@@ -33,7 +33,7 @@ from typing import Optional
 import numpy as np
 
 from ...errors import SceneError
-from ..keys import added_in, effect_sections
+from ..keys import effect_sections
 from .particles import region_bounds
 
 
@@ -74,22 +74,31 @@ def output_path_problem(path) -> Optional[str]:
 def ignored_keys(scene) -> list[tuple[str, str]]:
     """(key, reason) for each key the scene gives but nothing will read: a key an effect adds
     to another section (scene/keys.py ``Section.adds``) that the effect ignores while the
-    scene lacks its section (``Key.when_off``: a temperature without heat transfer)."""
+    scene lacks its section (``Key.when_off``: a temperature without heat transfer). Read
+    from the scene's objects: a key counts as given where its value is not its default."""
     out = []
     for path, section in effect_sections().items():
         if path in scene.settings:
             continue
-        for where, key in added_in(_given_tables(scene), section):
-            if key.when_off == "ignored":
-                out.append((f"{where}.{key.name}", f"ignored: the scene has no [{path}] "
-                            f"section ({section.description.split(':')[0].lower()} off)"))
+        for host, keys in section.adds.items():
+            for where, item in _host_objects(scene, host):
+                for key in keys:
+                    given = item.effect_values.get(key.name, key.default) != key.default
+                    if key.when_off == "ignored" and given:
+                        out.append((f"{where}.{key.name}", f"ignored: the scene has no [{path}] "
+                                    f"section ({section.description.split(':')[0].lower()} off)"))
     return out
 
 
-def _given_tables(scene) -> dict:
-    """The scene's document as given (its TOML text, read again)."""
-    import tomllib
-    return tomllib.loads(scene.text)
+def _host_objects(scene, host: str) -> list:
+    """(dotted key, object) of each object the scene holds of the host section ``host``."""
+    if host == "materials.*":
+        return [(f"materials.{name}", m) for name, m in scene.materials.items()]
+    if host == "simulation":
+        return [("simulation", scene.simulation)]
+    items = {"walls[]": scene.walls, "bodies[]": scene.bodies, "particles[]": scene.fills,
+             "factories[]": scene.factories}[host]
+    return [(getattr(x, "key", None) or f"{host[:-2]}[{i}]", x) for i, x in enumerate(items)]
 
 
 def _path_text_problem(text: str) -> Optional[str]:
