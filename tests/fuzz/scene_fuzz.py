@@ -33,6 +33,7 @@ corpus.
 from __future__ import annotations
 
 import copy
+import functools
 import importlib.util
 import json
 import math
@@ -1483,15 +1484,22 @@ def _past(bound: float, direction: int) -> float:
 
 def _other_units(node: dict) -> list[str]:
     """Quantity strings of another dimension than ``node``'s pattern accepts."""
+    return list(_other_units_for(node["pattern"]))
+
+
+@functools.lru_cache(maxsize=None)
+def _other_units_for(pattern_text: str) -> tuple[str, ...]:
+    """_other_units by pattern, once per pattern (the corpus asks ~20,000 times for a few
+    dozen patterns: seconds of every pytest worker's collection)."""
     from taichi_dem.scene.units import DIMENSIONS, units_for
-    pattern = re.compile(node["pattern"])
+    pattern = re.compile(pattern_text)
     out = []
     for d in DIMENSIONS:
         for u in units_for(d)[:3] + ["ft", "in", "deg"]:
             text = f"3 {u}"
             if not pattern.search(text):
                 out.append(text)
-    return sorted(set(out))
+    return tuple(sorted(set(out)))
 
 
 # strings that break a name's or a path's pattern (control characters; '/', '.', '..' and
