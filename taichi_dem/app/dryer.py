@@ -119,6 +119,9 @@ class Dryer:
     shell_loss_coefficient: float = 0.0          # W/(m^2 K), gas to the surroundings
     ambient_temperature: float = 288.15          # K
     perry_k: float = 0.5             # Btu/(h ft3 F) in Ua = K G^0.67 / D
+    # what of a map's solids meets the gas: "curtains" (the airborne particles) or "surface"
+    # (those and the bed's and the flights' loads' surface open to the gas)
+    exposure: str = "curtains"
     residence_time: float | None = None          # s: given (a map's), else Friedman-Marshall
     conductance_per_metre: float | None = None   # W/(m K): given (a map's), else Perry's Ua
     uncertainty: float = 0.25        # relative, of each closure (for the sensitivity)

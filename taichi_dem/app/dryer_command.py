@@ -81,6 +81,10 @@ KEYS = {
         "map": ("map", None, "", None, None, "a map.json of this drum's slices (taichi-dem "
                 "map), relative to this file, or a list of maps at several gas speeds: the "
                 "residence, conductance and torque from it"),
+        "exposure": ("exposure", None, "curtains", None, None,
+                     "what of a map's solids meets the gas: \"curtains\" (the airborne "
+                     "particles) or \"surface\" (those and the surface of the bed and of the "
+                     "flights' loads open to the gas, each at its own speed against it)"),
         "perry_k": ("perry_k", None, 0.5, 0.0, 100.0, "K in Perry's Ua = K G^0.67 / D, "
                                                       "Btu/(h ft3 F)"),
         "uncertainty": ("uncertainty", None, 0.25, GE0, 0.9,
@@ -133,6 +137,12 @@ def load(path, feed: float | None = None) -> Dryer:
                 resolved = [str((p.parent / v).resolve()) for v in paths]
                 kw["map"] = resolved[0] if isinstance(value, str) else resolved
                 continue
+            if attr == "exposure":
+                if value not in ("curtains", "surface"):
+                    raise SceneError(str(p), name, "expected \"curtains\" or \"surface\", "
+                                     f"got {value!r}")
+                kw[attr] = value
+                continue
             if attr == "counter_current":
                 if value not in ("counter", "co"):
                     raise SceneError(str(p), name, f"expected \"counter\" or \"co\", got {value!r}")
@@ -160,6 +170,9 @@ def load(path, feed: float | None = None) -> Dryer:
     if feed is not None:
         kw["feed"] = feed
     map_path = kw.pop("map", None)
+    if map_path is None and kw.get("exposure", "curtains") != "curtains":
+        raise SceneError(str(p), "closure.exposure", "the surface open to the gas is measured "
+                         "by a map of the drum's slices: give closure.map")
     if map_path is not None:
         if "residence_time" in kw or "conductance_per_metre" in kw:
             raise SceneError(str(p), "closure.map", "a map gives the residence time and the "
@@ -225,8 +238,12 @@ def report(d: Dryer, a: dict, spread: dict, title: str = "") -> str:
               f"{d.map_info['map_uniform_holdup']:.4g} kg/m where the slice alone carries the "
               "feed), "
               f"{d.map_info['map_airborne_fraction']:.1%} of it airborne, the curtains' "
-              f"coefficient h = {d.map_info['map_heat_transfer_coefficient']:.3g} W/(m^2 K); "
-              "the +- column is each figure's change with the closures moved by the map's "
+              f"coefficient h = {d.map_info['map_heat_transfer_coefficient']:.3g} W/(m^2 K)"
+              + (f"; the gas also meets the surface of the bed and the flights' loads: "
+                 f"{d.map_info['map_surface_conductance_per_metre']:.4g} of the "
+                 f"{d.conductance_per_metre:.4g} W/(m K) per metre (closure.exposure)"
+                 if d.map_info.get("map_surface_conductance_per_metre") is not None else "")
+              + "; the +- column is each figure's change with the closures moved by the map's "
               "standard errors (added in quadrature)." if d.map_info else
              "Closures: residence "
              + (f"given ({d.residence_time:g} s)" if d.residence_time is not None

@@ -102,12 +102,26 @@ def closures(path, design: dict, source: str) -> dict:
                           f"{d * 1e3:.3g} mm: the curtains' surface is scaled by "
                           f"{d_map / d:.3g} (the same airborne mass in the dryer's particles) "
                           "and h is theirs")
-    reynolds = design["gas_density"] * d * slip / design["gas_viscosity"]
-    prandtl = design["gas_heat_capacity"] * design["gas_viscosity"] / design["gas_conductivity"]
-    nusselt = 2.0 + 0.6 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0)
-    h = design["gas_conductivity"] * nusselt / d
-    # dh/h = (0.3 Re^0.5 Pr^(1/3) / Nu) ds/s
-    slip_share = 0.3 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0) / nusselt
+    h, slip_share = ranz_marshall(design, d, slip)
+    conductance = h * area
+    variance = ((area_error / area if area else 0.0) ** 2
+                + (slip_share * slip_error / slip if slip else 0.0) ** 2) * conductance ** 2
+    surface = None
+    if design.get("exposure", "curtains") == "surface":
+        s_area, s_area_error = _interpolate(rows, "holdup_kg_per_m", holdup,
+                                            "surface_area_per_metre")
+        s_slip, s_slip_error = _interpolate(rows, "holdup_kg_per_m", holdup, "surface_slip_speed")
+        if not (math.isfinite(s_area) and math.isfinite(s_slip)):
+            raise SceneError(source, "closure.exposure", f"{p} has no surface figures (map the "
+                             "slice again with this version of taichi-dem map)")
+        # the bed's and the loads' open surface is a layer over their free surfaces: its area
+        # per metre does not change with the particles' size (unlike the curtains'), and each
+        # particle there exchanges at its own h(d) at the surface's speed against the gas
+        h_surface, s_share = ranz_marshall(design, d, s_slip)
+        surface = h_surface * s_area
+        conductance += surface
+        variance += ((s_area_error / s_area if s_area else 0.0) ** 2
+                     + (s_share * s_slip_error / s_slip if s_slip else 0.0) ** 2) * surface ** 2
     notes = list(size_notes)
     gas = info.get("gas")
     if gas:
@@ -120,9 +134,9 @@ def closures(path, design: dict, source: str) -> dict:
     return {
         "residence_time": marched.residence_time,
         "residence_uncertainty": abs(flow_error / flow) if flow else 0.0,
-        "conductance_per_metre": h * area,
-        "conductance_uncertainty": math.hypot(area_error / area if area else 0.0,
-                                              slip_share * slip_error / slip if slip else 0.0),
+        "conductance_per_metre": conductance,
+        "conductance_uncertainty": math.sqrt(variance) / conductance if conductance else 0.0,
+        "map_surface_conductance_per_metre": surface,
         "drive_torque": abs(sum(marched.torques.values())),
         "map_holdup": holdup,
         "map_uniform_holdup": uniform,
@@ -135,6 +149,17 @@ def closures(path, design: dict, source: str) -> dict:
         "map_feed_range": (conveyed[0], conveyed[-1]),
         "map_gas_speed": abs(float(gas["axial_velocity"])) if gas else None,
     }
+
+
+def ranz_marshall(design: dict, diameter: float, slip: float) -> tuple[float, float]:
+    """h = k_g Nu / d (W/(m^2 K)), Nu = 2 + 0.6 Re^(1/2) Pr^(1/3), Re = rho_g d s / mu_g, for
+    particles of ``diameter`` m moving at ``slip`` m/s through the ``design``'s gas; and dh/h
+    per ds/s, 0.3 Re^(1/2) Pr^(1/3) / Nu (the share of the slip's error in h's)."""
+    reynolds = design["gas_density"] * diameter * slip / design["gas_viscosity"]
+    prandtl = design["gas_heat_capacity"] * design["gas_viscosity"] / design["gas_conductivity"]
+    nusselt = 2.0 + 0.6 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0)
+    return (design["gas_conductivity"] * nusselt / diameter,
+            0.3 * math.sqrt(reynolds) * prandtl ** (1.0 / 3.0) / nusselt)
 
 
 def _march(path, slopes: set, length: float, feed: float, source: str):
@@ -181,6 +206,9 @@ def closures_over_gas(paths, design: dict, source: str) -> dict:
                  "conductance_uncertainty", "drive_torque", "map_holdup", "map_uniform_holdup",
                  "map_airborne_fraction", "map_heat_transfer_coefficient"):
         out[name] = float(np.interp(speed, speeds, [c[name] for c in found]))
+    if found[0]["map_surface_conductance_per_metre"] is not None:
+        out["map_surface_conductance_per_metre"] = float(np.interp(
+            speed, speeds, [c["map_surface_conductance_per_metre"] for c in found]))
     out["map_source"] = " + ".join(f"{c['map_source']} ({c['map_gas_speed']:.3g} m/s)" for c in found)
     # the maps' notes on the spheres' size (once; their gas notes give way to the
     # interpolation in the gas speed), then the gas's

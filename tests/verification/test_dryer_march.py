@@ -224,7 +224,8 @@ def test_bad_input_names_the_file_key_and_reason(tmp_path, edit, key, reason):
     assert str(bad) in r.stderr and key in r.stderr and reason in r.stderr
 
 
-def _map(tmp_path, diameter=1.0, rpm=8.0, incline=4.7, gas=None, slower=1.0, name="map.json"):
+def _map(tmp_path, diameter=1.0, rpm=8.0, incline=4.7, gas=None, slower=1.0, name="map.json",
+         surface=False):
     """A map.json as `taichi-dem map` writes it, with made-up rows: the feed 0.5 kg/s is carried
     at 20 kg/m (at 20 * ``slower`` kg/m with the flows divided by ``slower``); ``gas``: the
     slice's gas speed along the axis (m/s), recorded as the map does."""
@@ -239,6 +240,11 @@ def _map(tmp_path, diameter=1.0, rpm=8.0, incline=4.7, gas=None, slower=1.0, nam
                      "airborne_fraction": 0.1, "airborne_fraction_standard_error": 0.01,
                      "drum/torque_per_metre": torque, "drum/torque_per_metre_standard_error": 1.0,
                      "dynamic_angle": 30.0, "dynamic_angle_standard_error": 0.5})
+        if surface:     # the bed's open surface: about its chord, the slip the bed's
+            rows[-1].update({"surface_area_per_metre": 0.6 * area,
+                             "surface_area_per_metre_standard_error": 0.05 * area,
+                             "surface_slip_speed": 0.5 * slip,
+                             "surface_slip_speed_standard_error": 0.0})
     info = {"shell_radius": diameter / 2, "bulk_density": 1740.0, "particle_diameter": 0.024,
             "angular_speeds": {"drum": rpm * 2 * math.pi / 60}, "bodies": ["drum"],
             "gas": {"axial_velocity": gas, "density": 0.46} if gas is not None else None}
@@ -295,6 +301,49 @@ def test_a_map_gives_the_residence_the_conductance_and_the_torque(tmp_path):
     re = d24.gas_density * 0.024 * slip / d24.gas_viscosity
     h = d24.gas_conductivity * (2 + 0.6 * re ** 0.5 * pr ** (1 / 3)) / 0.024
     assert d24.conductance_per_metre == pytest.approx(h * area * 0.018 / 0.024, rel=1e-12)
+
+
+def test_the_surface_open_to_the_gas_adds_its_own_exchange(tmp_path):
+    """closure.exposure = "surface": the bed's and the loads' open surface per metre (a layer
+    over their free surfaces, so not scaled to the dryer's smaller particles as the curtains
+    are) exchanges at Ranz-Marshall's h(d) at its own slip, added to the curtains'; the
+    errors of the two parts add in quadrature. Without surface figures in the map, or
+    without a map, the key is refused."""
+    import numpy as np
+    from taichi_dem.app.machine import MachineMap
+    from taichi_dem.app.machine import answer as march
+    map_path = _map(tmp_path, surface=True)
+    path = _design_with_map(tmp_path, map_path)
+    curtains = load(path)
+    path.write_text(path.read_text().replace("[closure]\n", '[closure]\nexposure = "surface"\n'))
+    d = load(path)
+    mean = march(MachineMap.load(map_path), 12.0, 0.5, -0.08).holdup / 12.0
+    area = np.interp(mean, [10.0, 20.0, 40.0], [0.5, 0.9, 1.5])
+    slip = 0.5 * np.interp(mean, [10.0, 20.0, 40.0], [3.0, 3.4, 3.6])
+    re = d.gas_density * 0.018 * slip / d.gas_viscosity
+    pr = d.gas_heat_capacity * d.gas_viscosity / d.gas_conductivity
+    h = d.gas_conductivity * (2 + 0.6 * re ** 0.5 * pr ** (1 / 3)) / 0.018
+    surface = h * 0.6 * area
+    assert d.map_info["map_surface_conductance_per_metre"] == pytest.approx(surface, rel=1e-12)
+    assert d.conductance_per_metre == pytest.approx(curtains.conductance_per_metre + surface,
+                                                    rel=1e-12)
+    # 10 % on the curtains' area, 5/60 on the surface's
+    expected = math.hypot(0.1 * curtains.conductance_per_metre, surface / 12.0)
+    assert d.conductance_uncertainty * d.conductance_per_metre == pytest.approx(expected, rel=1e-9)
+    assert curtains.map_info["map_surface_conductance_per_metre"] is None
+    r = _cli("dryer", str(path))
+    assert r.returncode == 0 and "flights' loads" in r.stdout, r.stderr
+    # a map without the surface figures, no map, a bad value: refused
+    _map(tmp_path, surface=False)
+    r = _cli("dryer", str(path))
+    assert r.returncode == 2 and "closure.exposure" in r.stderr and "map the slice again" in r.stderr
+    no_map = path.read_text().replace(f'map = "{map_path.name}"\n', "")
+    path.write_text(no_map)
+    r = _cli("dryer", str(path))
+    assert r.returncode == 2 and "closure.exposure" in r.stderr and "give closure.map" in r.stderr
+    path.write_text(no_map.replace('exposure = "surface"', 'exposure = "bed"'))
+    r = _cli("dryer", str(path))
+    assert r.returncode == 2 and "closure.exposure" in r.stderr and "bed" in r.stderr
 
 
 @pytest.mark.parametrize("change, reason", [({"diameter": 1.2}, "across"), ({"rpm": 5.0}, "rpm"),
