@@ -505,11 +505,17 @@ class DryerDrum(Process):
         pilot, on_map, pilot_moved = run(DEMOS_DIR / self.PILOT, capacity=False)
         on_correlations = answer(replace(pilot, residence_time=None, conductance_per_metre=None,
                                          map_info=None, drive_torque=None))
+        # the same map with the gas meeting the bed's and the flights' loads' open surface too
+        _, on_surface, surface_moved = run(DEMOS_DIR / self.PILOT, capacity=False,
+                                           exposure="surface")
         words = []
         # the map's figures with their change when its closures move by their standard errors
         # (the correlations' have no measured scatter)
         errors = {k: v or 0.0 for k, v in pilot_moved["combined"].items()}
         for label, x, err in (("on the DEM map of this drum's slices", on_map, errors),
+                              ("the same, the gas also meeting the bed's and the loads' open "
+                               "surface", on_surface,
+                               {k: v or 0.0 for k, v in surface_moved["combined"].items()}),
                               ("on the correlations", on_correlations, None)):
             def pm(name, scale=1.0, fmt=".2g"):
                 return f" +- {err.get(name, 0.0) * scale:{fmt}}" if err is not None else ""
@@ -526,7 +532,9 @@ class DryerDrum(Process):
               "(its heap stands at 38.9 deg against angular rock's 40.5 +- 0.7; "
               "docs/calibration/aggregate): its slices convey 1.0-1.3x as fast as Friedman and "
               "Marshall's flighted drums (free-rolling spheres: 1.3-1.6x), and its curtains "
-              "show the gas less surface than the correlations' dryers (docs/machine/dryer_slice).")
+              "show the gas less surface than the correlations' dryers; the bed's and the "
+              "loads' open surface doubles the exchange, still about a third of Perry's "
+              "(docs/machine/dryer_slice).")
 
 
 class SlotHopper(Demo):

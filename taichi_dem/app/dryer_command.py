@@ -95,10 +95,10 @@ KEYS = {
 ABOUT = "about"          # free text: what the design is and where its numbers come from
 
 
-def load(path, feed: float | None = None) -> Dryer:
+def load(path, feed: float | None = None, exposure: str | None = None) -> Dryer:
     """A dryer design file (TOML; the sections and keys of KEYS) as a Dryer (at ``feed`` kg/s
-    of dry solids instead of the file's, when given: a map's closures follow it); bad input is
-    a SceneError naming the file, key and reason."""
+    of dry solids and with closure.exposure ``exposure`` instead of the file's, when given: a
+    map's closures follow them); bad input is a SceneError naming the file, key and reason."""
     from ..scene.loader import read_toml
     from ..scene.units import parse_quantity
     p = Path(path)
@@ -169,6 +169,8 @@ def load(path, feed: float | None = None) -> Dryer:
             kw[attr] = int(number) if attr == "cells" else number
     if feed is not None:
         kw["feed"] = feed
+    if exposure is not None:
+        kw["exposure"] = exposure
     map_path = kw.pop("map", None)
     if map_path is None and kw.get("exposure", "curtains") != "curtains":
         raise SceneError(str(p), "closure.exposure", "the surface open to the gas is measured "
@@ -197,6 +199,9 @@ def add_arguments(p) -> None:
                    help="the gas against the solids or with them (default: the file's)")
     p.add_argument("--feed", default=None,
                    help="a feed of dry solids ('45 t/h', or kg/s) instead of the design's")
+    p.add_argument("--exposure", choices=("curtains", "surface"), default=None,
+                   help="with a map: what of the solids meets the gas (default: the file's "
+                        "closure.exposure)")
     p.add_argument("--out", default=None, help="folder for dryer.md, dryer.json and "
                                                "dryer_profile.png (default: print only)")
 
@@ -309,13 +314,13 @@ def _plot(a: dict, path: Path) -> None:
 
 
 def run(path, flow: str | None = None, capacity: bool = True,
-        feed: float | None = None) -> tuple[Dryer, dict, dict]:
+        feed: float | None = None, exposure: str | None = None) -> tuple[Dryer, dict, dict]:
     """Load, march and measure the sensitivity of the dryer in ``path`` (at ``feed`` kg/s of
-    dry solids instead of the file's, when given); with ``capacity`` also its drying capacity
-    (the largest dry feed it dries to the target moisture) and that figure's sensitivity to the
-    closures."""
+    dry solids and with closure.exposure ``exposure`` instead of the file's, when given); with
+    ``capacity`` also its drying capacity (the largest dry feed it dries to the target
+    moisture) and that figure's sensitivity to the closures."""
     from dataclasses import replace
-    d = load(path, feed=feed)
+    d = load(path, feed=feed, exposure=exposure)
     if flow is not None:
         d = replace(d, counter_current=flow == "counter")
     a = answer(d)
@@ -336,8 +341,9 @@ def _capacity(path, d: Dryer):
         low, high = 0.05 * d.feed, 5.0 * d.feed
 
     def at_feed(feed, residence=1.0, conductance=1.0):
-        return replace(load(path, feed=feed), counter_current=d.counter_current,
-                       residence_factor=residence, conductance_factor=conductance)
+        return replace(load(path, feed=feed, exposure=d.exposure),
+                       counter_current=d.counter_current, residence_factor=residence,
+                       conductance_factor=conductance)
     value, bound = drying_capacity(at_feed, low, high, d.target_moisture)
     own = {"residence": d.residence_uncertainty, "conductance": d.conductance_uncertainty}
     moves = []
@@ -366,7 +372,8 @@ def cmd_dryer(args) -> int:
                               file="taichi-dem dryer", key="--feed")
         if feed <= 0.0:
             raise SceneError("taichi-dem dryer", "--feed", "must be > 0")
-    d, a, spread = run(args.design, args.flow, feed=feed)
+    d, a, spread = run(args.design, args.flow, feed=feed,
+                       exposure=getattr(args, "exposure", None))
     text = report(d, a, spread, Path(args.design).stem.replace("_", " "))
     print(text)
     if args.out:

@@ -88,3 +88,9 @@ def test_the_dryer_demo_gives_the_maps_answers_with_their_uncertainty(capsys):
     on_map, on_correlations = pilot.split("; on the correlations")
     assert "residence" in on_map and " +- " in on_map.split("residence", 1)[1]
     assert " +- " not in on_correlations.split(". The map's")[0]
+    # the same maps with the gas meeting the bed's and the loads' open surface too
+    _, surface, _ = run(demos.DEMOS_DIR / "dryers" / "pilot_dryer.toml", capacity=False,
+                        exposure="surface")
+    counted = on_map.split("the gas also meeting", 1)[1]
+    assert f"{surface['conductance_per_metre']:.3g} W/(m K) per metre" in counted
+    assert " +- " in counted
