@@ -466,7 +466,9 @@ class DryerDrum(Process):
         print(f"summary: against the flighted-drum correlations at this drum's size, speed, "
               f"incline and gas: residence {median:.3g} s (median), Friedman-Marshall's {fm:.3g} "
               f"s over its {gas.length:g} m ({median / fm:.2g}x); the gas gave the solids "
-              f"{heat / 1e3:.3g} kW, {dem:.3g} W/(m K) per metre of drum against Perry's Ua "
+              f"{heat / 1e3:.3g} kW, {dem:.3g} W/(m K) per metre of drum (every particle in the "
+              f"stream over its whole surface, the buried ones too: an upper bound) against "
+              f"Perry's Ua "
               f"{perry:.3g} W/(m K) per metre ({dem / perry:.2g}x), at a fill of {fill:.2%} "
               f"(bulk {bulk:.4g} kg/m^3; the correlations were fitted at 3-8 %). This short drum shows "
               "a dryer's plumbing - flights, curtains, gas, drying - and is not a calibrated "
@@ -502,6 +504,13 @@ class DryerDrum(Process):
               f"moisture, the gas at {m['gas_outlet_temperature'] - 273.15:.0f} +- "
               f"{pm.get('gas_outlet_temperature', 0.0):.2g} C; drive torque "
               f"{m['drive_torque'] / 1e3:.3g} kN m (the map's torque at the marched hold-up).")
+        _, ms, _ = run(DEMOS_DIR / self.DESIGN_ON_MAP, capacity=False, exposure="surface")
+        print(f"summary: the same, the gas also meeting the bed's and the flights' loads' open "
+              f"surface (closure.exposure = \"surface\"): gas-solids "
+              f"{ms['conductance_per_metre']:.3g} W/(m K) per metre; the solids leave at "
+              f"{ms['solids_outlet_temperature'] - 273.15:.0f} C with "
+              f"{ms['solids_outlet_moisture']:.2%} moisture, the gas at "
+              f"{ms['gas_outlet_temperature'] - 273.15:.0f} C.")
         pilot, on_map, pilot_moved = run(DEMOS_DIR / self.PILOT, capacity=False)
         on_correlations = answer(replace(pilot, residence_time=None, conductance_per_metre=None,
                                          map_info=None, drive_torque=None))
