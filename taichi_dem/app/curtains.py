@@ -28,15 +28,7 @@ def touching_another(position: np.ndarray, radius: np.ndarray, period_axis: int 
     out = np.zeros(n, bool)
     if n < 2:
         return out
-    x = np.asarray(position, float).copy()
-    box = None
-    if period_axis is not None and period > 0.0:
-        # cKDTree wraps every axis of its box: the periodic one at the period, the others in a
-        # box far larger than the particles' span (no image ever comes near)
-        x -= x.min(axis=0) - 1.0
-        x[:, period_axis] = np.mod(x[:, period_axis], period)
-        box = np.full(3, 1e3 * (float(np.ptp(x)) + 1.0))
-        box[period_axis] = period
+    x, box = _periodic_box(position, period_axis, period)
     reach = 2.0 * float(np.max(radius)) * (1.0 + CONTACT_TOLERANCE)
     pairs = cKDTree(x, boxsize=box).query_pairs(reach, output_type="ndarray")
     if len(pairs) == 0:
@@ -49,6 +41,21 @@ def touching_another(position: np.ndarray, radius: np.ndarray, period_axis: int 
     out[pairs[near, 0]] = True
     out[pairs[near, 1]] = True
     return out
+
+
+def _periodic_box(position, period_axis: int | None, period: float):
+    """(positions, boxsize) for a cKDTree that wraps ``period_axis`` at ``period`` m: the
+    positions shifted into the box's positive octant, that axis taken modulo the period.
+    cKDTree wraps every axis of its box, so the others get a box far larger than the
+    particles' span (no image ever comes near); (a copy, None) without a period."""
+    x = np.asarray(position, float).copy()
+    if period_axis is None or not period > 0.0:
+        return x, None
+    x -= x.min(axis=0) - 1.0
+    x[:, period_axis] = np.mod(x[:, period_axis], period)
+    box = np.full(3, 1e3 * (float(np.ptp(x)) + 1.0))
+    box[period_axis] = period
+    return x, box
 
 
 def touching_bodies(position: np.ndarray, radius: np.ndarray, meshes, poses) -> np.ndarray:
@@ -175,13 +182,7 @@ def exposed_fraction(position, radius, meshes=(), poses=(), length: float = 0.0,
     span = EXPOSURE_REACH_DIAMETERS * 2.0 * float(np.mean(r)) if reach is None else float(reach)
     u = sphere_directions(directions)
     blocked = np.zeros((len(idx), directions), bool)
-    xs = x.copy()
-    box = None
-    if period_axis is not None and length > 0.0:
-        xs -= xs.min(axis=0) - 1.0
-        xs[:, period_axis] = np.mod(xs[:, period_axis], length)
-        box = np.full(3, 1e3 * (float(np.ptp(xs)) + 1.0))
-        box[period_axis] = length
+    xs, box = _periodic_box(x, period_axis, length)
     # other particles: those within the ray's reach of the surface
     near = cKDTree(xs[idx], boxsize=box).query_ball_tree(
         cKDTree(xs, boxsize=box), float(np.max(r)) * 2.0 + span)
