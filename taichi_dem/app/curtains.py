@@ -183,35 +183,48 @@ def exposed_fraction(position, radius, meshes=(), poses=(), length: float = 0.0,
     u = sphere_directions(directions)
     blocked = np.zeros((len(idx), directions), bool)
     xs, box = _periodic_box(x, period_axis, length)
-    # other particles: those within the ray's reach of the surface
-    near = cKDTree(xs[idx], boxsize=box).query_ball_tree(
-        cKDTree(xs, boxsize=box), float(np.max(r)) * 2.0 + span)
-    a = np.repeat(np.arange(len(idx)), [len(n) for n in near])
-    b = np.concatenate([np.asarray(n, int) for n in near]) if len(a) else np.zeros(0, int)
-    keep = b != idx[a]
-    a, b = a[keep], b[keep]
-    for lo in range(0, len(a), 20000):
-        ia, jb = a[lo:lo + 20000], b[lo:lo + 20000]
-        d = xs[jb] - xs[idx[ia]]                    # from the particle to its neighbour
-        if box is not None:
-            d[:, period_axis] -= length * np.round(d[:, period_axis] / length)
-        # the ray s + t u, s = r_i u, 0 <= t <= span, enters sphere j where its closest
-        # approach to d is under r_j: at t* = clip(u.d - r_i, 0, span), s' = r_i + t*,
-        # |s' u - d|^2 = |d|^2 - 2 s' u.d + s'^2
-        along = d @ u.T                                               # (pairs, directions)
-        ri = r[idx[ia]][:, None]
-        reach_to = ri + np.clip(along - ri, 0.0, span)
-        gap = np.einsum("pc,pc->p", d, d)[:, None] - 2.0 * reach_to * along + reach_to ** 2
-        hit = gap < (r[jb] ** 2)[:, None]
-        # the pairs come grouped by particle (query_ball_tree's rows, in order)
-        first = np.flatnonzero(np.r_[True, ia[1:] != ia[:-1]])
-        blocked[ia[first]] |= np.logical_or.reduceat(hit, first, axis=0)
+    # other particles: those within the ray's reach of the surface (each pair both ways,
+    # kept where the first is measured, grouped by it)
+    pairs = cKDTree(xs, boxsize=box).query_pairs(float(np.max(r)) * 2.0 + span,
+                                                 output_type="ndarray")
+    first, second = np.r_[pairs[:, 0], pairs[:, 1]], np.r_[pairs[:, 1], pairs[:, 0]]
+    row_of = np.full(len(x), -1)
+    row_of[idx] = np.arange(len(idx))
+    keep = row_of[first] >= 0
+    order = np.argsort(row_of[first[keep]], kind="stable")
+    a, b = row_of[first[keep]][order], second[keep][order]
+    d = xs[b] - xs[idx[a]]                          # from the particle to its neighbour
+    if box is not None:
+        d[:, period_axis] -= length * np.round(d[:, period_axis] / length)
+    # the nearest neighbours first: they hide most directions, and a particle they hide all
+    # round (most of a bed's) needs no test against the farther ones
+    near = np.einsum("pc,pc->p", d, d) < (4.0 * float(np.max(r))) ** 2
+    _block(blocked, u, r[idx], a[near], b[near], d[near], r, span)
+    far = ~near & ~blocked.all(axis=1)[a]
+    _block(blocked, u, r[idx], a[far], b[far], d[far], r, span)
     rows, dirs = np.nonzero(~blocked)
     if len(rows) and len(meshes):
         start = x[idx[rows]] + r[idx[rows]][:, None] * u[dirs]
         hit = _segments_cross(meshes, poses, start, u[dirs], span)
         blocked[rows[hit], dirs[hit]] = True
     return 1.0 - blocked.mean(axis=1)
+
+
+def _block(blocked, u, radius_of_row, a, b, d, radius, span, chunk=20000) -> None:
+    """Mark in ``blocked`` (rows x directions) the directions ``u`` of row a whose ray from
+    the surface, s + t u with s = r_a u and 0 <= t <= ``span``, enters the sphere of particle
+    b (``radius``) at ``d`` from it: its closest approach to d, at t* = clip(u.d - r_a, 0,
+    span) and s' = r_a + t*, is |s' u - d|^2 = |d|^2 - 2 s' u.d + s'^2 < r_b^2. The pairs
+    come grouped by a (ascending)."""
+    for lo in range(0, len(a), chunk):       # (nothing to do without pairs)
+        ia, jb, dd = a[lo:lo + chunk], b[lo:lo + chunk], d[lo:lo + chunk]
+        along = dd @ u.T                                              # (pairs, directions)
+        ri = radius_of_row[ia][:, None]
+        reach_to = ri + np.clip(along - ri, 0.0, span)
+        gap = np.einsum("pc,pc->p", dd, dd)[:, None] - 2.0 * reach_to * along + reach_to ** 2
+        hit = gap < (radius[jb] ** 2)[:, None]
+        first = np.flatnonzero(np.r_[True, ia[1:] != ia[:-1]])
+        blocked[ia[first]] |= np.logical_or.reduceat(hit, first, axis=0)
 
 
 def _segments_cross(meshes, poses, start: np.ndarray, direction: np.ndarray,
