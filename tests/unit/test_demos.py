@@ -84,6 +84,11 @@ def test_the_dryer_demo_gives_the_maps_answers_with_their_uncertainty(capsys):
     assert (f"residence {m['residence_time'] / 60:.3g} +- "
             f"{moved['combined']['residence_time'] / 60:.2g} min") in line
     assert f"the gas at {m['gas_outlet_temperature'] - 273.15:.0f} +- " in line
+    _, ms, _ = run(demos.DEMOS_DIR / "dryers" / "aggregate_dryer_map.toml", capacity=False,
+                   exposure="surface")
+    line = next(x for x in out.splitlines() if "flights' loads' open surface" in x)
+    assert f"gas-solids {ms['conductance_per_metre']:.3g} W/(m K)" in line
+    assert f"the gas at {ms['gas_outlet_temperature'] - 273.15:.0f} C" in line
     pilot = next(x for x in out.splitlines() if "pilot dryer fed" in x)
     on_map, on_correlations = pilot.split("; on the correlations")
     assert "residence" in on_map and " +- " in on_map.split("residence", 1)[1]
