@@ -333,6 +333,13 @@ def test_the_surface_open_to_the_gas_adds_its_own_exchange(tmp_path):
     assert curtains.map_info["map_surface_conductance_per_metre"] is None
     r = _cli("dryer", str(path))
     assert r.returncode == 0 and "flights' loads" in r.stdout, r.stderr
+    # the command line's --exposure over the file's
+    r = _cli("dryer", str(path), "--exposure", "curtains")
+    assert r.returncode == 0 and "flights' loads" not in r.stdout, r.stderr
+    plain = tmp_path / "plain.toml"
+    plain.write_text(path.read_text().replace('exposure = "surface"\n', ""))
+    r = _cli("dryer", str(plain), "--exposure", "surface")
+    assert r.returncode == 0 and f"{surface:.4g} of the" in r.stdout, r.stderr
     # a map without the surface figures, no map, a bad value: refused
     _map(tmp_path, surface=False)
     r = _cli("dryer", str(path))
