@@ -170,8 +170,9 @@ def exposed_fraction(position, radius, meshes=(), poses=(), length: float = 0.0,
     periodic axis of length ``length`` m) or crossing a triangle of ``meshes`` at ``poses``
     ((R, T) as in touching_bodies). The gas sweeping past a bed meets its outer layer: a
     sphere alone is 1, one of two touching equal spheres 1 - (1 - cos 30 deg) / 2 = 0.933
-    (the other hides the cap whose normals pass within a radius of its centre), one on a
-    floor 0.5, and one inside a packing ~0. ``only``: the indices to measure (all by
+    (the other hides the cap whose normals pass within a radius of its centre), one resting
+    on a floor (1 + r / (r + reach)) / 2 = 0.6 at the default reach (the normals just below
+    its equator clear the floor within the reach), and one inside a packing ~0. ``only``: the indices to measure (all by
     default); returns their fractions, each a multiple of 1 / ``directions``."""
     from scipy.spatial import cKDTree
     x = np.asarray(position, float)

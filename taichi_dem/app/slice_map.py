@@ -190,7 +190,7 @@ class SliceObserver:
         self.flights = (FlightRecorder.for_slice(sim, geometry, shell_mesh, self.up,
                                                  self.horizontal) if shell_mesh else None)
         # the surface the gas sweeps besides the curtains: a dryer's figure, measured in a
-        # slice with a [gas] (~0.3 s a sample for 1,500 particles in a flighted drum, ~10 %
+        # slice with a [gas] (~0.13 s a sample for 1,500 particles in a flighted drum, ~5 %
         # of such a slice's time)
         self.surface = gas is not None
 
