@@ -504,13 +504,18 @@ class DryerDrum(Process):
               f"moisture, the gas at {m['gas_outlet_temperature'] - 273.15:.0f} +- "
               f"{pm.get('gas_outlet_temperature', 0.0):.2g} C; drive torque "
               f"{m['drive_torque'] / 1e3:.3g} kN m (the map's torque at the marched hold-up).")
-        _, ms, _ = run(DEMOS_DIR / self.DESIGN_ON_MAP, capacity=False, exposure="surface")
+        _, ms, s_moved = run(DEMOS_DIR / self.DESIGN_ON_MAP, capacity=False,
+                             exposure="surface")
+        spm = {k: v or 0.0 for k, v in s_moved["combined"].items()}
         print(f"summary: the same, the gas also meeting the bed's and the flights' loads' open "
-              f"surface (closure.exposure = \"surface\"): gas-solids "
-              f"{ms['conductance_per_metre']:.3g} W/(m K) per metre; the solids leave at "
-              f"{ms['solids_outlet_temperature'] - 273.15:.0f} C with "
-              f"{ms['solids_outlet_moisture']:.2%} moisture, the gas at "
-              f"{ms['gas_outlet_temperature'] - 273.15:.0f} C.")
+              f"surface (closure.exposure = \"surface\"; an upper estimate of that part): "
+              f"gas-solids {ms['conductance_per_metre']:.3g} W/(m K) per metre; the solids "
+              f"leave at {ms['solids_outlet_temperature'] - 273.15:.0f} +- "
+              f"{spm.get('solids_outlet_temperature', 0.0):.2g} C with "
+              f"{ms['solids_outlet_moisture']:.3%} +- "
+              f"{spm.get('solids_outlet_moisture', 0.0):.3%} moisture, the gas at "
+              f"{ms['gas_outlet_temperature'] - 273.15:.0f} +- "
+              f"{spm.get('gas_outlet_temperature', 0.0):.2g} C.")
         pilot, on_map, pilot_moved = run(DEMOS_DIR / self.PILOT, capacity=False)
         on_correlations = answer(replace(pilot, residence_time=None, conductance_per_metre=None,
                                          map_info=None, drive_torque=None))

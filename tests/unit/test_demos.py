@@ -88,7 +88,7 @@ def test_the_dryer_demo_gives_the_maps_answers_with_their_uncertainty(capsys):
                    exposure="surface")
     line = next(x for x in out.splitlines() if "flights' loads' open surface" in x)
     assert f"gas-solids {ms['conductance_per_metre']:.3g} W/(m K)" in line
-    assert f"the gas at {ms['gas_outlet_temperature'] - 273.15:.0f} C" in line
+    assert f"the gas at {ms['gas_outlet_temperature'] - 273.15:.0f} +- " in line
     pilot = next(x for x in out.splitlines() if "pilot dryer fed" in x)
     on_map, on_correlations = pilot.split("; on the correlations")
     assert "residence" in on_map and " +- " in on_map.split("residence", 1)[1]
