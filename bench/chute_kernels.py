@@ -74,8 +74,13 @@ def main(argv=None) -> int:
 
     try:
         sim.step(a.warmup)
-        e._pair_forces = timed("pair", e._pair_forces)
-        e._gather = timed("gather", e._gather)
+        # the step's kernels of each holding variant (Engine.select_step hands one of them to
+        # the step after every rebuild: wrapping only the current ones was undone there)
+        for variant in e._variants.values():
+            if "pairs" in variant:
+                pair, gather, *rest = variant["pairs"]
+                variant["pairs"] = (timed("pair", pair), timed("gather", gather), *rest)
+        e.select_step()
         bp = e.broadphase
         if a.fused_rebuild:
             parallel_rebuild = bp.rebuild
