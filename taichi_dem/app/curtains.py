@@ -113,14 +113,18 @@ def airborne(position, radius, meshes, poses, length: float,
 
 def curtain_figures(position, velocity, radius, mass, meshes, poses, length: float,
                     period_axis: int | None = None, gas_velocity=(0.0, 0.0, 0.0),
-                    free: np.ndarray | None = None, surface: bool = True) -> dict:
+                    free: np.ndarray | None = None, surface: bool = True,
+                    axis_direction=None) -> dict:
     """A slice's curtains now: ``airborne_fraction`` (of the mass), ``curtain_area_per_metre``
     (the airborne particles' surface, m^2 per metre of drum) and ``curtain_slip_speed`` (their
     mean speed relative to the gas, m/s; NaN with none airborne); with ``surface``, also the
     rest's surface open to the gas (exposed_fraction(): the bed's top and the flights' loads),
     ``surface_area_per_metre`` (m^2/m) and ``surface_slip_speed`` (its area-weighted mean
     speed relative to the gas, m/s). ``free``: the airborne mask when already known
-    (airborne())."""
+    (airborne()). With ``axis_direction`` (a unit vector along the drum), also
+    ``airborne_mass_flow``: the part of the axial mass flow carried in flight, sum m v_a / L
+    over the airborne particles (kg/s), so a slice's transport splits into what the curtains
+    carry and what the bed and the flights carry."""
     if free is None:
         free = airborne(position, radius, meshes, poses, length, period_axis)
     total = float(np.sum(mass))
@@ -129,6 +133,9 @@ def curtain_figures(position, velocity, radius, mass, meshes, poses, length: flo
     out = {"airborne_fraction": float(np.sum(mass[free])) / total if total > 0 else float("nan"),
            "curtain_area_per_metre": float(np.sum(4.0 * np.pi * radius[free] ** 2)) / length,
            "curtain_slip_speed": float(np.mean(slip)) if len(slip) else float("nan")}
+    if axis_direction is not None:
+        axial = np.asarray(velocity, float)[free] @ np.asarray(axis_direction, float)
+        out["airborne_mass_flow"] = float(np.sum(np.asarray(mass)[free] * axial)) / length
     if surface:
         held = np.nonzero(~free)[0]
         area = np.zeros(len(held))

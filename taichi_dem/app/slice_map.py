@@ -23,6 +23,8 @@ surface_chord        m      the length of that surface across the shell (Saeman'
 axial_dispersion     m^2/s  D_ax: half the growth rate of the variance of the particles' unwrapped
                             axial displacements (app/dispersion.py), from the flow's steady start
 airborne_fraction    -      the mass fraction touching nothing, in flight (app/curtains.py)
+airborne_mass_flow   kg/s   the part of axial_mass_flow those particles carry in flight (the
+                            curtains' share of the transport; the rest rides the bed and flights)
 curtain_area_per_metre m^2/m those particles' surface per metre: what a dryer's gas meets
 curtain_slip_speed   m/s    their mean speed relative to the gas ([gas] velocity; at rest without)
 surface_area_per_metre m^2/m the other particles' surface open to the gas (the bed's top and the
@@ -224,7 +226,8 @@ class SliceObserver:
         free = airborne(x, r, self.meshes, placed, g.length, g.axis)
         for name, value in curtain_figures(x, v, r, m, self.meshes, placed, g.length, g.axis,
                                            self.gas_velocity, free=free,
-                                           surface=self.surface).items():
+                                           surface=self.surface,
+                                           axis_direction=g.axis_direction).items():
             self._add(name, value)
         if self.flights is not None:
             self.flights.sample(x, m, ~free, placed[g.shell][0])
@@ -349,7 +352,7 @@ class SliceResult:
 FIGURES = {"axial_mass_flow": "kg/s", "axial_speed": "m/s", "slip_ratio": "-",
            "shell_layer_axial_speed": "m/s", "surface_chord": "m", "bed_solid_fraction": "-",
            "dynamic_angle": "deg", "saeman_flow": "kg/s", "saeman_ratio": "-",
-           "axial_dispersion": "m^2/s", "airborne_fraction": "-",
+           "axial_dispersion": "m^2/s", "airborne_fraction": "-", "airborne_mass_flow": "kg/s",
            "curtain_area_per_metre": "m^2/m", "curtain_slip_speed": "m/s",
            "surface_area_per_metre": "m^2/m", "surface_slip_speed": "m/s"}
 BODY_FIGURES = {"torque_per_metre": "N m/m", "power_per_metre": "W/m",

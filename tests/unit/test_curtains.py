@@ -51,6 +51,11 @@ def test_the_curtain_figures():
     assert out["airborne_fraction"] == pytest.approx(5.0 / 8.0)
     assert out["curtain_area_per_metre"] == pytest.approx(2 * 4 * math.pi * R ** 2 / 0.5)
     assert out["curtain_slip_speed"] == pytest.approx(4.5)           # (4 + 5) / 2 against the gas
+    assert "airborne_mass_flow" not in out
+    v[:, 0] = [5.0, 5.0, 5.0, 0.5, -1.0]                                 # along x: the bed fast
+    along = curtains.curtain_figures(x, v, r, m, [plate], [pose], length=0.5, period_axis=None,
+                                     axis_direction=(1.0, 0.0, 0.0), surface=False)
+    assert along["airborne_mass_flow"] == pytest.approx((2 * 0.5 - 3 * 1.0) / 0.5)   # in flight only
     none = curtains.curtain_figures(x[:3], v[:3], r[:3], m[:3], [plate], [pose], 0.5)
     assert none["airborne_fraction"] == 0.0 and math.isnan(none["curtain_slip_speed"])
 
