@@ -66,6 +66,9 @@ def main(argv=None) -> int:
     p.add_argument("--reuse", action="store_true", help="reuse the direct run in OUT")
     p.add_argument("--map", type=Path, default=MAP, help="the slices' map (default: the "
                    "published one, docs/machine/dryer_slice/map.json)")
+    p.add_argument("--feed-over", type=float, nargs=2, metavar=("X0", "X1"), default=None,
+                   help="march with the feed entering evenly between X0 and X1 m from the "
+                   "inlet end (the factory's box: 0.03 0.25) instead of at the inlet end")
     p.add_argument("--long", action="store_true", help="the 2.8 m drum fed 22 t/h with more "
                    "than 10,000 particles inside (dryer_direct_long.toml)")
     a = p.parse_args(argv)
@@ -108,7 +111,8 @@ def main(argv=None) -> int:
               "drum/torque": math.nan}
     rows_uniform = dr.compare(direct, uniform, errors, TOLERANCES)
     m = mc.MachineMap.load(a.map)
-    out = mc.with_errors(m, LENGTH, [feed], -math.tan(math.radians(INCLINE)), draws=40)
+    out = mc.with_errors(m, LENGTH, [feed], -math.tan(math.radians(INCLINE)), draws=40,
+                         feed_over=a.feed_over)
     ans, err = out["feeds"][0], out["errors"][0]
     rows_machine = dr.compare(direct, ans, err, TOLERANCES)
     rms, worst = dr.profile_difference(direct, ans)
@@ -122,7 +126,9 @@ def main(argv=None) -> int:
                 f"run's start (steady from {direct.steady_from:.1f} s, under two residence "
                 f"times): Little's law is compared" if censored else ""),
              "", "The march of `taichi-dem machine` and of `taichi-dem dryer`'s map closure (the "
-             "hold-up profile from the discharge back):", "", dr.table(rows_machine), "",
+             "hold-up profile from the discharge back"
+             + (f"; the feed entering over {a.feed_over[0]:g} - {a.feed_over[1]:g} m"
+                if a.feed_over else "") + "):", "", dr.table(rows_machine), "",
              f"`taichi-dem dryer`'s residence, hold-up and torque from its closure: "
              f"{c['residence_time']:.4g} s, {c['map_holdup'] * LENGTH:.4g} kg, "
              f"{c['drive_torque']:.4g} N m", "",
@@ -141,6 +147,8 @@ def main(argv=None) -> int:
     print(text)
     tag = "" if a.map == MAP else "_" + (a.map.parent.name if a.map.name == "map.json"
                                          else a.map.stem)
+    if a.feed_over:
+        tag += "_feed_over"
     (a.out / f"comparison{tag}.md").write_text(text + "\n")
     (a.out / f"comparison{tag}.json").write_text(json.dumps({
         name: [{"name": r.name, "direct": [r.direct.value, r.direct.error],

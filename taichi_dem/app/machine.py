@@ -21,6 +21,19 @@ the map's flow at each hold-up is fitted as q(H, s) = a(H) + b(H) s over the inc
 plain drum has a = 0 and one incline suffices), and at each position the depth gradient is the
 one at which q equals the feed. For a plain drum it reduces to Kramers' equation (tested).
 
+The depth gradient drives the bed, not what is in flight. An incline tilts gravity for every
+particle, but a bed's free surface sloping along the axis pushes only the particles resting in
+it: the curtains of a flighted drum fall the same whatever the bed's depth below. Where the map
+has airborne_mass_flow (the part of q carried in flight, app/curtains.py), the gradient acts
+through the rest only:
+
+    q = a + b tan(theta) + phi_bed b cos(beta) dh/dx,      phi_bed = 1 - q_airborne / q
+
+(the mean over the inclines at each hold-up). In a flighted drum the curtains carry 60 - 80 % of
+the flow (docs/machine/dryer_slice/dryer.md), so the bed needs 3 - 5x the gradient to carry
+the same excess, and the hold-up falls over a shorter stretch before a free discharge. A map
+without the figure (a plain drum, a cooler, a map written before it) keeps phi_bed = 1.
+
 Along the marched profile H(x): the hold-up M = int H dx (kg), the mean residence time
 tau = M / F (the plug-flow mean: hold-up over throughput, exact for any mixing at steady state),
 each body's torque and power int T(H) dx, and the outlet temperature of a bed cooled (or heated)
@@ -185,11 +198,17 @@ class MachineMap:
                           self.heat_capacity, self.wall_temperatures, self.bodies)
 
 
+# the smallest share of the flow a depth gradient drives (TransportLaw.bed_share): a bed
+# carrying less would need a gradient no bed holds (the flighted slices measured carry 23 - 37 %)
+BED_SHARE_FLOOR = 0.05
+
+
 class TransportLaw:
     """q(H, s) = a(H) + b(H) s (kg/s along the slice's +axis) fitted to the map, a and b held
     as multiples of the chord cubed (Saeman's dependence on the bed, so that a drum's map is
     one constant and hold-ups below the map extrapolate as Saeman's do), interpolated linearly
-    in H and held constant beyond the mapped range; beta(H) (deg) likewise."""
+    in H and held constant beyond the mapped range; beta(H) (deg) likewise, and ``bed_share``
+    (phi_bed, the share of the flow a depth gradient drives: module docstring)."""
 
     def __init__(self, machine: MachineMap, source: str = "map"):
         rows = machine.rows
@@ -238,6 +257,16 @@ class TransportLaw:
         # is refused by the march.
         b, b_error = np.array(b), np.array(b_error)
         self.flow_at_mapped = np.array(q_mean)          # kg/s, mean over the inclines
+        # phi_bed: the share of the flow the bed carries, which a depth gradient drives
+        # (module docstring); 1 where the map does not say what is carried in flight
+        shares = []
+        for H in holdups:
+            at = [r for r in rows if round(r.holdup, 9) == H]
+            parts = [1.0 - r.mean("airborne_mass_flow") / r.mean("axial_mass_flow")
+                     for r in at if "airborne_mass_flow" in r.figures
+                     and r.mean("axial_mass_flow") != 0.0]
+            shares.append(float(np.mean(parts)) if parts and len(parts) == len(at) else 1.0)
+        self.bed_share = np.clip(np.array(shares), BED_SHARE_FLOOR, 1.0)
         self.plateau_only = bool(not self.single_incline and np.any(b <= 0.0)
                                  and np.all(np.abs(b) <= 2.0 * b_error))
 
@@ -297,12 +326,15 @@ class Profile:
 
 
 def march(law: TransportLaw, length: float, feed: float, axial_slope: float,
-          discharge_depth: float, overflow_holdup: float, steps: int = 400) -> Profile:
+          discharge_depth: float, overflow_holdup: float, steps: int = 400,
+          flow_at=None) -> Profile:
     """The steady hold-up profile of a machine ``length`` m long at ``feed`` kg/s, gravity's
     axial slope ``axial_slope`` along the slice's +axis, from the discharge (bed depth
     ``discharge_depth`` m: a dam's height, or a few particles for a free discharge) upstream,
-    by RK4 in the bed depth: dh/dx_up = ((F - a)/b - s_d) / cos(beta), s_d the slope towards
-    the discharge."""
+    by RK4 in the bed depth: dh/dx_up = ((F - a)/b - s_d) / (phi_bed cos(beta)), s_d the slope
+    towards the discharge, phi_bed the share of the flow the bed carries (1 without the map's
+    airborne_mass_flow). ``flow_at``: F at a distance (m) from the discharge, where the feed
+    enters over a stretch (feed_entered); default ``feed`` all along."""
     # the flow direction: where the machine carries its bed at the mapped hold-ups
     sign = law.direction(axial_slope)
     s_down = sign * axial_slope
@@ -315,25 +347,27 @@ def march(law: TransportLaw, length: float, feed: float, axial_slope: float,
     table_u = np.linspace(1e-6, 1.0, cells + 1)
     table_h = table_u ** 2 * 2.0 * section.shell_radius
     table_H = section.holdup(table_h)
-    ha, hb, hbeta = (np.interp(table_H, law.holdups, v)
-                     for v in (law.a_per_chord3, law.b_per_chord3, law.beta))
+    ha, hb, hbeta, hshare = (np.interp(table_H, law.holdups, v)
+                             for v in (law.a_per_chord3, law.b_per_chord3, law.beta,
+                                       law.bed_share))
     c3 = section.chord(table_h) ** 3
     a_down = sign * ha * c3          # a along the flow; b (dq/ds) is the same either way
     b = hb * c3
     if np.any(hb <= 0.0):
         raise SceneError("map", "rows", "the map's flow falls with the slope (b <= 0) at some "
                          "hold-up: not a transport law the march can use")
-    inv_cos = 1.0 / np.cos(np.radians(hbeta))
+    # the gradient drives the bed's share of the flow only (module docstring)
+    inv_cos = 1.0 / (np.cos(np.radians(hbeta)) * hshare)
     two_r, du = 2.0 * section.shell_radius, table_u[1] - table_u[0]
 
-    def rate(h):
+    def rate(h, flow):
         # Kramers' dh/dx is singular on an empty shell: the table starts just above it
         k = min(max(math.sqrt(h / two_r) - 1e-6, 0.0) / du, cells - 1e-9)
         i = int(k)
         w = k - i
         aa = a_down[i] * (1 - w) + a_down[i + 1] * w
         bb = b[i] * (1 - w) + b[i + 1] * w
-        return ((feed - aa) / bb - s_down) * (inv_cos[i] * (1 - w) + inv_cos[i + 1] * w)
+        return ((flow - aa) / bb - s_down) * (inv_cos[i] * (1 - w) + inv_cos[i + 1] * w)
 
     # positions from the discharge on a grid fine where the bed is shallow and steep
     grid = length * (np.arange(steps + 1) / steps) ** 2
@@ -342,12 +376,16 @@ def march(law: TransportLaw, length: float, feed: float, axial_slope: float,
     depths = [h]
     full = float(section.depth(overflow_holdup)[0])
     overflows = False
+    if flow_at is None:
+        def flow_at(_):
+            return feed
     for k in range(steps):
         dx = grid[k + 1] - grid[k]
-        k1 = rate(h)
-        k2 = rate(max(h + 0.5 * dx * k1, 0.0))
-        k3 = rate(max(h + 0.5 * dx * k2, 0.0))
-        k4 = rate(max(h + dx * k3, 0.0))
+        f0, fm, f1 = flow_at(grid[k]), flow_at(grid[k] + 0.5 * dx), flow_at(grid[k + 1])
+        k1 = rate(h, f0)
+        k2 = rate(max(h + 0.5 * dx * k1, 0.0), fm)
+        k3 = rate(max(h + 0.5 * dx * k2, 0.0), fm)
+        k4 = rate(max(h + dx * k3, 0.0), f1)
         h = max(h + dx / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4), 0.0)
         up.append(grid[k + 1])
         depths.append(h)
@@ -410,8 +448,22 @@ def _pieces(machine: MachineMap, length: float, inlet_sections, law=None) -> lis
         for k, (m, l) in reversed(list(enumerate(inlet_sections)))]
 
 
+def feed_entered(feed: float, length: float, feed_over=None):
+    """F(distance from the discharge, m) -> kg/s: the flow past a cross-section when the feed
+    enters evenly between ``feed_over`` = (x0, x1) m from the inlet end (a factory's box, a
+    chute's spread): 0 upstream of x0, all of it from x1 on. None: ``feed`` everywhere (the
+    feed dropped at the inlet end)."""
+    if feed_over is None:
+        return lambda up: feed
+    x0, x1 = (float(v) for v in feed_over)
+    if not 0.0 <= x0 < x1 <= length:
+        raise SceneError("taichi-dem machine", "--feed-over", f"the feed's stretch {x0:g} - "
+                         f"{x1:g} m must lie within the machine's {length:g} m, its start first")
+    return lambda up: feed * min(max((length - up - x0) / (x1 - x0), 0.0), 1.0)
+
+
 def _march_pieces(pieces, feed: float, axial_slope: float, depth0: float,
-                  overflow_holdup: float | None, steps: int) -> list:
+                  overflow_holdup: float | None, steps: int, feed_over=None) -> list:
     """March each piece from the discharge upstream, the bed's depth (its free surface)
     continuous where one section meets the next; [(map, x offset m, profile)], stopping at the
     first that overflows. Every section must carry the bed the same way."""
@@ -423,9 +475,11 @@ def _march_pieces(pieces, feed: float, axial_slope: float, depth0: float,
     if len(signs) > 1:
         raise SceneError("taichi-dem machine", "--inlet-section", "the sections' maps carry the "
                          "bed in opposite directions at this incline")
+    entered = feed_entered(feed, total, feed_over)
     for m, piece_length, law in pieces:
         limit = float(law.holdups[-1]) if overflow_holdup is None else overflow_holdup
-        prof = march(law, piece_length, feed, axial_slope, depth, limit, steps)
+        prof = march(law, piece_length, feed, axial_slope, depth, limit, steps,
+                     flow_at=lambda up, start=done: entered(start + up))
         done += piece_length
         out.append((m, total - done, prof))
         if prof.overflows:
@@ -437,16 +491,19 @@ def _march_pieces(pieces, feed: float, axial_slope: float, depth0: float,
 def answer(machine: MachineMap, length: float, feed: float, axial_slope: float,
            discharge_depth: float | None = None, overflow_holdup: float | None = None,
            inlet_temperature: float | None = None, law: TransportLaw | None = None,
-           steps: int = 400, inlet_sections=()) -> MachineAnswer:
+           steps: int = 400, inlet_sections=(), feed_over=None) -> MachineAnswer:
     """The machine ``length`` m long at ``feed`` kg/s: march and integrate (module docstring).
     ``discharge_depth`` defaults to one particle diameter, ``overflow_holdup`` to the largest
     mapped hold-up (of each section's map). ``inlet_sections``: [(map, length m)] in order
     from the inlet end, each with its own map (an inlet screw before the paddles); ``machine``
     covers the rest, at the discharge end. Each section's figures come from its own map; a
-    body's torque and power are summed over the sections that have it (by name)."""
+    body's torque and power are summed over the sections that have it (by name).
+    ``feed_over``: (x0, x1) m from the inlet end where the feed enters evenly (feed_entered);
+    default at the inlet end."""
     pieces = _pieces(machine, length, inlet_sections, law)
     depth0 = machine.particle_diameter if discharge_depth is None else discharge_depth
-    marched = _march_pieces(pieces, feed, axial_slope, depth0, overflow_holdup, steps)
+    marched = _march_pieces(pieces, feed, axial_slope, depth0, overflow_holdup, steps,
+                            feed_over)
     hold = 0.0
     torques, powers = {}, {}
     ntu, wall = 0.0, None
@@ -513,7 +570,7 @@ def capacity(machine: MachineMap, length: float, axial_slope: float,
 
 def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
                 discharge_depth=None, overflow_holdup=None, inlet_temperature=None,
-                draws: int = 40, seed: int = 0, inlet_sections=()) -> dict:
+                draws: int = 40, seed: int = 0, inlet_sections=(), feed_over=None) -> dict:
     """The answers at each feed and the capacity, each with the standard deviation over
     ``draws`` re-marches of maps (every section's) drawn from the figures' standard errors."""
     rng = np.random.default_rng(seed)
@@ -521,7 +578,8 @@ def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
     base = {"capacity": capacity(machine, length, axial_slope, discharge_depth, overflow_holdup,
                                  inlet_sections=inlet_sections),
             "feeds": [answer(machine, length, f, axial_slope, discharge_depth, overflow_holdup,
-                             inlet_temperature, inlet_sections=inlet_sections) for f in feeds]}
+                             inlet_temperature, inlet_sections=inlet_sections,
+                             feed_over=feed_over) for f in feeds]}
     samples = {"capacity": [], "feeds": [[] for _ in feeds]}
     bodies = list(dict.fromkeys([*machine.bodies, *(b for m, _ in inlet_sections for b in m.bodies)]))
     for _ in range(draws):
@@ -535,7 +593,8 @@ def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
             for k, f in enumerate(feeds):
                 samples["feeds"][k].append(answer(drawn, length, f, axial_slope, discharge_depth,
                                                   overflow_holdup, inlet_temperature, law=law,
-                                                  inlet_sections=drawn_inlet))
+                                                  inlet_sections=drawn_inlet,
+                                                  feed_over=feed_over))
         except SceneError:        # a draw whose flow falls with the slope: skipped
             continue
     base["capacity_error"] = float(np.std(samples["capacity"], ddof=1)) if len(samples["capacity"]) > 1 else math.nan

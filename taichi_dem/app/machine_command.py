@@ -8,8 +8,8 @@ from pathlib import Path
 
 from ..scene import catalog  # noqa: F401 (the effects' dimensions: a temperature)
 from ..errors import SceneError
-from .machine import (MachineMap, choice_differences, choices_report, parse_holdup,
-                      substituted, with_errors)
+from .machine import (MachineMap, choice_differences, choices_report, feed_entered,
+                      parse_holdup, substituted, with_errors)
 
 
 def add_arguments(p) -> None:
@@ -34,6 +34,10 @@ def add_arguments(p) -> None:
     p.add_argument("--discharge-depth", default=None,
                    help="the bed's depth at the discharge ('20 mm': a dam's height; default one "
                         "particle diameter, a free discharge)")
+    p.add_argument("--feed-over", nargs=2, metavar=("FROM", "TO"), default=None,
+                   help="the feed enters evenly between these distances from the inlet end "
+                        "('0.03 m' '0.25 m': a chute's or a factory's spread; default at the "
+                        "inlet end)")
     p.add_argument("--overflow", default=None,
                    help="the hold-up at which the inlet end overflows ('90 kg/m', or a fill "
                         "fraction '40 %%'; default the largest mapped hold-up)")
@@ -108,6 +112,10 @@ def cmd_machine(args) -> int:
             raise SceneError("taichi-dem machine", "--overflow", str(err)) from None
         full = float(m.section.holdup(2.0 * m.section.shell_radius))
         overflow = value if kind == "kg/m" else value * full
+    feed_over = (tuple(_quantity(v, "length", "--feed-over") for v in args.feed_over)
+                 if args.feed_over else None)
+    if feed_over is not None:
+        feed_entered(1.0, length, feed_over)        # refused here when outside the machine
     inlet = [(MachineMap.load(path), _quantity(size, "length", "--inlet-section"))
              for path, size in args.inlet_section]
     for (path, _), (section_map, size) in zip(args.inlet_section, inlet):
@@ -119,7 +127,7 @@ def cmd_machine(args) -> int:
             raise SceneError(str(path), "rows", f"mapped at {mapped[0]} deg only, not at the "
                              f"machine's {incline} deg: map it at both, or at this incline")
     out = with_errors(m, length, feeds, slope, depth0, overflow, t_in, draws=args.draws,
-                      inlet_sections=inlet)
+                      inlet_sections=inlet, feed_over=feed_over)
     report = machine_report(m, out, length, incline, t_in,
                             sections=[(p, l) for (p, _), (_, l) in zip(args.inlet_section, inlet)])
     if args.choice:
@@ -127,7 +135,8 @@ def cmd_machine(args) -> int:
         for label, path in args.choice:
             other = substituted(m, MachineMap.load(path), source=str(path))
             other_out = with_errors(other, length, feeds, slope, depth0, overflow, t_in,
-                                    draws=args.draws, inlet_sections=inlet)
+                                    draws=args.draws, inlet_sections=inlet,
+                                    feed_over=feed_over)
             differences[label] = choice_differences(out, other_out)
         report["text"] += "\n\n" + choices_report(differences)
         report["json"]["choices"] = {label: {"map": str(path), **differences[label]}

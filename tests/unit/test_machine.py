@@ -18,8 +18,10 @@ RHO_B = 1500.0            # bulk density, kg/m^3
 SECTION = mc.Section(R, 0.0, RHO_B)
 
 
-def drum_map(depths=(0.1, 0.2, 0.3, 0.45, 0.6), shaft_torque=None, conductance=None):
-    """A plain drum's map as Saeman's law gives it, at one incline (gravity towards -x)."""
+def drum_map(depths=(0.1, 0.2, 0.3, 0.45, 0.6), shaft_torque=None, conductance=None,
+             airborne_share=None):
+    """A plain drum's map as Saeman's law gives it, at one incline (gravity towards -x);
+    ``airborne_share``: that part of the flow said to be carried in flight."""
     rows = []
     slope = -math.tan(math.radians(THETA))
     for d in depths:
@@ -31,20 +33,24 @@ def drum_map(depths=(0.1, 0.2, 0.3, 0.45, 0.6), shaft_torque=None, conductance=N
             figures["shell/torque_per_metre"] = (shaft_torque * H, 0.0)
         if conductance is not None:
             figures["shell/conductance_per_metre"] = (conductance, 0.0)
+        if airborne_share is not None:
+            figures["airborne_mass_flow"] = (airborne_share * q, 0.0)
         rows.append(mc.MapRow(H, slope, figures))
     return mc.MachineMap(rows, SECTION, {"shell": 2 * math.pi * N}, 0.004, 1000.0,
                          {"shell": 300.0}, ["shell"])
 
 
-def kramers(feed, length, h0, steps=20000):
-    """Kramers & Croockewit's equation as published (x from the discharge), RK4."""
+def kramers(feed, length, h0, steps=20000, bed_share=1.0):
+    """Kramers & Croockewit's equation as published (x from the discharge), RK4; with
+    ``bed_share`` < 1 the depth gradient drives only that share of the flow (its rate over
+    the share)."""
     phi = feed / RHO_B
     tb, sb = math.tan(math.radians(BETA)), math.sin(math.radians(BETA))
     tt = math.tan(math.radians(THETA))
 
     def rate(h):
         f = 2 * h / R - (h / R) ** 2
-        return tb * (3 * phi / (4 * math.pi * N * R ** 3) * f ** -1.5 - tt / sb)
+        return tb * (3 * phi / (4 * math.pi * N * R ** 3) * f ** -1.5 - tt / sb) / bed_share
     x = np.linspace(0.0, length, steps + 1)
     h = np.empty_like(x)
     h[0] = h0
@@ -92,6 +98,33 @@ def test_march_reduces_to_kramers_for_a_plain_drum():
         assert got == pytest.approx(float(np.interp(d, x_ref, h_ref)), rel=2e-3), d
     # far from the discharge, Saeman's uniform depth
     assert prof.depth[0] == pytest.approx(saeman_depth(feed), rel=5e-3)
+
+
+def test_the_depth_gradient_drives_only_what_the_bed_carries():
+    """With 70 % of the flow carried in flight (a flighted drum's curtains), the bed's depth
+    gradient drives the other 30 %: Kramers' equation with its rate over 0.3. The uniform
+    depth far upstream is the same (no gradient there), the stretch before the discharge
+    where the bed thins is shorter, and the hold-up larger."""
+    feed, length, h0 = 1.2, 12.0, 0.02
+    law = mc.TransportLaw(drum_map(airborne_share=0.7))
+    assert law.bed_share == pytest.approx(np.full(5, 0.3))
+    prof = mc.march(law, length, feed, -math.tan(math.radians(THETA)), h0,
+                    overflow_holdup=float(SECTION.holdup(R)), steps=800)
+    x_ref, h_ref = kramers(feed, length, h0, bed_share=0.3)
+    up = length - prof.x
+    for d in (0.02, 0.1, 0.3, 1.0, 3.0, 12.0):
+        got = float(np.interp(d, up[::-1], prof.depth[::-1]))
+        assert got == pytest.approx(float(np.interp(d, x_ref, h_ref)), rel=2e-3), d
+    assert prof.depth[0] == pytest.approx(saeman_depth(feed), rel=5e-3)
+    plain = mc.answer(drum_map(), length, feed, -math.tan(math.radians(THETA)), 0.02, steps=800)
+    flighted = mc.answer(drum_map(airborne_share=0.7), length, feed,
+                         -math.tan(math.radians(THETA)), 0.02, steps=800)
+    assert flighted.holdup > plain.holdup
+    # a map without the figure at some row keeps the whole flow driven (phi_bed = 1)
+    rows = drum_map(airborne_share=0.7).rows
+    rows[2].figures.pop("airborne_mass_flow")
+    mixed = mc.TransportLaw(mc.MachineMap(rows, SECTION, {}, 0.004))
+    assert mixed.bed_share[2] == 1.0 and mixed.bed_share[0] == pytest.approx(0.3)
 
 
 def test_march_residence_torque_and_outlet_temperature():
@@ -386,3 +419,23 @@ def test_machine_command_reports_each_choice(tmp_path, capsys):
     assert torque["relative"] == pytest.approx(0.1, rel=1e-6)
     assert "What each modelling choice moves the answers by" in (
         tmp_path / "out" / "machine.md").read_text()
+
+
+def test_a_feed_entering_over_a_stretch_ramps_the_flow_and_holds_less():
+    """feed_entered: no flow upstream of the feed's stretch, all of it downstream, linear
+    between; the march then holds less at the closed end than with the feed dropped there,
+    and the same beyond the stretch. A stretch outside the machine is refused."""
+    length, feed = 12.0, 1.2
+    entered = mc.feed_entered(feed, length, (1.0, 3.0))      # from the inlet end
+    assert entered(length - 0.5) == 0.0 and entered(length - 2.0) == pytest.approx(0.6)
+    assert entered(length - 3.0) == pytest.approx(feed) and entered(0.0) == feed
+    slope = -math.tan(math.radians(THETA))
+    at_end = mc.answer(drum_map(), length, feed, slope, 0.02, steps=800)
+    spread = mc.answer(drum_map(), length, feed, slope, 0.02, steps=800, feed_over=(1.0, 3.0))
+    assert spread.holdup < at_end.holdup
+    assert spread.profile.holdup[0] < at_end.profile.holdup[0]
+    for x in (4.0, 8.0, 11.5):
+        assert float(np.interp(x, spread.profile.x, spread.profile.holdup)) == pytest.approx(
+            float(np.interp(x, at_end.profile.x, at_end.profile.holdup)), rel=1e-6)
+    with pytest.raises(SceneError, match="feed-over"):
+        mc.feed_entered(feed, length, (3.0, 1.0))
