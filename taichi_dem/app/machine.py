@@ -536,9 +536,10 @@ def answer(machine: MachineMap, length: float, feed: float, axial_slope: float,
 
 def capacity(machine: MachineMap, length: float, axial_slope: float,
              discharge_depth: float | None = None, overflow_holdup: float | None = None,
-             law: TransportLaw | None = None, steps: int = 200, inlet_sections=()) -> float:
+             law: TransportLaw | None = None, steps: int = 200, inlet_sections=(),
+             feed_over=None) -> float:
     """The largest feed (kg/s) whose profile stays below the overflow hold-up of every section
-    (bisection)."""
+    (bisection); ``feed_over`` as answer()'s."""
     pieces = _pieces(machine, length, inlet_sections, law)
     law = pieces[0][2]
     limit = float(law.holdups[-1]) if overflow_holdup is None else overflow_holdup
@@ -548,7 +549,8 @@ def capacity(machine: MachineMap, length: float, axial_slope: float,
 
     def fits(feed):
         return not any(prof.overflows for _, _, prof in
-                       _march_pieces(pieces, feed, axial_slope, depth0, overflow_holdup, steps))
+                       _march_pieces(pieces, feed, axial_slope, depth0, overflow_holdup, steps,
+                                     feed_over))
     # the feed whose uniform bed sits at the overflow brackets the capacity (a short machine
     # with a shallow discharge holds more)
     uniform = max(slope_sign * law.flow(limit, axial_slope), 1e-12)
@@ -576,7 +578,7 @@ def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
     rng = np.random.default_rng(seed)
     inlet_sections = list(inlet_sections or ())
     base = {"capacity": capacity(machine, length, axial_slope, discharge_depth, overflow_holdup,
-                                 inlet_sections=inlet_sections),
+                                 inlet_sections=inlet_sections, feed_over=feed_over),
             "feeds": [answer(machine, length, f, axial_slope, discharge_depth, overflow_holdup,
                              inlet_temperature, inlet_sections=inlet_sections,
                              feed_over=feed_over) for f in feeds]}
@@ -589,7 +591,8 @@ def with_errors(machine: MachineMap, length: float, feeds, axial_slope: float,
             law = TransportLaw(drawn)
             samples["capacity"].append(capacity(drawn, length, axial_slope, discharge_depth,
                                                 overflow_holdup, law=law,
-                                                inlet_sections=drawn_inlet))
+                                                inlet_sections=drawn_inlet,
+                                                feed_over=feed_over))
             for k, f in enumerate(feeds):
                 samples["feeds"][k].append(answer(drawn, length, f, axial_slope, discharge_depth,
                                                   overflow_holdup, inlet_temperature, law=law,

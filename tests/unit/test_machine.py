@@ -437,5 +437,8 @@ def test_a_feed_entering_over_a_stretch_ramps_the_flow_and_holds_less():
     for x in (4.0, 8.0, 11.5):
         assert float(np.interp(x, spread.profile.x, spread.profile.holdup)) == pytest.approx(
             float(np.interp(x, at_end.profile.x, at_end.profile.holdup)), rel=1e-6)
+    # the inlet end holds less, so more feed fits below the overflow
+    assert mc.capacity(drum_map(), length, slope, 0.02, feed_over=(1.0, 3.0)) > mc.capacity(
+        drum_map(), length, slope, 0.02)
     with pytest.raises(SceneError, match="feed-over"):
         mc.feed_entered(feed, length, (3.0, 1.0))
