@@ -262,13 +262,14 @@ def outlet_temperatures(rtd: ResidenceTimes, tau: float, inlet: float, wall: flo
 
 
 def rtd_report(machine, out: dict, axial_slope: float, inlet_temperature=None,
-               plot=None) -> tuple[str, list]:
+               plot=None, inlet=None) -> tuple[str, list]:
     """A Markdown table of each feed's RTD (and outlet temperatures) for ``taichi-dem machine``
-    and the JSON rows; ``plot``: a path for E(t) of every feed. ("", []) without D_ax."""
+    and the JSON rows; ``plot``: a path for E(t) of every feed; ``inlet``: (x0, x1) m where the
+    feed falls, as the march was given it (machine_rtd). ("", []) without D_ax."""
     rows, lines = [], []
     curves = []
     for ans in out["feeds"]:
-        got = machine_rtd(machine, ans, axial_slope, inlet_temperature)
+        got = machine_rtd(machine, ans, axial_slope, inlet_temperature, inlet=inlet)
         if got is None:
             return "", []
         r = got["rtd"]

@@ -29,10 +29,13 @@ through the rest only:
 
     q = a + b tan(theta) + phi_bed b cos(beta) dh/dx,      phi_bed = 1 - q_airborne / q
 
-(the mean over the inclines at each hold-up). In a flighted drum the curtains carry 60 - 80 % of
-the flow (docs/machine/dryer_slice/dryer.md), so the bed needs 3 - 5x the gradient to carry
-the same excess, and the hold-up falls over a shorter stretch before a free discharge. A map
-without the figure (a plain drum, a cooler, a map written before it) keeps phi_bed = 1.
+(the mean over the inclines at each hold-up: the bed's share of the flow stands for its share
+of the slope's effect, exact for a map at one incline, q = b s). In the flighted drums mapped
+the curtains carry 41 - 77 % of the flow (docs/machine/dryer_slice/), so the bed needs 1.7 -
+4x the gradient to carry the same excess, and the hold-up falls over a shorter stretch before
+a free discharge. A map without the figure (a plain drum, a map written before it) keeps
+phi_bed = 1. The error draws (with_errors) draw the airborne flow independently of the whole,
+which overstates the spread phi_bed adds a little.
 
 Along the marched profile H(x): the hold-up M = int H dx (kg), the mean residence time
 tau = M / F (the plug-flow mean: hold-up over throughput, exact for any mixing at steady state),
@@ -199,7 +202,7 @@ class MachineMap:
 
 
 # the smallest share of the flow a depth gradient drives (TransportLaw.bed_share): a bed
-# carrying less would need a gradient no bed holds (the flighted slices measured carry 23 - 37 %)
+# carrying less would need a gradient no bed holds (the flighted slices measured carry 23 - 59 %)
 BED_SHARE_FLOOR = 0.05
 
 

@@ -145,7 +145,8 @@ def cmd_machine(args) -> int:
     folder.mkdir(parents=True, exist_ok=True)
     if not inlet:       # the RTD where the map has D_ax (app/dispersion.py; one map only)
         from .dispersion import rtd_report
-        text, rtd_rows = rtd_report(m, out, slope, t_in, plot=folder / "rtd.png")
+        text, rtd_rows = rtd_report(m, out, slope, t_in, plot=folder / "rtd.png",
+                                    inlet=feed_over)
         if text:
             report["text"] += "\n\n" + text
             report["json"]["residence_time_distributions"] = rtd_rows

@@ -226,6 +226,9 @@ def test_machine_command_refuses_bad_input_with_file_key_reason(tmp_path, capsys
     assert main(["machine", str(two), "--length", "six metres", "--feed", "1 t/h",
                  "--incline", "3"]) == 2
     assert "--length" in capsys.readouterr().err
+    assert main(["machine", str(two), "--length", "6 m", "--feed", "1 t/h", "--incline", "3",
+                 "--feed-over", "2 m", "1 m", "--out", str(tmp_path / "out")]) == 2
+    assert "--feed-over" in capsys.readouterr().err
 
 
 def screw_map(a=2.0, b=6.0):
