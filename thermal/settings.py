@@ -21,6 +21,11 @@ from taichi_dem.scene.keys import Series
 from .host_keys import HOST_KEYS, check_hosts, check_materials, host_rules
 
 DRAG_MODELS = ("di_felice", "schiller_naumann")
+# (as [gas] through_bed: effects/drag/settings.py)
+DRAG_THROUGH_BED_HELP = ("true: the gas is forced through every packing at its superficial "
+                         "velocity (a bed on a distributor); false: it flows round packings (a "
+                         "drum's bed, a flight's load) and drags only the particles that no "
+                         "contact touches (the curtains)")
 GAS_MODELS = ("fixed", "axial_plug_flow")
 CORRELATIONS = ("ranz_marshall", "gunn")
 FLOWS = ("along_axis", "against_axis")
@@ -95,6 +100,8 @@ GAS = register(Section("thermal.gas", "The gas the particles exchange heat with 
         "axis, marched cell by cell", default="fixed", choices=GAS_MODELS, effect="convection"),
     Key("drag", "choice", "the gas's drag on the particles (one-way)", default="none",
         choices=("none",) + DRAG_MODELS, effect="drag"),
+    Key("drag_through_bed", "boolean", "with drag: " + DRAG_THROUGH_BED_HELP, default=False,
+        effect="drag"),
     Key("temperature", "quantity", "fixed gas: its temperature", unit="temperature",
         default=air.TEMPERATURE, **_P, effect="convection"),
     Key("velocity", "vector", "fixed gas: its superficial velocity", unit="speed",
@@ -269,6 +276,7 @@ class GasSettings:
     mass_flow: float = 0.0               # kg/s
     flow: str = GAS.default("flow")
     drag: str = GAS.default("drag")
+    drag_through_bed: bool = GAS.default("drag_through_bed")
 
     @property
     def plug_flow(self) -> bool:
@@ -404,8 +412,11 @@ def parse_gas(value: Any, ctx, key: str) -> GasSettings:
     file = ctx.source
     g = ctx.table(value, key)
     GAS.check(g, file, key)
-    gk: dict[str, Any] = GAS.read(g, file, key, only=("model", "drag"))
+    gk: dict[str, Any] = GAS.read(g, file, key, only=("model", "drag", "drag_through_bed"))
     model = gk.setdefault("model", "fixed")
+    if "drag_through_bed" in gk and gk.get("drag", "none") == "none":
+        raise SceneError(file, f"{key}.drag_through_bed", "only with a drag (drag = "
+                                                          "\"di_felice\" or \"schiller_naumann\")")
     if model == "fixed":
         for k in PLUG_FLOW_KEYS:
             if k in g:

@@ -131,6 +131,11 @@ def closures(path, design: dict, source: str) -> dict:
                          f"density and the drum's section), the map's at "
                          f"{abs(gas['axial_velocity']):.3g} m/s: the curtains' exposure and the "
                          "drag on the transport were measured at another gas speed")
+        if gas.get("through_bed", True) and abs(gas["axial_velocity"]) > 0.0:
+            notes.append("the map's gas was forced through the bed (gas.through_bed, or a map "
+                         "made before the key): in a drum it goes round it, and the transport "
+                         "under-states what the slope conveys (a tenth at 3.7 m/s: "
+                         "docs/machine/dryer_slice/dryer.md)")
     return {
         "residence_time": marched.residence_time,
         "residence_uncertainty": abs(flow_error / flow) if flow else 0.0,

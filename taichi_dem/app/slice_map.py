@@ -409,10 +409,11 @@ def machine_info(scene, geometry: SliceGeometry, fill_index: int = 0) -> dict:
             "angular_speeds": speeds, "wall_temperatures": walls,
             "heat_capacity": (getattr(material, "heat_capacity", None)
                               if scene.settings.get("thermal") is not None else None),
-            # the gas the curtains fell through ([gas]: its speed along the axis, m/s, and
-            # density, kg/m^3): a dryer marched on this map should blow as fast
+            # the gas the curtains fell through ([gas]: axial speed m/s, density kg/m^3; a dryer
+            # marched on the map should blow as fast) and whether it was forced through the bed
             "gas": ({"axial_velocity": float(np.asarray(gas.velocity, float) @ geometry.axis_direction),
-                     "density": float(gas.density)}
+                     "density": float(gas.density),
+                     "through_bed": bool(getattr(gas, "through_bed", False))}
                     if (gas := scene.settings.get("gas")) is not None else None)}
 
 

@@ -155,7 +155,8 @@ class GatherStage:
                         heat += mesh_heat
                         conductance += mesh_conductance
                 # the particle effects: gravity, convection, plug-flow gas, radiation
-                load = Load(acceleration=vec0, heat=heat, conductance=conductance)
+                load = Load(acceleration=vec0, heat=heat, conductance=conductance,
+                            contact_force=force)
                 for effect in ti.static(particle_effects):
                     load = effect(i, load)
                 if s.alive[i] != 0:

@@ -178,7 +178,8 @@ class Insertion:
                 # inserted clear of every contact: free flight is the first step's acceleration
                 # (the initial fill's are computed by Engine.start); after the particle's own
                 # values, which an effect may read (its material, its mass)
-                load = Load(acceleration=ti.Vector([0.0, 0.0, 0.0]), heat=0.0, conductance=0.0)
+                load = Load(acceleration=ti.Vector([0.0, 0.0, 0.0]), heat=0.0, conductance=0.0,
+                            contact_force=ti.Vector([0.0, 0.0, 0.0]))
                 for start_of in ti.static(starts):
                     load = start_of(i, load)
                 s.acceleration[i] = load.acceleration

@@ -814,6 +814,12 @@ def test_mechanics_gas_drag_loads_and_refuses():
     d["gas"] = {"velocity": [0.0, 0.0, 1.5], "drag": "schiller_naumann", "density": 1.2}
     g = load(d).settings["gas"]
     assert g.model == "schiller_naumann" and g.velocity == (0.0, 0.0, 1.5) and g.density == 1.2
+    assert g.through_bed is False          # a drum's gas goes round its bed unless told
+    d["gas"]["through_bed"] = True
+    assert load(d).settings["gas"].through_bed is True
+    d["gas"]["through_bed"] = "yes"
+    error(d, "gas.through_bed", "true or false")
+    del d["gas"]["through_bed"]
     d["gas"]["drag"] = "ergun"
     error(d, "gas.drag", "\"di_felice\" or \"schiller_naumann\"")
     d["gas"] = {"drag": "di_felice"}
@@ -826,7 +832,12 @@ def test_thermal_gas_drag():
     d = _thermal_base()
     d["thermal"]["gas"] = {"model": "fixed", "velocity": [1.0, 0.0, 0.0], "drag": "di_felice"}
     g = load(d).settings["gas"]
-    assert g.model == "di_felice" and g.velocity == (1.0, 0.0, 0.0)
+    assert g.model == "di_felice" and g.velocity == (1.0, 0.0, 0.0) and not g.through_bed
+    d["thermal"]["gas"]["drag_through_bed"] = True
+    assert load(d).settings["gas"].through_bed is True
+    d["thermal"]["gas"]["drag"] = "none"
+    error(d, "thermal.gas.drag_through_bed", "only with a drag")
+    del d["thermal"]["gas"]["drag_through_bed"]
     d["thermal"]["gas"]["drag"] = "stokes"
     error(d, "thermal.gas.drag", "\"none\", \"di_felice\" or \"schiller_naumann\"")
     d["thermal"]["gas"]["drag"] = "none"

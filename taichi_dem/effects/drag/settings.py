@@ -11,6 +11,10 @@ from ... import air
 from ...scene.keys import Key, Section, given, register, type_name
 
 MODELS = ("di_felice", "schiller_naumann")
+THROUGH_BED_HELP = ("true: the gas is forced through every packing at its superficial velocity "
+                    "(a packed or fluidised bed on a distributor); false: it flows round packings "
+                    "(a drum's bed, a flight's load) and drags only the particles that no contact "
+                    "touches (the curtains)")
 
 SECTION = register(Section("gas", "A gas that drags the particles (one-way coupled), without "
                            "heat transfer; with [thermal], give the gas in [thermal.gas]", (
@@ -22,6 +26,7 @@ SECTION = register(Section("gas", "A gas that drags the particles (one-way coupl
         default=air.VISCOSITY, minimum=0.0, exclusive_minimum=True),
     Key("drag", "choice", "the drag law: Di Felice (local voidage from the cell grid) or "
         "Schiller-Naumann (a dilute particle)", default="di_felice", choices=MODELS),
+    Key("through_bed", "boolean", THROUGH_BED_HELP, default=False),
 ), owner=__name__, reader=lambda table, parser: read(table, parser),
    derive=lambda parser: derive(parser), after=("thermal",),
    builds="taichi_dem.effects.drag.effect:build",
@@ -40,12 +45,17 @@ SERIES = (Series("gas/drag_force", "N", "the gas's pull on all particles in the 
 class DragSettings:
     """Drag from a gas on the particles (effects/drag/effect.py), one-way coupled: ``model``
     "di_felice" (local voidage from the cell grid) or "schiller_naumann" (dilute); the gas's
-    superficial ``velocity`` m/s (uniform), ``density`` kg/m^3 and ``viscosity`` Pa s. From
-    the mechanics-only [gas] section or from [thermal.gas] with ``drag``."""
+    superficial ``velocity`` m/s (uniform), ``density`` kg/m^3 and ``viscosity`` Pa s;
+    ``through_bed``: the gas forced through packings (else round them, dragging only the
+    particles no contact touches). From the mechanics-only [gas] section or from
+    [thermal.gas] with ``drag`` (and ``drag_through_bed``)."""
     model: str
     velocity: tuple
     density: float
     viscosity: float
+    # whether the gas flows through packings (a bed on a distributor) or round them (a drum):
+    # then a particle that any contact touches feels no gas (effect.py)
+    through_bed: bool = False
 
 
 # the voidage of a loose packing: the gas between its particles moves at U / 0.4
@@ -76,15 +86,16 @@ def read(table, parser) -> DragSettings:
         raise SceneError(file, "gas.velocity", "required: the gas's superficial velocity, m/s")
     v = SECTION.read(table, file, "gas", defaults=True)
     return DragSettings(model=v["drag"], velocity=v["velocity"], density=v["density"],
-                        viscosity=v["viscosity"])
+                        viscosity=v["viscosity"], through_bed=bool(v["through_bed"]))
 
 
 def derive(parser) -> Optional[DragSettings]:
     """The drag of a [thermal.gas] with drag = "di_felice" | "schiller_naumann" (its gas's
-    velocity, density and viscosity), when the scene has no [gas]; else None."""
+    velocity, density and viscosity, and drag_through_bed), when the scene has no [gas]; else None."""
     heat = parser.settings.get("thermal")
     heat_gas = heat.gas if heat is not None else None
     if heat_gas is not None and heat_gas.drag != "none":
         return DragSettings(model=heat_gas.drag, velocity=heat_gas.velocity,
-                            density=heat_gas.density, viscosity=heat_gas.viscosity)
+                            density=heat_gas.density, viscosity=heat_gas.viscosity,
+                            through_bed=heat_gas.drag_through_bed)
     return None
