@@ -331,6 +331,9 @@ def run(path, flow: str | None = None, capacity: bool = True,
     return d, a, spread
 
 
+CAPACITY_RESOLUTION = 0.01           # drying_capacity's bisection tolerance (relative)
+
+
 def _capacity(path, d: Dryer):
     """(capacity kg/s, "" or "above"/"below" the searched range, its sensitivity kg/s)."""
     from dataclasses import replace
@@ -344,7 +347,8 @@ def _capacity(path, d: Dryer):
         return replace(load(path, feed=feed, exposure=d.exposure),
                        counter_current=d.counter_current, residence_factor=residence,
                        conductance_factor=conductance)
-    value, bound = drying_capacity(at_feed, low, high, d.target_moisture)
+    value, bound = drying_capacity(at_feed, low, high, d.target_moisture,
+                                   tolerance=CAPACITY_RESOLUTION)
     own = {"residence": d.residence_uncertainty, "conductance": d.conductance_uncertainty}
     moves = []
     for name in ("residence", "conductance"):
@@ -353,10 +357,12 @@ def _capacity(path, d: Dryer):
         for f in (1.0 + u, 1.0 - u):
             kw = {name: f}
             other, _ = drying_capacity(lambda feed: at_feed(feed, **kw), low, high,
-                                       d.target_moisture)
+                                       d.target_moisture, tolerance=CAPACITY_RESOLUTION)
             moved = max(moved, abs(other - value))
         moves.append(moved)
-    return value, bound, math.hypot(*moves)
+    # never below the bisection's resolution (drying_capacity's 1 %): closures that move the
+    # capacity by less land in the same bracket, which read as an exact "+- 0"
+    return value, bound, max(math.hypot(*moves), CAPACITY_RESOLUTION * value)
 
 
 def cmd_dryer(args) -> int:
