@@ -101,12 +101,13 @@ class EffectContext:
 def particle_load(real):
     """The load a particle stage adds to (``particle_func``, ``inserted_func``): a Taichi
     struct of ``acceleration`` m/s^2 (3-vector), ``heat`` W and ``conductance`` W/K, and
-    ``contact_force`` N (3-vector, read-only for the effects): the sum of the contact forces on
-    the particle in this step, zero for one that touches nothing (the gas's drag reads it: a
-    gas that flows round packings drags only the particles no contact touches)."""
+    ``touching`` (i32, read-only for the effects): 1 when a contact pushes on the particle in
+    this step or it is held in a packing (mobility: its contacts are skipped, and it rests on
+    them), else 0 (the gas's drag reads it: a gas that flows round packings drags only the
+    particles that touch nothing)."""
     import taichi as ti
     vec3 = ti.types.vector(3, real)
-    return ti.types.struct(acceleration=vec3, heat=real, conductance=real, contact_force=vec3)
+    return ti.types.struct(acceleration=vec3, heat=real, conductance=real, touching=ti.i32)
 
 
 class Effect:

@@ -155,8 +155,15 @@ class GatherStage:
                         heat += mesh_heat
                         conductance += mesh_conductance
                 # the particle effects: gravity, convection, plug-flow gas, radiation
+                # touching: a contact pushes on it, or it is held at rest in a packing
+                touching = 0
+                if force.norm_sqr() > 0.0:
+                    touching = 1
+                if ti.static(holds):
+                    if not integrates:
+                        touching = 1
                 load = Load(acceleration=vec0, heat=heat, conductance=conductance,
-                            contact_force=force)
+                            touching=touching)
                 for effect in ti.static(particle_effects):
                     load = effect(i, load)
                 if s.alive[i] != 0:

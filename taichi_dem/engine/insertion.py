@@ -179,7 +179,7 @@ class Insertion:
                 # (the initial fill's are computed by Engine.start); after the particle's own
                 # values, which an effect may read (its material, its mass)
                 load = Load(acceleration=ti.Vector([0.0, 0.0, 0.0]), heat=0.0, conductance=0.0,
-                            contact_force=ti.Vector([0.0, 0.0, 0.0]))
+                            touching=0)
                 for start_of in ti.static(starts):
                     load = start_of(i, load)
                 s.acceleration[i] = load.acceleration

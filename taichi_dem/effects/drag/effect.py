@@ -32,8 +32,8 @@ drum, and goes round the bed and the flights' loads, whose pores would need orde
 magnitude more (Ergun at the superficial velocity). Dragged as if the gas went through it, a
 loose bed in a dryer's 3.7 m/s gas is pushed along the axis at 1.8 - 3.1x the slope's pull
 (docs/machine/dryer_slice/dryer.md). So by default (``through_bed = false``) a particle feels
-the gas only while no contact touches it: the load's ``contact_force`` is zero, i.e. while it
-falls in a curtain. What this leaves out, the drag of the gas sweeping over the bed's surface,
+the gas only while no contact touches it (the load's ``touching``: no contact force on it, and
+not held at rest by mobility), i.e. while it falls in a curtain. What this leaves out, the drag of the gas sweeping over the bed's surface,
 is bounded by the same slice with every particle dragged as if alone in the gas
 (Schiller-Naumann at the full slip, an upper bound for a half-sunk sphere): the part of the
 flow that the bed and flights carry moved by nothing measurable (dryer.md). ``velocity`` is
@@ -141,7 +141,7 @@ class Drag(Effect):
             feels_gas = True
             if ti.static(not through_bed):
                 # the gas goes round packings: a particle any contact touches feels none of it
-                feels_gas = load.contact_force.norm_sqr() == 0.0
+                feels_gas = load.touching == 0
             eps = 1.0 + 0.0 * diameter
             if ti.static(di_felice):
                 if feels_gas:
