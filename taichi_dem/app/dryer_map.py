@@ -134,8 +134,8 @@ def closures(path, design: dict, source: str) -> dict:
         if gas.get("through_bed", True) and abs(gas["axial_velocity"]) > 0.0:
             notes.append("the map's gas was forced through the bed (gas.through_bed, or a map "
                          "made before the key): in a drum it goes round it, and the transport "
-                         "under-states what the slope conveys (a tenth at 3.7 m/s: "
-                         "docs/machine/dryer_slice/dryer.md)")
+                         "under-states what the slope conveys (5 % at 3.7 m/s in the real-size "
+                         "slices: docs/machine/dryer_slice/dryer.md)")
     return {
         "residence_time": marched.residence_time,
         "residence_uncertainty": abs(flow_error / flow) if flow else 0.0,

@@ -33,11 +33,12 @@ magnitude more (Ergun at the superficial velocity). Dragged as if the gas went t
 loose bed in a dryer's 3.7 m/s gas is pushed along the axis at 1.8 - 3.1x the slope's pull
 (docs/machine/dryer_slice/dryer.md). So by default (``through_bed = false``) a particle feels
 the gas only while no contact touches it (the load's ``touching``: no contact force on it, and
-not held at rest by mobility), i.e. while it falls in a curtain. What this leaves out, the drag of the gas sweeping over the bed's surface,
-is bounded by the same slice with every particle dragged as if alone in the gas
-(Schiller-Naumann at the full slip, an upper bound for a half-sunk sphere): the part of the
-flow that the bed and flights carry moved by nothing measurable (dryer.md). ``velocity`` is
-then the gas's velocity in the open section.
+not held at rest by mobility), i.e. while it falls in a curtain. What this leaves out, the
+drag of the gas sweeping over the bed's surface, is bounded by the same slice with every
+particle dragged as if alone in the gas (Schiller-Naumann at the full slip, an upper bound
+for a half-sunk sphere): the part of the flow that the bed and flights carry moved by nothing
+measurable (dryer.md). ``velocity`` is then the gas's velocity in the open section. At a fixed
+hold-up the slices then follow Friedman and Marshall's gas term up to 3.7 m/s (dryer.md).
 """
 import math
 

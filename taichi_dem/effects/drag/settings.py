@@ -91,7 +91,8 @@ def read(table, parser) -> DragSettings:
 
 def derive(parser) -> Optional[DragSettings]:
     """The drag of a [thermal.gas] with drag = "di_felice" | "schiller_naumann" (its gas's
-    velocity, density and viscosity, and drag_through_bed), when the scene has no [gas]; else None."""
+    velocity, density and viscosity, and drag_through_bed), when the scene has no [gas];
+    else None."""
     heat = parser.settings.get("thermal")
     heat_gas = heat.gas if heat is not None else None
     if heat_gas is not None and heat_gas.drag != "none":
