@@ -27,6 +27,18 @@ def test_the_slice_geometry_of_a_drum():
     assert g.free_area == pytest.approx(math.pi * 0.05 ** 2, rel=1e-9)
 
 
+@pytest.mark.parametrize("gas, through_bed", [("", None), ("\nthrough_bed = true", True),
+                                              ("\nthrough_bed = false", False)])
+def test_the_map_records_its_gas_and_whether_it_went_through_the_bed(gas, through_bed):
+    """The map's machine info carries the gas the curtains fell through (its axial speed and
+    density) and whether it was forced through the bed (the default: round it)."""
+    s = scene(TEXT + '\n[gas]\nvelocity = [-1.5, 0.0, 0.0]\ndensity = 0.46' + gas + "\n")
+    info = sm.machine_info(s, sm.slice_geometry(s))["gas"]
+    assert info["axial_velocity"] == pytest.approx(-1.5) and info["density"] == 0.46
+    assert info["through_bed"] is (through_bed is True)
+    assert sm.machine_info(scene(), sm.slice_geometry(scene()))["gas"] is None
+
+
 @pytest.mark.parametrize("change, key, reason", [
     (('periodic = ["x"]', 'periodic = []'), "domain.periodic", "one axis"),
     (('periodic = ["x"]', 'periodic = ["x", "y"]'), "domain.periodic", "one axis"),

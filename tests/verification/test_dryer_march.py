@@ -225,10 +225,11 @@ def test_bad_input_names_the_file_key_and_reason(tmp_path, edit, key, reason):
 
 
 def _map(tmp_path, diameter=1.0, rpm=8.0, incline=4.7, gas=None, slower=1.0, name="map.json",
-         surface=False):
+         surface=False, through_bed=None):
     """A map.json as `taichi-dem map` writes it, with made-up rows: the feed 0.5 kg/s is carried
     at 20 kg/m (at 20 * ``slower`` kg/m with the flows divided by ``slower``); ``gas``: the
-    slice's gas speed along the axis (m/s), recorded as the map does."""
+    slice's gas speed along the axis (m/s), recorded as the map does, with ``through_bed``
+    where given (a map made before the key has none)."""
     rows = []
     for holdup, flow, area, slip, torque in ((10.0, -0.2, 0.5, 3.0, 40.0), (20.0, -0.5, 0.9, 3.4, 70.0),
                                              (40.0, -1.2, 1.5, 3.6, 120.0)):
@@ -248,6 +249,8 @@ def _map(tmp_path, diameter=1.0, rpm=8.0, incline=4.7, gas=None, slower=1.0, nam
     info = {"shell_radius": diameter / 2, "bulk_density": 1740.0, "particle_diameter": 0.024,
             "angular_speeds": {"drum": rpm * 2 * math.pi / 60}, "bodies": ["drum"],
             "gas": {"axial_velocity": gas, "density": 0.46} if gas is not None else None}
+    if gas is not None and through_bed is not None:
+        info["gas"]["through_bed"] = through_bed
     path = tmp_path / name
     path.write_text(json.dumps({"scene": "slice.toml", "machine": info, "rows": rows}))
     return path
@@ -516,3 +519,13 @@ def test_the_real_size_design_on_its_own_slices_map():
     assert abs(a["energy_closure"]) < 1e-9
     assert a["residence_time"] == pytest.approx(info["map_holdup"] * on_map.length / on_map.feed,
                                                 rel=1e-9)
+
+
+@pytest.mark.parametrize("through_bed, noted", [(None, True), (True, True), (False, False)])
+def test_a_map_whose_gas_went_through_the_bed_is_noted(tmp_path, through_bed, noted):
+    """A map records whether its slices' gas was forced through the bed ([gas] through_bed);
+    a dryer marched on one that was, or on one made before the record (when it always was),
+    says so, since in a drum the gas goes round its bed and the map's transport is then low."""
+    d = load(_design_with_map(tmp_path, _map(tmp_path, gas=1.0, through_bed=through_bed)))
+    said = [n for n in d.map_info["map_notes"] if "forced through the bed" in n]
+    assert bool(said) == noted, d.map_info["map_notes"]
