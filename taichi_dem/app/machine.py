@@ -31,8 +31,8 @@ through the rest only:
 
 (the mean over the inclines at each hold-up: the bed's share of the flow stands for its share
 of the slope's effect, exact for a map at one incline, q = b s). In the flighted drums mapped
-the curtains carry 41 - 77 % of the flow (docs/machine/dryer_slice/), so the bed needs 1.7 -
-4x the gradient to carry the same excess, and the hold-up falls over a shorter stretch before
+the curtains carry 41 - 79 % of the flow (docs/machine/dryer_slice/), so the bed needs 1.7 -
+5x the gradient to carry the same excess, and the hold-up falls over a shorter stretch before
 a free discharge. A map without the figure (a plain drum, a map written before it) keeps
 phi_bed = 1. The error draws (with_errors) draw the airborne flow independently of the whole,
 which overstates the spread phi_bed adds a little.
@@ -202,7 +202,7 @@ class MachineMap:
 
 
 # the smallest share of the flow a depth gradient drives (TransportLaw.bed_share): a bed
-# carrying less would need a gradient no bed holds (the flighted slices measured carry 23 - 59 %)
+# carrying less would need a gradient no bed holds (the flighted slices measured carry 21 - 59 %)
 BED_SHARE_FLOOR = 0.05
 
 

@@ -413,7 +413,7 @@ def machine_info(scene, geometry: SliceGeometry, fill_index: int = 0) -> dict:
             # marched on the map should blow as fast) and whether it was forced through the bed
             "gas": ({"axial_velocity": float(np.asarray(gas.velocity, float) @ geometry.axis_direction),
                      "density": float(gas.density),
-                     "through_bed": bool(getattr(gas, "through_bed", False))}
+                     "through_bed": bool(gas.through_bed)}
                     if (gas := scene.settings.get("gas")) is not None else None)}
 
 
